@@ -1,0 +1,206 @@
+/// @file render_command.cpp
+/// @brief `vdb_ewa render IN.vdb OUT.exr [options]`: vdb_render's options, GNU spelling.
+#include "commands.h"
+#include "exit_codes.h"
+#include "option_values.h"
+
+#include <vdb_ewa/vdb_ewa.h>
+
+#include <chrono>
+#include <cstdio>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+namespace vdb_ewa::cli {
+namespace {
+
+std::string fmt(double v)
+{
+    std::ostringstream s;
+    s << std::setprecision(6) << v;
+    return s.str();
+}
+
+std::string fmt3(const Vec3d& v) { return fmt(v.x) + "," + fmt(v.y) + "," + fmt(v.z); }
+
+class RenderCommand : public Command
+{
+public:
+    explicit RenderCommand(CLI::App& app)
+    {
+        const RenderSettings rs;
+        const CameraSettings cs;
+        mApp = app.add_subcommand("render", "Render a VDB fog volume to an EXR with EWA volume splatting");
+        mApp->add_option("input", mInput, "input .vdb file")->required();
+        mApp->add_option("output", mOutput, "output .exr file (float RGBA, premultiplied)")->required();
+        mApp->add_option("--name", mName, "grid to render (default: the first scalar float or double grid)");
+        // Camera (vdb_render semantics).
+        mApp->add_option("--res", mRes, "image size in pixels, WxH (default: 1920x1080)");
+        mApp->add_option("-t,--translate", mTranslate, "camera position X,Y,Z in world units (default: 0,0,0)");
+        mApp->add_option("-r,--rotate", mRotate,
+            "camera rotation X,Y,Z in degrees, applied about x, then y, then z (default: look at the "
+            "centre of the grid's active voxels)");
+        mApp->add_option("--lookat", mLookAt, "aim the camera at the world point X,Y,Z");
+        mApp->add_option("--up", mUp, "world vector that points up after --lookat (default: 0,1,0)");
+        mApp->add_option("--camera", mCamera, "camera type: persp[ective] or ortho[graphic] (default: perspective)");
+        mApp->add_option("--fov", mFov, "horizontal field of view in degrees (default: " + fmt(cs.fieldOfView()) + ", from --focal and --aperture)");
+        mApp->add_option("--focal", mFocal, "perspective focal length in mm (default: " + fmt(cs.focal) + ")");
+        mApp->add_option("--aperture", mAperture, "perspective frame width in mm (default: " + fmt(cs.aperture) + ")");
+        mApp->add_option("--frame", mFrame, "orthographic frame width in world units (default: " + fmt(cs.frame) + ")");
+        mApp->add_option("--near", mNear, "near plane depth in world units (default: " + fmt(cs.near) + ")");
+        mApp->add_option("--far", mFar, "far plane depth in world units (default: " + fmt(cs.far) + ")");
+        // Optical model (vdb_render's dense-volume model).
+        mApp->add_option("--absorb", mAbsorb, "absorption R,G,B per unit density per voxel length (default: " + fmt3(rs.absorb) + ")");
+        mApp->add_option("--scatter", mScatter, "scattering R,G,B per unit density per voxel length (default: " + fmt3(rs.scatter) + ")");
+        mApp->add_option("--light", mLight,
+            "direction towards the light X,Y,Z[,R,G,B] with optional colour (default: " + fmt3(rs.lightDir) + "," +
+                fmt3(rs.lightColor) + ")");
+        mApp->add_option("--gain", mGain, "shadow-ray extinction falls as 1/(1 + gain * distance in voxels) (default: " + fmt(rs.gain) + ")");
+        mApp->add_option("--cutoff", mCutoff,
+            "density cutoff, and rays stop where |transmittance RGB|^2 < cutoff (default: " + fmt(rs.cutoff) + ")");
+        mApp->add_option("--shadowstep", mShadowStep, "shadow-ray step in voxels (default: " + fmt(rs.shadowStep) + ")");
+        mApp->add_option("--step", mStep, "vdb_render's primary-ray step in voxels; the splatter has no primary rays and ignores it");
+        // EWA splatting.
+        mApp->add_option("--kernel-sigma", mKernelSigma, "reconstruction kernel std. deviation in voxels (default: " + fmt(rs.kernelSigma) + ")");
+        mApp->add_option("--lowpass", mLowpass, "screen-space low-pass filter variance in pixels^2 (default: " + fmt(rs.lowpass) + ")");
+        mApp->add_option("--aa", mAa, "anti-aliasing: ewa (resampling filter), swan (uniform scaling) or none (default: ewa)");
+        mApp->add_option("--cutoff-radius", mCutoffRadius, "footprint cut-off radius in std. deviations (default: " + fmt(rs.cutoffRadius) + ")");
+        mApp->add_option("--slab", mSlab, "image-aligned slab thickness in voxel lengths (default: " + fmt(rs.slab) + ")");
+        mApp->add_option("--threads,--cpus", mThreads, "worker threads, 0 = all cores (default: 0)");
+        mApp->add_flag("-v,--verbose", mVerbose, "print the resolved settings, counts and stage timings");
+    }
+
+    CLI::App* subcommand() const override { return mApp; }
+
+    int run() override
+    {
+        CameraSettings cam;
+        RenderSettings rs;
+        resolve(cam, rs);
+        Renderer renderer(rs); // validates the render settings
+
+        if (mOutput.size() < 4 || mOutput.substr(mOutput.size() - 4) != ".exr") {
+            throw ValueError(mOutput + ": unsupported output format (expected a .exr file)");
+        }
+        checkOutputWritable(mOutput);
+
+        const auto t0 = std::chrono::steady_clock::now();
+        GridSource grid = openInput();
+        const double loadSeconds = seconds(t0);
+        Camera camera(cam, grid.worldCentre());
+        if (mVerbose) printSettings(grid, camera, rs);
+
+        RenderStats stats;
+        Image image = renderer.render(grid, camera, &stats);
+        for (const std::string& w : stats.warnings) std::cerr << "vdb_ewa: warning: " << mInput << ": " << w << "\n";
+
+        const auto t1 = std::chrono::steady_clock::now();
+        try {
+            writeExr(image, mOutput, {{"software", std::string("vdb_ewa ") + versionString()}});
+        } catch (const Error& e) {
+            std::cerr << "vdb_ewa: " << e.what() << "\n";
+            return kExitRenderFailed;
+        }
+        if (mVerbose) printStats(stats, loadSeconds, seconds(t1));
+        return kExitOk;
+    }
+
+private:
+    static double seconds(std::chrono::steady_clock::time_point since)
+    {
+        return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+    }
+
+    GridSource openInput() const { return GridSource::open(mInput, mName); }
+
+    void resolve(CameraSettings& cam, RenderSettings& rs) const
+    {
+        if (!mRes.empty()) parseResolution(mRes, cam.width, cam.height);
+        if (!mTranslate.empty()) cam.translate = parseVec3("translate", mTranslate, true);
+        if (!mRotate.empty()) cam.rotate = parseVec3("rotate", mRotate, true);
+        if (!mLookAt.empty()) cam.lookAt = parseVec3("lookat", mLookAt, true);
+        if (!mUp.empty()) cam.up = parseVec3("up", mUp, true);
+        if (!mCamera.empty()) {
+            if (mCamera.rfind("persp", 0) == 0) cam.projection = Projection::Perspective;
+            else if (mCamera.rfind("ortho", 0) == 0) cam.projection = Projection::Orthographic;
+            else throw ValueError("--camera: expected perspective or orthographic, got '" + mCamera + "'");
+        }
+        if (mFov && mFocal) throw ValueError("specify --focal or --fov, but not both");
+        if (mAperture) cam.aperture = *mAperture;
+        if (mFocal) cam.focal = *mFocal;
+        if (mFov) cam.setFieldOfView(*mFov);
+        if (mFrame) cam.frame = *mFrame;
+        if (mNear) cam.near = *mNear;
+        if (mFar) cam.far = *mFar;
+
+        if (!mAbsorb.empty()) rs.absorb = parseVec3("absorb", mAbsorb, true);
+        if (!mScatter.empty()) rs.scatter = parseVec3("scatter", mScatter, true);
+        if (!mLight.empty()) {
+            const std::vector<double> v = parseNumbers("light", mLight);
+            if (v.size() != 3 && v.size() != 6) throw ValueError("--light: expected X,Y,Z or X,Y,Z,R,G,B, got '" + mLight + "'");
+            rs.lightDir = Vec3d(v[0], v[1], v[2]);
+            if (v.size() == 6) rs.lightColor = Vec3d(v[3], v[4], v[5]);
+        }
+        if (mGain) rs.gain = *mGain;
+        if (mCutoff) rs.cutoff = *mCutoff;
+        if (mShadowStep) rs.shadowStep = *mShadowStep;
+        if (mKernelSigma) rs.kernelSigma = *mKernelSigma;
+        if (mLowpass) rs.lowpass = *mLowpass;
+        if (!mAa.empty()) {
+            if (mAa == "ewa") rs.antiAliasing = AntiAliasing::Ewa;
+            else if (mAa == "swan") rs.antiAliasing = AntiAliasing::Swan;
+            else if (mAa == "none") rs.antiAliasing = AntiAliasing::None;
+            else throw ValueError("--aa: expected ewa, swan or none, got '" + mAa + "'");
+        }
+        if (mCutoffRadius) rs.cutoffRadius = *mCutoffRadius;
+        if (mSlab) rs.slab = *mSlab;
+        rs.threads = mThreads;
+    }
+
+    void printSettings(const GridSource& grid, const Camera& camera, const RenderSettings& rs) const
+    {
+        const CameraSettings& c = camera.settings();
+        std::cout << "vdb_ewa: grid '" << grid.name() << "' (" << grid.storedType() << ") from " << mInput << ": "
+                  << grid.activeVoxelCount() << " active voxels, " << grid.activeTileCount() << " active tiles, "
+                  << (grid.isLinear() ? "affine" : "non-linear") << " transform\n"
+                  << "vdb_ewa: camera " << (c.projection == Projection::Perspective ? "perspective" : "orthographic")
+                  << " --res " << c.width << "x" << c.height << " --translate " << fmt3(c.translate);
+        if (c.rotate) std::cout << " --rotate " << fmt3(*c.rotate);
+        else std::cout << " --lookat " << fmt3(c.lookAt ? *c.lookAt : grid.worldCentre()) << " --up " << fmt3(c.up);
+        std::cout << " --focal " << fmt(c.focal) << " --aperture " << fmt(c.aperture) << " (fov " << fmt(c.fieldOfView())
+                  << ") --frame " << fmt(c.frame) << " --near " << fmt(c.near) << " --far " << fmt(c.far) << "\n"
+                  << "vdb_ewa: model --absorb " << fmt3(rs.absorb) << " --scatter " << fmt3(rs.scatter) << " --light "
+                  << fmt3(rs.lightDir) << "," << fmt3(rs.lightColor) << " --gain " << fmt(rs.gain) << " --cutoff "
+                  << fmt(rs.cutoff) << " --shadowstep " << fmt(rs.shadowStep) << "\n"
+                  << "vdb_ewa: splatting --kernel-sigma " << fmt(rs.kernelSigma) << " --lowpass " << fmt(rs.lowpass)
+                  << " --aa " << (rs.antiAliasing == AntiAliasing::Ewa ? "ewa" : rs.antiAliasing == AntiAliasing::Swan ? "swan" : "none")
+                  << " --cutoff-radius " << fmt(rs.cutoffRadius) << " --slab " << fmt(rs.slab) << " --threads "
+                  << rs.threads << "\n";
+    }
+
+    static void printStats(const RenderStats& s, double loadSeconds, double writeSeconds)
+    {
+        std::cout << "vdb_ewa: " << s.activeVoxels << " active voxels and " << s.activeTiles << " active tiles read; "
+                  << s.kernels << " kernels, " << s.kernelsSkipped << " values skipped (below --cutoff or NaN), "
+                  << s.kernelsCulled << " kernels culled, " << s.splats << " splatted into " << s.splatTilePairs
+                  << " (splat, tile) pairs\n"
+                  << std::fixed << std::setprecision(3) << "vdb_ewa: timings (s): load " << loadSeconds << ", kernels "
+                  << s.kernelSeconds << ", shadows " << s.shadowSeconds << ", project " << s.projectSeconds
+                  << ", rasterise " << s.rasterSeconds << ", write " << writeSeconds << "\n";
+    }
+
+    CLI::App* mApp = nullptr;
+    std::string mInput, mOutput, mName, mRes, mTranslate, mRotate, mLookAt, mUp, mCamera;
+    std::string mAbsorb, mScatter, mLight, mAa;
+    std::optional<double> mFov, mFocal, mAperture, mFrame, mNear, mFar, mGain, mCutoff, mShadowStep, mStep;
+    std::optional<double> mKernelSigma, mLowpass, mCutoffRadius, mSlab;
+    int mThreads = 0;
+    bool mVerbose = false;
+};
+
+} // namespace
+
+std::unique_ptr<Command> addRenderCommand(CLI::App& app) { return std::make_unique<RenderCommand>(app); }
+
+} // namespace vdb_ewa::cli

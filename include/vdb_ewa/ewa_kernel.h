@@ -1,0 +1,69 @@
+/// @file ewa_kernel.h
+/// @brief The EWA resampling filter of one reconstruction kernel: ray-space projection
+///        (Zwicker et al. 2002, Eq. 26, 29, 31), footprint (Eq. 32), low-pass convolution and
+///        viewport scaling (Eq. 33), conic and cut-off box (Sec. 7.1).
+/// @note Pure math on doubles; see docs/equations.md.
+#pragma once
+
+#include "render_settings.h"
+#include "types.h"
+
+namespace vdb_ewa {
+
+/// Symmetric 2x2 matrix [xx xy; xy yy].
+struct Sym2
+{
+    double xx = 0, xy = 0, yy = 0;
+    double det() const { return xx * yy - xy * xy; }
+    Sym2 inverse() const
+    {
+        const double d = det();
+        return {yy / d, -xy / d, xx / d};
+    }
+    /// Quadratic form d^T M d.
+    double quad(double dx, double dy) const { return xx * dx * dx + 2.0 * xy * dx * dy + yy * dy * dy; }
+    /// Smaller eigenvalue.
+    double minEigen() const;
+};
+
+/// Zwicker et al. 2002, Eq. (26): camera space t -> ray space x = (t0/t2, t1/t2, |t|).
+Vec3d rayFromCamera(const Vec3d& t);
+
+/// Zwicker et al. 2002, Eq. (29): Jacobian of Eq. (26) at t (rows: d x_i / d t).
+/// det = |t| / t2^3.
+Mat3d rayJacobian(const Vec3d& t);
+
+/// Everything projectKernel needs to know about the camera and the filter.
+struct ProjectionParams
+{
+    bool perspective = true;
+    double focalPixels = 1.0;    ///< viewport scale S = diag(f, f), pixels per plane unit
+    Vec2d principalPoint{0, 0};  ///< raster position of the optical axis, pixels
+    /// Perspective only: |t0/t2|, |t1/t2| are clamped to these when forming J, so kernels far
+    /// outside the frustum edge do not get unbounded footprints (1.3 x the half-frame, gsplat).
+    double maxTanX = 1e300, maxTanY = 1e300;
+    AntiAliasing antiAliasing = AntiAliasing::Ewa;
+    double lowpass = 1.0;        ///< V^h = lowpass * I, pixels^2
+    double cutoffRadius = 3.0;   ///< in standard deviations of the filtered footprint
+};
+
+/// A kernel's screen-space resampling filter rho(p) = peak * exp(-0.5 d^T Q d), d = p - centre.
+struct Footprint
+{
+    Vec2d centre;        ///< raster position, pixels
+    Sym2 covariance;     ///< S V'_2x2 S^T + V^h, pixels^2 (Eq. 33)
+    Sym2 conic;          ///< Q = covariance^-1
+    /// Footprint value at the centre for a unit-weight kernel: |J| f^2 / (2 pi sqrt(det Cov)),
+    /// divided by the mass kept inside the cut-off (1 - exp(-c^2/2)), in 1/world-length^2.
+    double peak = 0;
+    Vec2d halfExtent;    ///< half size of the box of the ellipse d^T Q d = cutoffRadius^2, pixels
+    double depth = 0;    ///< kernel centre along its viewing ray (x2 of Eq. 26; t2 if ortho)
+    double depthSd = 0;  ///< std. deviation along the viewing ray (conditional on x0, x1)
+    bool valid = false;  ///< false if the centre is not in front of the eye
+};
+
+/// Project a kernel of camera-space centre @a tCentre and camera-space covariance
+/// @a covCamera (world units^2) to its screen-space resampling filter (Eq. 31-33).
+Footprint projectKernel(const Vec3d& tCentre, const Mat3d& covCamera, const ProjectionParams& params);
+
+} // namespace vdb_ewa

@@ -1,0 +1,45 @@
+/// @file grid_source.h
+/// @brief A scalar volume to render: opened from a .vdb file (float, double or half-stored
+///        float grids) or handed over by a host application (see openvdb_grid.h).
+/// @note OpenVDB types stay out of this header; the grid lives behind an opaque Impl.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "types.h"
+
+namespace vdb_ewa {
+
+class VDB_EWA_API GridSource
+{
+public:
+    /// Open @a path and read the grid called @a gridName, or the first scalar floating-point
+    /// grid when @a gridName is empty (vdb_render's rule).
+    /// @throw IoError    missing, unreadable, non-VDB or truncated file
+    /// @throw InputError no such grid, or a grid that is not a scalar float/double grid
+    static GridSource open(const std::string& path, const std::string& gridName = "");
+
+    const std::string& name() const;
+    /// File the grid came from, empty for a host grid.
+    const std::string& path() const;
+    /// "float" or "double": the value type stored in the file (half-stored grids read as float).
+    const std::string& storedType() const;
+    bool isLevelSet() const;
+    /// True if the index-to-world map is affine (one covariance per frame, Eq. 31).
+    bool isLinear() const;
+    std::uint64_t activeVoxelCount() const;
+    std::uint64_t activeTileCount() const;
+    /// Centre of the active voxel bounding box in world space (vdb_render's default target).
+    Vec3d worldCentre() const;
+
+    struct Impl;
+    explicit GridSource(std::shared_ptr<const Impl> impl) : mImpl(std::move(impl)) {}
+    const Impl& impl() const { return *mImpl; }
+
+private:
+    std::shared_ptr<const Impl> mImpl;
+};
+
+} // namespace vdb_ewa

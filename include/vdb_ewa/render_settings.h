@@ -1,0 +1,46 @@
+/// @file render_settings.h
+/// @brief Plain settings of the optical model and of the EWA splatter, with defaults.
+/// @note The optical model and its defaults are vdb_render's (OpenVDB tools/RayTracer.h,
+///       VolumeRender): extinction (absorb + scatter) x density per voxel length, single
+///       scattering of one directional light with shadow transmittance.
+#pragma once
+
+#include "types.h"
+
+namespace vdb_ewa {
+
+/// Screen-space anti-aliasing of the footprints (Zwicker et al. 2002, Sec. 5, Eq. 33).
+enum class AntiAliasing
+{
+    Ewa,  ///< EWA resampling filter: footprint covariance + low-pass covariance (Eq. 33)
+    Swan, ///< Swan et al.: scale the whole footprint uniformly (comparison mode, over-blurs)
+    None  ///< no low-pass filter: point-sample the projected kernel (aliases when minified)
+};
+
+struct RenderSettings
+{
+    // --- Optical model (vdb_render's names and defaults) ---
+    Vec3d absorb{0.1, 0.1, 0.1};      ///< absorption per unit density per voxel length, RGB
+    Vec3d scatter{1.5, 1.5, 1.5};     ///< scattering per unit density per voxel length, RGB
+    Vec3d lightDir{0.3, 0.3, 0.0};    ///< direction *towards* the light, world space (normalised)
+    Vec3d lightColor{0.7, 0.7, 0.7};  ///< radiance of the directional light, RGB
+    double gain = 0.2;                ///< shadow-ray extinction falls as 1/(1 + gain * s), s in voxels
+    double cutoff = 0.005;            ///< density cutoff; rays stop where |T|^2 < cutoff (RGB T)
+    double shadowStep = 3.0;          ///< shadow-ray step in voxels
+
+    // --- EWA splatting ---
+    double kernelSigma = 0.6;   ///< reconstruction kernel std. deviation in voxels (Eq. 19, V = s^2 I)
+    double lowpass = 1.0;       ///< low-pass filter variance in pixels^2 (Eq. 33, V^h = lowpass I)
+    AntiAliasing antiAliasing = AntiAliasing::Ewa;
+    double cutoffRadius = 3.0;  ///< footprint evaluated where r = d^T Q d < cutoffRadius^2 (in sigma)
+    double slab = 1.0;          ///< image-aligned slab thickness in voxel lengths
+    int tileKernelSpacing = 4;  ///< largest kernel spacing (voxels) used to model active tiles
+
+    // --- Execution ---
+    int threads = 0;            ///< worker threads, 0 = all cores (a tbb::task_arena, never global)
+
+    /// Throw ValueError naming the first setting out of range.
+    void validate() const;
+};
+
+} // namespace vdb_ewa

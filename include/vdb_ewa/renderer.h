@@ -1,0 +1,50 @@
+/// @file renderer.h
+/// @brief The renderer: EWA volume splatting (Zwicker et al. 2002) of a GridSource seen by a
+///        Camera, composited in image-aligned slabs. The sole orchestrator of the pipeline.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "camera.h"
+#include "grid_source.h"
+#include "image.h"
+#include "render_settings.h"
+
+namespace vdb_ewa {
+
+/// What a render read, culled and splatted, and how long each stage took (seconds).
+struct RenderStats
+{
+    double kernelSeconds = 0;   ///< active voxels and tiles -> reconstruction kernels
+    double shadowSeconds = 0;   ///< shadow transmittance per kernel
+    double projectSeconds = 0;  ///< kernels -> screen-space splats (Eq. 29-33) and binning
+    double rasterSeconds = 0;   ///< per-tile slab compositing
+    std::uint64_t activeVoxels = 0;
+    std::uint64_t activeTiles = 0;
+    std::uint64_t kernels = 0;        ///< kernels built (voxels + tile kernels)
+    std::uint64_t kernelsSkipped = 0; ///< below the density cutoff, or invalid values
+    std::uint64_t kernelsCulled = 0;  ///< outside the view frustum
+    std::uint64_t splats = 0;         ///< kernels splatted
+    std::uint64_t splatTilePairs = 0; ///< (splat, screen tile) pairs rasterised
+    std::vector<std::string> warnings; ///< what was clamped or skipped, one line each
+};
+
+class VDB_EWA_API Renderer
+{
+public:
+    /// @throw ValueError if a setting is out of range.
+    explicit Renderer(const RenderSettings& settings);
+
+    const RenderSettings& settings() const { return mSettings; }
+
+    /// Render @a grid through @a camera. Thread-safe: a Renderer holds no mutable state.
+    /// The result does not depend on the thread count (bit-identical).
+    Image render(const GridSource& grid, const Camera& camera, RenderStats* stats = nullptr) const;
+
+private:
+    RenderSettings mSettings;
+};
+
+} // namespace vdb_ewa

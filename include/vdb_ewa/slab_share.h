@@ -1,0 +1,50 @@
+/// @file slab_share.h
+/// @brief Image-aligned sheet buffers (Mueller & Crawfis 1998): the share of a kernel's
+///        integral along the viewing ray that falls in each slab, and the exact update of a
+///        homogeneous slab (ewa-brief Sec. 5).
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+
+namespace vdb_ewa {
+
+/// Standard normal cumulative distribution.
+inline double normalCdf(double x) { return 0.5 * std::erfc(-x * 0.70710678118654752440); }
+
+/// Slabs [zBase + k * thickness, zBase + (k + 1) * thickness) along the viewing ray.
+struct SlabGrid
+{
+    double zBase = 0.0;
+    double thickness = 1.0;
+
+    std::int64_t index(double z) const { return std::int64_t(std::floor((z - zBase) / thickness)); }
+    double start(std::int64_t k) const { return zBase + double(k) * thickness; }
+};
+
+/// Slabs overlapped by mu +- truncation * sd clipped to [clipNear, clipFar]: sets @a first
+/// and returns their number (0 if the clipped range is empty).
+std::int64_t slabSpan(const SlabGrid& slabs, double mu, double sd, double truncation,
+    double clipNear, double clipFar, std::int64_t& first);
+
+/// Shares of a Gaussian of mean @a mu and std. deviation @a sd (along the ray) in each slab
+/// it overlaps: Phi((z1 - mu)/sd) - Phi((z0 - mu)/sd). The Gaussian is truncated to
+/// mu +- truncation * sd and renormalised, so the shares of an unclipped kernel sum to 1; the
+/// part outside [clipNear, clipFar] (near and far planes) is dropped, not redistributed.
+/// Writes at most @a maxCount shares to @a shares and the first slab index to @a first.
+/// @return the number of slabs written (0 if the kernel lies outside the clip range).
+int slabShares(const SlabGrid& slabs, double mu, double sd, double truncation,
+    double clipNear, double clipFar, std::int64_t& first, float* shares, int maxCount);
+
+/// Exact front-to-back update of one homogeneous slab for one colour channel: optical depth
+/// @a tau, extinction-weighted emission @a emission (= sum of colour x optical depth).
+/// C += T (E / tau)(1 - exp(-tau)); T *= exp(-tau).
+inline void compositeSlab(float tau, float emission, float& colour, float& transmittance)
+{
+    if (!(tau > 0.0f)) return;
+    const float absorbed = -std::expm1(-tau);
+    colour += transmittance * (tau > 1e-7f ? emission / tau * absorbed : emission);
+    transmittance *= 1.0f - absorbed;
+}
+
+} // namespace vdb_ewa

@@ -1,0 +1,22 @@
+/// @file vdb_ewa.h
+/// @brief Umbrella header of the vdb_ewa library: EWA volume splatting of OpenVDB grids.
+#pragma once
+
+#include "camera.h"
+#include "error.h"
+#include "ewa_kernel.h"
+#include "exr_output.h"
+#include "grid_source.h"
+#include "image.h"
+#include "make_grid.h"
+#include "render_settings.h"
+#include "renderer.h"
+#include "slab_share.h"
+#include "types.h"
+
+namespace vdb_ewa {
+
+/// Library version, "MAJOR.MINOR.PATCH".
+VDB_EWA_API const char* versionString();
+
+} // namespace vdb_ewa

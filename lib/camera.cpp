@@ -1,0 +1,136 @@
+/// @file camera.cpp
+/// @brief vdb_render's camera conventions (OpenVDB tools/RayTracer.h, BaseCamera).
+#include <vdb_ewa/camera.h>
+
+#include <vdb_ewa/error.h>
+
+#include <cmath>
+#include <sstream>
+
+namespace vdb_ewa {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+bool finite3(const Vec3d& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+std::string str3(const Vec3d& v)
+{
+    std::ostringstream s;
+    s << v.x << "," << v.y << "," << v.z;
+    return s.str();
+}
+
+/// Rotation about a coordinate axis, column-vector convention (OpenVDB math::rotation).
+Mat3d axisRotation(int axis, double degrees)
+{
+    const double a = degrees * kPi / 180.0, c = std::cos(a), s = std::sin(a);
+    switch (axis) {
+    case 0: return mat3FromRows({1, 0, 0}, {0, c, -s}, {0, s, c});
+    case 1: return mat3FromRows({c, 0, s}, {0, 1, 0}, {-s, 0, c});
+    default: return mat3FromRows({c, -s, 0}, {s, c, 0}, {0, 0, 1});
+    }
+}
+
+void validate(const CameraSettings& s)
+{
+    auto fail = [](const std::string& what) { throw ValueError("impossible camera: " + what); };
+    if (s.width < 1 || s.height < 1 || s.width > 65536 || s.height > 65536) {
+        fail("--res must be between 1x1 and 65536x65536, got " + std::to_string(s.width) + "x" +
+             std::to_string(s.height));
+    }
+    if (!finite3(s.translate)) fail("--translate is not finite");
+    if (s.rotate && !finite3(*s.rotate)) fail("--rotate is not finite");
+    if (s.lookAt && !finite3(*s.lookAt)) fail("--lookat is not finite");
+    if (s.rotate && s.lookAt) fail("specify --lookat or --rotate, but not both");
+    if (s.projection == Projection::Perspective) {
+        if (!(s.focal > 0.0) || !std::isfinite(s.focal)) fail("--focal must be > 0 mm");
+        if (!(s.aperture > 0.0) || !std::isfinite(s.aperture)) fail("--aperture must be > 0 mm");
+        if (!(s.fieldOfView() < 179.0)) fail("field of view must be below 179 degrees");
+    } else if (!(s.frame > 0.0) || !std::isfinite(s.frame)) {
+        fail("--frame must be > 0 world units");
+    }
+    if (!(s.near > 0.0) || !std::isfinite(s.near)) fail("--near must be > 0");
+    if (!(s.far > s.near)) fail("--far must be greater than --near");
+}
+
+} // namespace
+
+void CameraSettings::setFieldOfView(double degrees)
+{
+    if (!(degrees > 0.0 && degrees < 180.0)) {
+        throw ValueError("impossible camera: --fov must be in (0, 180) degrees");
+    }
+    focal = aperture / (2.0 * std::tan(degrees * kPi / 360.0));
+}
+
+double CameraSettings::fieldOfView() const
+{
+    return 360.0 / kPi * std::atan(aperture / (2.0 * focal));
+}
+
+Camera::Camera(const CameraSettings& settings, const Vec3d& defaultTarget) : mSettings(settings)
+{
+    validate(mSettings);
+    mEye = mSettings.translate;
+
+    // Camera axes in world space: right, up, and "back" (vdb_render's local +z).
+    Vec3d right, up, back;
+    if (mSettings.rotate) {
+        const Vec3d r = *mSettings.rotate;
+        const Mat3d localToWorld = axisRotation(2, r.z) * axisRotation(1, r.y) * axisRotation(0, r.x);
+        right = localToWorld[0];
+        up = localToWorld[1];
+        back = localToWorld[2];
+    } else {
+        // math::aim: forward = unit(eye - target), horizontal = unit(up x forward).
+        const Vec3d target = mSettings.lookAt ? *mSettings.lookAt : defaultTarget;
+        if (!finite3(target)) throw ValueError("impossible camera: the look-at target is not finite");
+        const Vec3d dir = mEye - target;
+        const double len = glm::length(dir);
+        if (!(len > 0.0)) {
+            throw ValueError("impossible camera: the eye " + str3(mEye) + " is at the look-at target");
+        }
+        back = dir / len;
+        const double upLen = glm::length(mSettings.up);
+        if (!(upLen > 0.0)) throw ValueError("impossible camera: --up is the zero vector");
+        const Vec3d h = glm::cross(mSettings.up / upLen, back);
+        const double hLen = glm::length(h);
+        if (!(hLen > 1e-9)) {
+            throw ValueError("impossible camera: --up " + str3(mSettings.up) +
+                             " is parallel to the view direction");
+        }
+        right = h / hLen;
+        up = glm::normalize(glm::cross(back, right));
+    }
+    mCameraFromWorld = mat3FromRows(right, -up, -back);
+
+    const double halfWidth = mSettings.projection == Projection::Perspective
+        ? 0.5 * mSettings.aperture / mSettings.focal  // tan of the half field of view
+        : 0.5 * mSettings.frame;                      // world units
+    mFocalPixels = 0.5 * double(mSettings.width) / halfWidth;
+}
+
+Vec2d Camera::rasterFromCamera(const Vec3d& t) const
+{
+    if (mSettings.projection == Projection::Perspective) {
+        return principalPoint() + mFocalPixels * Vec2d(t.x / t.z, t.y / t.z);
+    }
+    return principalPoint() + mFocalPixels * Vec2d(t.x, t.y);
+}
+
+void Camera::worldRay(double xRaster, double yRaster, Vec3d& origin, Vec3d& direction) const
+{
+    const Mat3d worldFromCamera = glm::transpose(mCameraFromWorld);
+    const Vec2d plane = (Vec2d(xRaster, yRaster) - principalPoint()) / mFocalPixels;
+    if (mSettings.projection == Projection::Perspective) {
+        const Vec3d dCam(plane.x, plane.y, 1.0);
+        direction = glm::normalize(worldFromCamera * dCam);
+        origin = mEye + direction * (mSettings.near * glm::length(dCam)); // on the near plane
+    } else {
+        direction = worldFromCamera * Vec3d(0, 0, 1);
+        origin = mEye + worldFromCamera * Vec3d(plane.x, plane.y, mSettings.near);
+    }
+}
+
+} // namespace vdb_ewa

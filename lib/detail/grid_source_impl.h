@@ -1,0 +1,37 @@
+/// @file grid_source_impl.h
+/// @brief The OpenVDB side of GridSource (private).
+#pragma once
+
+#include <vdb_ewa/grid_source.h>
+
+#include <openvdb/openvdb.h>
+
+namespace vdb_ewa {
+
+struct GridSource::Impl
+{
+    /// Always a float grid: double grids are converted on load (densities need no more).
+    openvdb::FloatGrid::ConstPtr grid;
+    std::string name;
+    std::string path;
+    std::string storedType; ///< "float", "half" or "double"
+    bool linear = true;
+    Mat3d indexToWorldLinear{1.0};   ///< A: linear part of the index-to-world map (affine grids)
+    Vec3d indexToWorldOffset{0.0};   ///< world position of index (0, 0, 0) (affine grids)
+    double voxelLength = 1.0;        ///< cbrt|det A|: the length "per voxel" densities refer to
+    std::uint64_t activeVoxels = 0;  ///< active voxels in leaf nodes
+    std::uint64_t activeTiles = 0;
+    Vec3d worldCentre{0.0};
+
+    /// Fill the derived fields from @a grid.
+    void derive();
+};
+
+namespace detail {
+
+/// Jacobian of the index-to-world map at an index position (columns: world image of the
+/// index axes).
+Mat3d indexToWorldJacobian(const openvdb::math::Transform& xform, const openvdb::Vec3d& pIndex);
+
+} // namespace detail
+} // namespace vdb_ewa

@@ -1,0 +1,45 @@
+/// @file kernel_extraction.h
+/// @brief Active voxels and active tiles -> Gaussian reconstruction kernels (Eq. 1, 8, 19).
+#pragma once
+
+#include <vdb_ewa/grid_source.h>
+#include <vdb_ewa/render_settings.h>
+
+#include <cstdint>
+#include <vector>
+
+namespace vdb_ewa {
+namespace detail {
+
+/// One reconstruction kernel r_k = G_V(u - u_k): a voxel (spacing 1) or one kernel of the
+/// lattice that models an active tile (spacing s > 1: sigma and weight scale with s).
+struct Kernel
+{
+    Vec3d pIndex;   ///< centre, index space
+    float density;  ///< sanitised voxel value (>= cutoff, <= kMaxDensity)
+    float spacing;  ///< lattice spacing in voxels: sigma = kernelSigma * spacing, weight x spacing^3
+};
+
+struct KernelSet
+{
+    std::vector<Kernel> kernels; ///< in tree order (deterministic)
+    std::uint64_t activeVoxels = 0;
+    std::uint64_t activeTiles = 0;
+    std::uint64_t belowCutoff = 0; ///< values < cutoff (including negative and -Inf): skipped
+    std::uint64_t notANumber = 0;  ///< NaN values: skipped
+    std::uint64_t clamped = 0;     ///< values > kMaxDensity (including +Inf): clamped
+};
+
+/// Densities above this are clamped: a voxel this dense is opaque at any sane setting.
+constexpr float kMaxDensity = 1.0e6f;
+
+/// Lattice spacing (voxels) used for an active tile of @a tileDim voxels a side: the largest
+/// power of two <= min(tileDim, maxSpacing), but coarse enough that a tile yields at most
+/// 64^3 kernels. See docs/equations.md#active-tiles.
+int tileLatticeSpacing(int tileDim, int maxSpacing);
+
+/// Build the kernels of every active voxel and tile, one TBB task per leaf node.
+KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& settings);
+
+} // namespace detail
+} // namespace vdb_ewa

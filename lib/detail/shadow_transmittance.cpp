@@ -1,0 +1,154 @@
+/// @file shadow_transmittance.cpp
+#include "shadow_transmittance.h"
+
+#include "grid_source_impl.h"
+
+#include <openvdb/tools/Interpolation.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace vdb_ewa {
+namespace detail {
+namespace {
+
+/// Shadow-ray marcher for one thread (owns a ValueAccessor, S7).
+class ShadowMarcher
+{
+public:
+    ShadowMarcher(const GridSource::Impl& grid, const RenderSettings& settings)
+        : mGrid(grid), mAccessor(grid.grid->tree()), mSettings(settings)
+    {
+        const Vec3d l = glm::normalize(settings.lightDir);
+        mLightWorld = l;
+        if (grid.linear) {
+            // Index-space displacement per voxel length travelled towards the light.
+            mStepIndex = glm::inverse(grid.indexToWorldLinear) * l * grid.voxelLength;
+        }
+        const openvdb::CoordBBox box = grid.grid->evalActiveVoxelBoundingBox();
+        mBoxMin = Vec3d(box.min().x(), box.min().y(), box.min().z()) - 1.0;
+        mBoxMax = Vec3d(box.max().x(), box.max().y(), box.max().z()) + 1.0;
+        for (int c = 0; c < 3; ++c) mExtinction[c] = settings.absorb[c] + settings.scatter[c];
+    }
+
+    Rgb march(const Vec3d& pIndex)
+    {
+        Rgb trans{1.0f, 1.0f, 1.0f};
+        const double step = mSettings.shadowStep;
+        const double cutoff = mSettings.cutoff;
+        const double gain = mSettings.gain;
+        double t[3] = {1.0, 1.0, 1.0};
+        // Voxel lengths until the ray leaves the padded active bounding box.
+        const double sMax = exitDistance(pIndex);
+        double s = step;
+        while (s <= sMax) {
+            const Vec3d p = indexAt(pIndex, s);
+            const openvdb::Vec3d pv(p.x, p.y, p.z);
+            // Skip empty nodes: jump to the first sample past the node's safe interior.
+            const double skipTo = emptyNodeExit(pIndex, p, s);
+            if (skipTo > s) {
+                s = step * std::ceil(skipTo / step);
+                if (s == skipTo) s += step;
+                continue;
+            }
+            float d = 0.0f;
+            openvdb::tools::BoxSampler::sample(mAccessor, pv, d);
+            if (d >= cutoff) {
+                const double k = d * step / (1.0 + s * gain);
+                for (int c = 0; c < 3; ++c) t[c] *= std::exp(-mExtinction[c] * k);
+                if (t[0] * t[0] + t[1] * t[1] + t[2] * t[2] < cutoff) break;
+            }
+            s += step;
+        }
+        for (int c = 0; c < 3; ++c) trans[c] = float(t[c]);
+        return trans;
+    }
+
+private:
+    Vec3d indexAt(const Vec3d& start, double s) const
+    {
+        if (mGrid.linear) return start + s * mStepIndex;
+        const auto& xform = mGrid.grid->transform();
+        const openvdb::Vec3d w0 = xform.indexToWorld(openvdb::Vec3d(start.x, start.y, start.z));
+        const Vec3d w = Vec3d(w0.x(), w0.y(), w0.z()) + s * mGrid.voxelLength * mLightWorld;
+        const openvdb::Vec3d i = xform.worldToIndex(openvdb::Vec3d(w.x, w.y, w.z));
+        return {i.x(), i.y(), i.z()};
+    }
+
+    /// Distance (voxel lengths) at which the ray leaves the padded active box.
+    double exitDistance(const Vec3d& start) const
+    {
+        if (!mGrid.linear) {
+            // No closed form through a frustum map: bound by the box diagonal in world units.
+            const Vec3d diag = mBoxMax - mBoxMin;
+            return glm::length(mGrid.indexToWorldLinear * diag) / mGrid.voxelLength * 2.0 + 1.0;
+        }
+        return boxExit(start, mStepIndex, mBoxMin, mBoxMax + 1.0);
+    }
+
+    static double boxExit(const Vec3d& o, const Vec3d& d, const Vec3d& lo, const Vec3d& hi)
+    {
+        double tExit = std::numeric_limits<double>::infinity();
+        for (int a = 0; a < 3; ++a) {
+            if (d[a] > 0.0) tExit = std::min(tExit, (hi[a] - o[a]) / d[a]);
+            else if (d[a] < 0.0) tExit = std::min(tExit, (lo[a] - o[a]) / d[a]);
+        }
+        return tExit;
+    }
+
+    /// If @a p lies in an empty (inactive, background) tree region, the distance along the ray
+    /// where trilinear samples may see data again; otherwise -1.
+    double emptyNodeExit(const Vec3d& start, const Vec3d& p, double s)
+    {
+        if (!mGrid.linear) return -1.0;
+        const openvdb::Coord ijk = openvdb::Coord::floor(openvdb::Vec3d(p.x, p.y, p.z));
+        const int depth = mAccessor.getValueDepth(ijk);
+        const int leafDepth = int(openvdb::FloatTree::DEPTH) - 1;
+        if (depth == leafDepth) return -1.0;
+        if (mAccessor.isValueOn(ijk)) return -1.0;
+        if (mAccessor.getValue(ijk) != 0.0f) return -1.0;
+        // Side of the empty node: root children 4096, then 128, then 8 (5-4-3 tree).
+        static const int kDims[] = {4096, 4096, 128, 8};
+        const int dim = kDims[std::clamp(depth + 1, 0, 3)];
+        const Vec3d lo(double(ijk.x() & ~(dim - 1)), double(ijk.y() & ~(dim - 1)), double(ijk.z() & ~(dim - 1)));
+        // Trilinear samples read floor(p) and floor(p) + 1: safe while p stays in [lo, lo+dim-1).
+        const double t = boxExit(p, mStepIndex, lo, lo + double(dim - 1));
+        (void)start;
+        return (t > 0.0 && std::isfinite(t)) ? s + t : -1.0;
+    }
+
+    const GridSource::Impl& mGrid;
+    openvdb::FloatGrid::ConstAccessor mAccessor;
+    const RenderSettings& mSettings;
+    Vec3d mLightWorld;
+    Vec3d mStepIndex{0.0};
+    Vec3d mBoxMin, mBoxMax;
+    double mExtinction[3];
+};
+
+} // namespace
+
+std::vector<Rgb> shadowTransmittance(const GridSource::Impl& grid, const KernelSet& kernels,
+    const RenderSettings& settings)
+{
+    std::vector<Rgb> out(kernels.kernels.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.size(), 1024),
+        [&](const tbb::blocked_range<std::size_t>& range) {
+            ShadowMarcher marcher(grid, settings);
+            for (std::size_t i = range.begin(); i < range.end(); ++i) {
+                out[i] = marcher.march(kernels.kernels[i].pIndex);
+            }
+        });
+    return out;
+}
+
+Rgb shadowTransmittanceAt(const GridSource::Impl& grid, const Vec3d& pIndex, const RenderSettings& settings)
+{
+    ShadowMarcher marcher(grid, settings);
+    return marcher.march(pIndex);
+}
+
+} // namespace detail
+} // namespace vdb_ewa

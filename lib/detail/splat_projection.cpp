@@ -1,0 +1,171 @@
+/// @file splat_projection.cpp
+#include "splat_projection.h"
+
+#include "grid_source_impl.h"
+
+#include <vdb_ewa/ewa_kernel.h>
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace vdb_ewa {
+namespace detail {
+namespace {
+
+constexpr double kDepthTruncation = 3.0; // kernels end at +-3 sd along the ray (99.73 %)
+
+ProjectionParams projectionParams(const Camera& camera, const RenderSettings& settings)
+{
+    ProjectionParams p;
+    p.perspective = camera.projection() == Projection::Perspective;
+    p.focalPixels = camera.focalPixels();
+    p.principalPoint = camera.principalPoint();
+    p.maxTanX = 1.3 * 0.5 * camera.width() / camera.focalPixels();
+    p.maxTanY = 1.3 * 0.5 * camera.height() / camera.focalPixels();
+    p.antiAliasing = settings.antiAliasing;
+    p.lowpass = settings.lowpass;
+    p.cutoffRadius = settings.cutoffRadius;
+    return p;
+}
+
+/// Where a kernel lies along its viewing ray; slabShares() turns it into shares twice
+/// (once to count, once to fill), with identical results.
+struct DepthExtent
+{
+    double mu, sd, clipNear, clipFar;
+};
+
+} // namespace
+
+SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
+    const std::vector<Rgb>& shadows, const Camera& camera, const RenderSettings& settings)
+{
+    SplatSet out;
+    const ProjectionParams params = projectionParams(camera, settings);
+    const bool perspective = params.perspective;
+    const Mat3d R = camera.cameraFromWorld();
+    const double sigma2 = settings.kernelSigma * settings.kernelSigma;
+    const double ell = grid.voxelLength;
+    out.slabs.zBase = perspective ? 0.0 : camera.near();
+    out.slabs.thickness = settings.slab * ell;
+
+    // Affine grids: camera-space covariance of a unit kernel, formed once per frame (Eq. 31).
+    const Mat3d RA = R * grid.indexToWorldLinear;
+    const Mat3d covUnit = RA * glm::transpose(RA);
+    const double volumeUnit = std::abs(glm::determinant(grid.indexToWorldLinear));
+
+    double extinction[3], albedo[3];
+    for (int c = 0; c < 3; ++c) {
+        extinction[c] = settings.absorb[c] + settings.scatter[c];
+        albedo[c] = extinction[c] > 0.0 ? settings.lightColor[c] * settings.scatter[c] / extinction[c] : 0.0;
+    }
+    const int width = camera.width(), height = camera.height();
+    const auto& xform = grid.grid->transform();
+
+    const std::size_t n = kernels.kernels.size();
+    std::vector<std::uint8_t> visible(n, 0);
+    std::vector<Splat> splats(n);
+    std::vector<DepthExtent> extents(n);
+    std::vector<std::uint32_t> spans(n, 0);
+    std::vector<std::uint8_t> spanClipped(n, 0);
+
+    // Pass 1: footprints and slab spans.
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096),
+        [&](const tbb::blocked_range<std::size_t>& range) {
+            for (std::size_t i = range.begin(); i < range.end(); ++i) {
+                const Kernel& k = kernels.kernels[i];
+                Vec3d pWorld;
+                Mat3d cov;
+                double volume;
+                if (grid.linear) {
+                    pWorld = grid.indexToWorldOffset + grid.indexToWorldLinear * k.pIndex;
+                    cov = covUnit;
+                    volume = volumeUnit;
+                } else {
+                    const openvdb::Vec3d w = xform.indexToWorld(openvdb::Vec3d(k.pIndex.x, k.pIndex.y, k.pIndex.z));
+                    pWorld = Vec3d(w.x(), w.y(), w.z());
+                    const Mat3d a = R * indexToWorldJacobian(xform, openvdb::Vec3d(k.pIndex.x, k.pIndex.y, k.pIndex.z));
+                    cov = a * glm::transpose(a);
+                    volume = std::abs(glm::determinant(a));
+                }
+                const double s = k.spacing;
+                cov *= sigma2 * s * s;
+                const Vec3d t = camera.cameraFromWorldPoint(pWorld);
+                if (perspective && !(t.z > camera.near())) continue; // centre before the near plane
+                const Footprint fp = projectKernel(t, cov, params);
+                if (!fp.valid) continue;
+
+                Splat& sp = splats[i];
+                // Pixels whose centre (i + 0.5) lies within the cut-off box.
+                const double bx0 = std::ceil(fp.centre.x - fp.halfExtent.x - 0.5);
+                const double bx1 = std::floor(fp.centre.x + fp.halfExtent.x - 0.5);
+                const double by0 = std::ceil(fp.centre.y - fp.halfExtent.y - 0.5);
+                const double by1 = std::floor(fp.centre.y + fp.halfExtent.y - 0.5);
+                if (bx1 < 0.0 || by1 < 0.0 || bx0 > width - 1 || by0 > height - 1 || bx0 > bx1 || by0 > by1) continue;
+                sp.x0 = int(std::max(bx0, 0.0));
+                sp.x1 = int(std::min(bx1, double(width - 1)));
+                sp.y0 = int(std::max(by0, 0.0));
+                sp.y1 = int(std::min(by1, double(height - 1)));
+
+                // Near/far planes clip the kernel's depth integral (perspective: the plane depth
+                // converted to distance along the ray through the centre).
+                const double toRay = perspective ? glm::length(t) / t.z : 1.0;
+                const DepthExtent extent{fp.depth, fp.depthSd, camera.near() * toRay, camera.far() * toRay};
+                const std::int64_t span = slabSpan(out.slabs, extent.mu, extent.sd, kDepthTruncation,
+                    extent.clipNear, extent.clipFar, sp.firstSlab);
+                if (span <= 0) continue;
+                spanClipped[i] = (span > kMaxSlabSpan);
+                const int count = int(std::min<std::int64_t>(span, kMaxSlabSpan));
+                spans[i] = std::uint32_t(count);
+                extents[i] = extent;
+
+                sp.cx = float(fp.centre.x);
+                sp.cy = float(fp.centre.y);
+                sp.qa = float(fp.conic.xx);
+                sp.qb = float(fp.conic.xy);
+                sp.qc = float(fp.conic.yy);
+                sp.cutoff = float(params.cutoffRadius * params.cutoffRadius);
+                // Weight w_k = density x voxel volume / voxel length (Eq. 8 with extinction
+                // per voxel length), times the footprint peak (Eq. 32, 33).
+                const double weight = double(k.density) * volume * s * s * s / ell * fp.peak;
+                for (int c = 0; c < 3; ++c) {
+                    const double tau = extinction[c] * weight;
+                    sp.tau[c] = float(tau);
+                    sp.emission[c] = float(tau * albedo[c] * double(shadows[i][c]));
+                }
+                visible[i] = 1;
+            }
+        });
+
+    // Pass 2: compact in kernel order and lay out the shares.
+    std::uint64_t total = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        if (!visible[i]) continue;
+        splats[i].shareOffset = total;
+        splats[i].slabCount = spans[i];
+        total += spans[i];
+        out.clippedSpan += spanClipped[i];
+    }
+    out.shares.resize(total);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096),
+        [&](const tbb::blocked_range<std::size_t>& range) {
+            for (std::size_t i = range.begin(); i < range.end(); ++i) {
+                if (!visible[i]) continue;
+                const DepthExtent& e = extents[i];
+                std::int64_t first = 0;
+                slabShares(out.slabs, e.mu, e.sd, kDepthTruncation, e.clipNear, e.clipFar, first,
+                    out.shares.data() + splats[i].shareOffset, int(spans[i]));
+            }
+        });
+    out.splats.reserve(std::size_t(std::count(visible.begin(), visible.end(), 1)));
+    for (std::size_t i = 0; i < n; ++i) {
+        if (visible[i]) out.splats.push_back(splats[i]);
+    }
+    out.culled = n - out.splats.size();
+    return out;
+}
+
+} // namespace detail
+} // namespace vdb_ewa

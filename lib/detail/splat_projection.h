@@ -1,0 +1,49 @@
+/// @file splat_projection.h
+/// @brief Kernels -> screen-space splats: footprint (Eq. 29-33), slab shares, colour.
+#pragma once
+
+#include "kernel_extraction.h"
+#include "shadow_transmittance.h"
+
+#include <vdb_ewa/camera.h>
+#include <vdb_ewa/slab_share.h>
+
+#include <cstdint>
+#include <vector>
+
+namespace vdb_ewa {
+namespace detail {
+
+/// A kernel ready to rasterise: optical depth tau_c(p) = tau[c] * exp(-0.5 d^T Q d) * share_s,
+/// emission E_c(p) = emission[c] * exp(-0.5 d^T Q d) * share_s in slab s.
+struct Splat
+{
+    float cx, cy;              ///< centre, raster
+    float qa, qb, qc;          ///< conic Q = [qa qb; qb qc], 1/pixels^2
+    float cutoff;              ///< evaluate where d^T Q d < cutoff (= cutoffRadius^2)
+    float tau[3];              ///< peak optical depth per channel
+    float emission[3];         ///< peak optical depth x source colour per channel
+    int x0, y0, x1, y1;        ///< inclusive pixel box, clipped to the image
+    std::int64_t firstSlab;    ///< first slab it overlaps
+    std::uint64_t shareOffset; ///< index of its first slab share in SplatSet::shares
+    std::uint32_t slabCount;   ///< number of slabs it overlaps
+};
+
+struct SplatSet
+{
+    std::vector<Splat> splats; ///< in kernel order (deterministic)
+    std::vector<float> shares; ///< slab shares of all splats
+    SlabGrid slabs;
+    std::uint64_t culled = 0;     ///< outside the frustum or behind the eye
+    std::uint64_t clippedSpan = 0; ///< kernels spanning more slabs than kMaxSlabSpan
+};
+
+/// Most slabs one kernel may span; shares past it are dropped (counted in clippedSpan).
+constexpr int kMaxSlabSpan = 1024;
+
+/// Project every kernel through @a camera. One task per block of kernels.
+SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
+    const std::vector<Rgb>& shadows, const Camera& camera, const RenderSettings& settings);
+
+} // namespace detail
+} // namespace vdb_ewa

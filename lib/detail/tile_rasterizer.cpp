@@ -1,0 +1,228 @@
+/// @file tile_rasterizer.cpp
+#include "tile_rasterizer.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace vdb_ewa {
+namespace detail {
+namespace {
+
+constexpr int kTilePixels = kTileSize * kTileSize;
+
+/// Screen tiles and the splats that overlap each (indices into SplatSet::splats).
+struct TileBins
+{
+    int tilesX = 0, tilesY = 0;
+    std::vector<std::uint64_t> offsets; ///< tilesX * tilesY + 1
+    std::vector<std::uint32_t> indices;
+};
+
+TileBins binSplats(const std::vector<Splat>& splats, int width, int height)
+{
+    TileBins bins;
+    bins.tilesX = (width + kTileSize - 1) / kTileSize;
+    bins.tilesY = (height + kTileSize - 1) / kTileSize;
+    const std::size_t tiles = std::size_t(bins.tilesX) * bins.tilesY;
+    bins.offsets.assign(tiles + 1, 0);
+    for (const Splat& s : splats) {
+        for (int ty = s.y0 / kTileSize; ty <= s.y1 / kTileSize; ++ty)
+            for (int tx = s.x0 / kTileSize; tx <= s.x1 / kTileSize; ++tx) ++bins.offsets[std::size_t(ty) * bins.tilesX + tx + 1];
+    }
+    for (std::size_t t = 0; t < tiles; ++t) bins.offsets[t + 1] += bins.offsets[t];
+    bins.indices.resize(bins.offsets.back());
+    std::vector<std::uint64_t> cursor(bins.offsets.begin(), bins.offsets.end() - 1);
+    for (std::uint32_t i = 0; i < splats.size(); ++i) {
+        const Splat& s = splats[i];
+        for (int ty = s.y0 / kTileSize; ty <= s.y1 / kTileSize; ++ty)
+            for (int tx = s.x0 / kTileSize; tx <= s.x1 / kTileSize; ++tx) bins.indices[cursor[std::size_t(ty) * bins.tilesX + tx]++] = i;
+    }
+    return bins;
+}
+
+/// The slab sweep of one screen tile: a ring of slab accumulators (optical depth and
+/// emission per channel and pixel), flushed front to back with the exact update.
+class TileCompositor
+{
+public:
+    TileCompositor(int x0, int y0, int w, int h, int ringSize, float cutoff)
+        : mX0(x0), mY0(y0), mW(w), mH(h), mMask(ringSize - 1), mCutoff(cutoff),
+          mTau(std::size_t(ringSize) * 3 * kTilePixels, 0.0f),
+          mEmission(std::size_t(ringSize) * 3 * kTilePixels, 0.0f),
+          mDirty(std::size_t(ringSize))
+    {
+        std::fill(std::begin(mT), std::end(mT), 1.0f);
+        std::fill(std::begin(mC), std::end(mC), 0.0f);
+        std::fill(std::begin(mAlive), std::end(mAlive), 0);
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) mAlive[y * kTileSize + x] = 1;
+        mAliveCount = w * h;
+    }
+
+    bool opaque() const { return mAliveCount == 0; }
+
+    void add(const Splat& s, const float* shares)
+    {
+        // Slabs in front of this splat's first one can receive nothing more: flush them.
+        flushBefore(s.firstSlab);
+        const int lx0 = std::max(s.x0 - mX0, 0), lx1 = std::min(s.x1 - mX0, mW - 1);
+        const int ly0 = std::max(s.y0 - mY0, 0), ly1 = std::min(s.y1 - mY0, mH - 1);
+        if (lx0 > lx1 || ly0 > ly1) return;
+        const int count = int(s.slabCount);
+        for (int k = 0; k < count; ++k) markDirty(s.firstSlab + k, lx0, ly0, lx1, ly1);
+        for (int ly = ly0; ly <= ly1; ++ly) {
+            const float dy = float(mY0 + ly) + 0.5f - s.cy;
+            for (int lx = lx0; lx <= lx1; ++lx) {
+                const int p = ly * kTileSize + lx;
+                if (!mAlive[p]) continue;
+                const float dx = float(mX0 + lx) + 0.5f - s.cx;
+                const float r = s.qa * dx * dx + 2.0f * s.qb * dx * dy + s.qc * dy * dy;
+                if (!(r < s.cutoff)) continue;
+                const float g = std::exp(-0.5f * r);
+                for (int k = 0; k < count; ++k) {
+                    const float gs = g * shares[k];
+                    const std::size_t base = slot(s.firstSlab + k) * 3 * kTilePixels + std::size_t(p);
+                    for (int c = 0; c < 3; ++c) {
+                        mTau[base + c * kTilePixels] += gs * s.tau[c];
+                        mEmission[base + c * kTilePixels] += gs * s.emission[c];
+                    }
+                }
+            }
+        }
+    }
+
+    /// Flush every pending slab and write the tile's pixels.
+    void finish(Image& image)
+    {
+        flushBefore(std::numeric_limits<std::int64_t>::max());
+        for (int ly = 0; ly < mH; ++ly)
+            for (int lx = 0; lx < mW; ++lx) {
+                const int p = ly * kTileSize + lx;
+                float* px = image.pixel(mX0 + lx, mY0 + ly);
+                for (int c = 0; c < 3; ++c) px[c] = mC[c * kTilePixels + p];
+                px[3] = 1.0f - (mT[p] + mT[kTilePixels + p] + mT[2 * kTilePixels + p]) / 3.0f;
+            }
+    }
+
+private:
+    struct Dirty
+    {
+        bool on = false;
+        std::int64_t slab = 0;
+        int x0 = 0, y0 = 0, x1 = -1, y1 = -1;
+    };
+
+    std::size_t slot(std::int64_t slab) const { return std::size_t(slab & mMask); }
+
+    void markDirty(std::int64_t slab, int x0, int y0, int x1, int y1)
+    {
+        Dirty& d = mDirty[slot(slab)];
+        if (!d.on) {
+            d = {true, slab, x0, y0, x1, y1};
+            mPending.push_back(slab);
+            return;
+        }
+        d.x0 = std::min(d.x0, x0);
+        d.y0 = std::min(d.y0, y0);
+        d.x1 = std::max(d.x1, x1);
+        d.y1 = std::max(d.y1, y1);
+    }
+
+    /// Composite, in depth order, every pending slab in front of @a slab.
+    void flushBefore(std::int64_t slab)
+    {
+        if (mPending.empty() || mPending.front() >= slab) return;
+        std::sort(mPending.begin(), mPending.end());
+        std::size_t n = 0;
+        while (n < mPending.size() && mPending[n] < slab) flush(mPending[n++]);
+        mPending.erase(mPending.begin(), mPending.begin() + std::ptrdiff_t(n));
+    }
+
+    void flush(std::int64_t slab)
+    {
+        Dirty& d = mDirty[slot(slab)];
+        const std::size_t base = slot(slab) * 3 * kTilePixels;
+        for (int ly = d.y0; ly <= d.y1; ++ly)
+            for (int lx = d.x0; lx <= d.x1; ++lx) {
+                const int p = ly * kTileSize + lx;
+                if (mAlive[p]) {
+                    for (int c = 0; c < 3; ++c) {
+                        const std::size_t i = base + c * kTilePixels + std::size_t(p);
+                        compositeSlab(mTau[i], mEmission[i], mC[c * kTilePixels + p], mT[c * kTilePixels + p]);
+                    }
+                    const float t0 = mT[p], t1 = mT[kTilePixels + p], t2 = mT[2 * kTilePixels + p];
+                    // vdb_render's ray termination: |T|^2 < cutoff (early termination, Sec. 5).
+                    if (t0 * t0 + t1 * t1 + t2 * t2 < mCutoff) {
+                        mAlive[p] = 0;
+                        --mAliveCount;
+                    }
+                }
+                for (int c = 0; c < 3; ++c) {
+                    const std::size_t i = base + c * kTilePixels + std::size_t(p);
+                    mTau[i] = 0.0f;
+                    mEmission[i] = 0.0f;
+                }
+            }
+        d.on = false;
+    }
+
+    int mX0, mY0, mW, mH;
+    std::int64_t mMask;
+    float mCutoff;
+    std::vector<float> mTau, mEmission; ///< [slot][channel][pixel]
+    std::vector<Dirty> mDirty;
+    std::vector<std::int64_t> mPending; ///< slabs holding contributions, not yet composited
+    float mT[3 * kTilePixels];
+    float mC[3 * kTilePixels];
+    std::uint8_t mAlive[kTilePixels];
+    int mAliveCount = 0;
+};
+
+int ringSizeFor(std::uint32_t maxSpan)
+{
+    int r = 1;
+    while (r < int(maxSpan) + 1) r *= 2;
+    return r;
+}
+
+} // namespace
+
+Image rasterizeSplats(const SplatSet& set, int width, int height, const RenderSettings& settings,
+    RasterStats& stats)
+{
+    Image image(width, height);
+    const TileBins bins = binSplats(set.splats, width, height);
+    stats.splatTilePairs = bins.indices.size();
+    const float cutoff = float(settings.cutoff);
+    const int tiles = bins.tilesX * bins.tilesY;
+    tbb::parallel_for(tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& range) {
+        std::vector<std::uint32_t> order;
+        for (int t = range.begin(); t < range.end(); ++t) {
+            const int tx = t % bins.tilesX, ty = t / bins.tilesX;
+            const int x0 = tx * kTileSize, y0 = ty * kTileSize;
+            const int w = std::min(kTileSize, width - x0), h = std::min(kTileSize, height - y0);
+            order.assign(bins.indices.begin() + std::ptrdiff_t(bins.offsets[t]),
+                bins.indices.begin() + std::ptrdiff_t(bins.offsets[t + 1]));
+            // Indices arrive in kernel order; a stable sort by first slab keeps ties in it.
+            std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+                return set.splats[a].firstSlab < set.splats[b].firstSlab;
+            });
+            std::uint32_t maxSpan = 1;
+            for (std::uint32_t i : order) maxSpan = std::max(maxSpan, set.splats[i].slabCount);
+            TileCompositor tile(x0, y0, w, h, ringSizeFor(maxSpan), cutoff);
+            for (std::uint32_t i : order) {
+                if (tile.opaque()) break;
+                const Splat& s = set.splats[i];
+                tile.add(s, set.shares.data() + s.shareOffset);
+            }
+            tile.finish(image);
+        }
+    });
+    return image;
+}
+
+} // namespace detail
+} // namespace vdb_ewa

@@ -1,0 +1,27 @@
+/// @file tile_rasterizer.h
+/// @brief Splats -> image: bin splats to 16x16 screen tiles, then per tile sweep the
+///        image-aligned slabs front to back (Sec. 7.1; Mueller & Crawfis sheet buffers).
+#pragma once
+
+#include "splat_projection.h"
+
+#include <vdb_ewa/image.h>
+
+namespace vdb_ewa {
+namespace detail {
+
+constexpr int kTileSize = 16;
+
+struct RasterStats
+{
+    std::uint64_t splatTilePairs = 0;
+};
+
+/// Composite @a set into a width x height image (premultiplied RGB, A = 1 - mean T).
+/// Each tile is owned by one task and processes its splats in (first slab, kernel) order,
+/// so the result does not depend on the thread count.
+Image rasterizeSplats(const SplatSet& set, int width, int height, const RenderSettings& settings,
+    RasterStats& stats);
+
+} // namespace detail
+} // namespace vdb_ewa

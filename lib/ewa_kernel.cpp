@@ -1,0 +1,108 @@
+/// @file ewa_kernel.cpp
+/// @brief Zwicker et al. 2002, Eq. (26)-(33); see docs/equations.md.
+#include <vdb_ewa/ewa_kernel.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace vdb_ewa {
+
+double Sym2::minEigen() const
+{
+    const double mean = 0.5 * (xx + yy);
+    const double diff = 0.5 * (xx - yy);
+    return mean - std::sqrt(diff * diff + xy * xy);
+}
+
+Vec3d rayFromCamera(const Vec3d& t)
+{
+    return {t.x / t.z, t.y / t.z, glm::length(t)};
+}
+
+Mat3d rayJacobian(const Vec3d& t)
+{
+    const double l = glm::length(t);
+    const double invZ = 1.0 / t.z;
+    const double invZ2 = invZ * invZ;
+    return mat3FromRows(
+        {invZ, 0.0, -t.x * invZ2},
+        {0.0, invZ, -t.y * invZ2},
+        {t.x / l, t.y / l, t.z / l});
+}
+
+Footprint projectKernel(const Vec3d& tCentre, const Mat3d& covCamera, const ProjectionParams& params)
+{
+    Footprint fp;
+    const double f = params.focalPixels;
+
+    // Ray-space covariance V' = J V J^T (Eq. 31) and |J| (Eq. 32).
+    Mat3d covRay;
+    double detJ = 1.0;
+    if (params.perspective) {
+        if (!(tCentre.z > 0.0)) return fp;
+        // Clamp the direction used for J at grazing angles (the centre stays exact).
+        Vec3d tJ = tCentre;
+        tJ.x = std::clamp(tCentre.x / tCentre.z, -params.maxTanX, params.maxTanX) * tCentre.z;
+        tJ.y = std::clamp(tCentre.y / tCentre.z, -params.maxTanY, params.maxTanY) * tCentre.z;
+        const Mat3d J = rayJacobian(tJ);
+        covRay = J * covCamera * glm::transpose(J);
+        detJ = glm::length(tJ) / (tJ.z * tJ.z * tJ.z);
+        fp.centre = params.principalPoint + f * Vec2d(tCentre.x / tCentre.z, tCentre.y / tCentre.z);
+        fp.depth = glm::length(tCentre);
+    } else {
+        covRay = covCamera; // orthographic: the ray map is the identity, |J| = 1
+        fp.centre = params.principalPoint + f * Vec2d(tCentre.x, tCentre.y);
+        fp.depth = tCentre.z;
+    }
+
+    // Footprint covariance in pixels, S V'_2x2 S^T (Eq. 32, 33). GLM indexes [column][row].
+    Sym2 cov{f * f * covRay[0][0], f * f * covRay[1][0], f * f * covRay[1][1]};
+    const Sym2 covPlane{covRay[0][0], covRay[1][0], covRay[1][1]};
+
+    // Depth spread along the ray through the centre: Var(x2 | x0, x1).
+    {
+        const double d = covPlane.det();
+        const double v0 = covRay[2][0], v1 = covRay[2][1];
+        double condVar = covRay[2][2];
+        if (d > 0.0) condVar -= (covPlane.yy * v0 * v0 - 2.0 * covPlane.xy * v0 * v1 + covPlane.xx * v1 * v1) / d;
+        fp.depthSd = std::sqrt(std::max(condVar, 1e-6 * covRay[2][2]));
+    }
+
+    // Low-pass filter (Eq. 33): convolution adds covariances.
+    switch (params.antiAliasing) {
+    case AntiAliasing::Ewa:
+        cov.xx += params.lowpass;
+        cov.yy += params.lowpass;
+        break;
+    case AntiAliasing::Swan: {
+        // Uniform scaling: grow the whole footprint until its minor axis has the low-pass
+        // variance added; isotropic footprints match EWA, elongated ones over-blur.
+        const double lambda = std::max(cov.minEigen(), 1e-12);
+        const double s = (lambda + params.lowpass) / lambda;
+        cov.xx *= s;
+        cov.xy *= s;
+        cov.yy *= s;
+        break;
+    }
+    case AntiAliasing::None: {
+        // Keep the conic finite for degenerate footprints (a 1e-6 pixel^2 floor).
+        cov.xx += 1e-6;
+        cov.yy += 1e-6;
+        break;
+    }
+    }
+
+    const double detCov = cov.det();
+    if (!(detCov > 0.0) || !std::isfinite(detCov)) return fp;
+    fp.covariance = cov;
+    fp.conic = cov.inverse();
+    const double c2 = params.cutoffRadius * params.cutoffRadius;
+    const double keptMass = -std::expm1(-0.5 * c2);
+    const double twoPi = 6.283185307179586476925;
+    fp.peak = detJ * f * f / (twoPi * std::sqrt(detCov) * keptMass);
+    fp.halfExtent = {std::sqrt(c2 * cov.xx), std::sqrt(c2 * cov.yy)};
+    fp.valid = std::isfinite(fp.peak) && std::isfinite(fp.centre.x) && std::isfinite(fp.centre.y);
+    return fp;
+}
+
+} // namespace vdb_ewa

@@ -1,0 +1,162 @@
+/// @file grid_source.cpp
+/// @brief Reading grids from .vdb files and from host applications.
+#include "detail/grid_source_impl.h"
+
+#include <vdb_ewa/error.h>
+#include <vdb_ewa/openvdb_grid.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+
+namespace vdb_ewa {
+namespace detail {
+
+Mat3d indexToWorldJacobian(const openvdb::math::Transform& xform, const openvdb::Vec3d& pIndex)
+{
+    const auto& map = *xform.baseMap();
+    Mat3d a;
+    for (int i = 0; i < 3; ++i) {
+        openvdb::Vec3d e(0.0);
+        e[i] = 1.0;
+        const openvdb::Vec3d w = map.isLinear() ? map.applyJacobian(e) : map.applyJacobian(e, pIndex);
+        a[i] = Vec3d(w.x(), w.y(), w.z());
+    }
+    return a;
+}
+
+} // namespace detail
+
+namespace {
+
+void initializeOpenVDB()
+{
+    static std::once_flag once;
+    std::call_once(once, [] { openvdb::initialize(); });
+}
+
+bool isScalarFloatType(const std::string& type) { return type == "float" || type == "double"; }
+
+/// Convert any supported grid to the float grid the renderer works on.
+openvdb::FloatGrid::ConstPtr asFloatGrid(const openvdb::GridBase::ConstPtr& base, std::string& storedType)
+{
+    if (auto f = openvdb::GridBase::constGrid<openvdb::FloatGrid>(base)) {
+        storedType = f->saveFloatAsHalf() ? "half" : "float";
+        return f;
+    }
+    if (auto d = openvdb::GridBase::constGrid<openvdb::DoubleGrid>(base)) {
+        storedType = "double";
+        auto tree = std::make_shared<openvdb::FloatTree>(d->tree());
+        auto f = openvdb::FloatGrid::create(tree);
+        f->setTransform(d->transform().copy());
+        f->setName(d->getName());
+        f->setGridClass(d->getGridClass());
+        return f;
+    }
+    return nullptr;
+}
+
+GridSource makeSource(openvdb::GridBase::ConstPtr base, const std::string& path)
+{
+    const std::string where = path.empty() ? std::string("host grid") : path;
+    if (!base) throw InputError(where + ": null grid");
+    auto impl = std::make_shared<GridSource::Impl>();
+    impl->grid = asFloatGrid(base, impl->storedType);
+    if (!impl->grid) {
+        throw InputError(where + ": grid '" + base->getName() + "' holds " + base->valueType() +
+                         " values; vdb_ewa renders scalar float or double grids");
+    }
+    if (impl->grid->getGridClass() == openvdb::GRID_LEVEL_SET) {
+        throw InputError(where + ": grid '" + base->getName() +
+                         "' is a level set; vdb_ewa renders fog volumes (level-set surfaces are not "
+                         "supported yet)");
+    }
+    impl->name = base->getName();
+    impl->path = path;
+    impl->derive();
+    return GridSource(impl);
+}
+
+} // namespace
+
+void GridSource::Impl::derive()
+{
+    const auto& xform = grid->transform();
+    linear = xform.isLinear();
+    activeVoxels = grid->tree().activeLeafVoxelCount();
+    activeTiles = grid->tree().activeTileCount();
+    const openvdb::CoordBBox bbox = grid->evalActiveVoxelBoundingBox();
+    const openvdb::Vec3d cIndex = bbox.empty() ? openvdb::Vec3d(0.0) : bbox.getCenter();
+    const openvdb::Vec3d cWorld = xform.indexToWorld(cIndex);
+    worldCentre = Vec3d(cWorld.x(), cWorld.y(), cWorld.z());
+    indexToWorldLinear = detail::indexToWorldJacobian(xform, cIndex);
+    const openvdb::Vec3d o = xform.indexToWorld(openvdb::Vec3d(0.0));
+    indexToWorldOffset = Vec3d(o.x(), o.y(), o.z());
+    voxelLength = std::cbrt(std::abs(glm::determinant(indexToWorldLinear)));
+    if (!(voxelLength > 0.0) || !std::isfinite(voxelLength)) {
+        throw InputError((path.empty() ? std::string("host grid") : path) + ": grid '" + name +
+                         "' has a singular or non-finite transform");
+    }
+}
+
+GridSource GridSource::open(const std::string& path, const std::string& gridName)
+{
+    initializeOpenVDB();
+    std::error_code ec;
+    if (!std::filesystem::exists(path, ec)) throw IoError(path + ": no such file");
+    if (std::filesystem::is_directory(path, ec)) throw IoError(path + ": is a directory, not a .vdb file");
+    if (!std::ifstream(path, std::ios::binary)) throw IoError(path + ": cannot be read (permission denied?)");
+
+    openvdb::GridBase::Ptr base;
+    try {
+        openvdb::io::File file(path);
+        file.open(/*delayLoad=*/false); // read everything now, so truncation is caught here
+        std::string name = gridName;
+        if (name.empty()) {
+            const openvdb::GridPtrVecPtr metas = file.readAllGridMetadata();
+            for (const auto& meta : *metas) {
+                if (isScalarFloatType(meta->valueType())) {
+                    name = meta->getName();
+                    break;
+                }
+            }
+            if (name.empty()) {
+                file.close();
+                throw InputError(path + ": no scalar floating-point grid in the file");
+            }
+        } else if (!file.hasGrid(name)) {
+            std::string names;
+            for (auto it = file.beginName(); it != file.endName(); ++it) {
+                names += (names.empty() ? "" : ", ") + ("'" + *it + "'");
+            }
+            file.close();
+            throw InputError(path + ": no grid named '" + name + "' (grids: " +
+                             (names.empty() ? "none" : names) + ")");
+        }
+        base = file.readGrid(name);
+        file.close();
+    } catch (const Error&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw IoError(path + ": cannot read VDB file (" + std::string(e.what()) + ")");
+    }
+    return makeSource(base, path);
+}
+
+GridSource gridSourceFromOpenVDB(openvdb::GridBase::ConstPtr grid)
+{
+    initializeOpenVDB();
+    return makeSource(std::move(grid), "");
+}
+
+const std::string& GridSource::name() const { return mImpl->name; }
+const std::string& GridSource::path() const { return mImpl->path; }
+const std::string& GridSource::storedType() const { return mImpl->storedType; }
+bool GridSource::isLevelSet() const { return mImpl->grid->getGridClass() == openvdb::GRID_LEVEL_SET; }
+bool GridSource::isLinear() const { return mImpl->linear; }
+std::uint64_t GridSource::activeVoxelCount() const { return mImpl->activeVoxels; }
+std::uint64_t GridSource::activeTileCount() const { return mImpl->activeTiles; }
+Vec3d GridSource::worldCentre() const { return mImpl->worldCentre; }
+
+} // namespace vdb_ewa

@@ -1,0 +1,87 @@
+/// @file renderer.cpp
+/// @brief The pipeline: kernels -> shadow transmittance -> splats -> tiles (docs/architecture.md).
+#include <vdb_ewa/renderer.h>
+
+#include "detail/grid_source_impl.h"
+#include "detail/kernel_extraction.h"
+#include "detail/shadow_transmittance.h"
+#include "detail/splat_projection.h"
+#include "detail/tile_rasterizer.h"
+
+#include <tbb/task_arena.h>
+
+#include <chrono>
+#include <sstream>
+
+namespace vdb_ewa {
+namespace {
+
+class StageTimer
+{
+public:
+    double lap()
+    {
+        const auto now = std::chrono::steady_clock::now();
+        const double s = std::chrono::duration<double>(now - mStart).count();
+        mStart = now;
+        return s;
+    }
+
+private:
+    std::chrono::steady_clock::time_point mStart = std::chrono::steady_clock::now();
+};
+
+std::string countLine(std::uint64_t n, const std::string& what)
+{
+    std::ostringstream s;
+    s << n << " " << what;
+    return s.str();
+}
+
+} // namespace
+
+Renderer::Renderer(const RenderSettings& settings) : mSettings(settings)
+{
+    mSettings.validate();
+}
+
+Image Renderer::render(const GridSource& grid, const Camera& camera, RenderStats* statsOut) const
+{
+    RenderStats stats;
+    Image image;
+    const GridSource::Impl& g = grid.impl();
+    auto run = [&] {
+        StageTimer timer;
+        const detail::KernelSet kernels = detail::extractKernels(g, mSettings);
+        stats.kernelSeconds = timer.lap();
+        const std::vector<detail::Rgb> shadows = detail::shadowTransmittance(g, kernels, mSettings);
+        stats.shadowSeconds = timer.lap();
+        const detail::SplatSet splats = detail::projectSplats(g, kernels, shadows, camera, mSettings);
+        stats.projectSeconds = timer.lap();
+        detail::RasterStats raster;
+        image = detail::rasterizeSplats(splats, camera.width(), camera.height(), mSettings, raster);
+        stats.rasterSeconds = timer.lap();
+
+        stats.activeVoxels = kernels.activeVoxels;
+        stats.activeTiles = kernels.activeTiles;
+        stats.kernels = kernels.kernels.size();
+        stats.kernelsSkipped = kernels.belowCutoff + kernels.notANumber;
+        stats.kernelsCulled = splats.culled;
+        stats.splats = splats.splats.size();
+        stats.splatTilePairs = raster.splatTilePairs;
+        if (kernels.activeVoxels == 0 && kernels.activeTiles == 0) stats.warnings.push_back("the grid has no active values: the image is empty");
+        if (kernels.notANumber) stats.warnings.push_back(countLine(kernels.notANumber, "NaN voxel values skipped"));
+        if (kernels.clamped) stats.warnings.push_back(countLine(kernels.clamped, "voxel values above 1e6 (or +Inf) clamped to 1e6"));
+        if (splats.clippedSpan) stats.warnings.push_back(countLine(splats.clippedSpan, "kernels spanned more than 1024 slabs and were truncated in depth (raise --slab)"));
+    };
+    if (mSettings.threads > 0) {
+        tbb::task_arena arena(mSettings.threads);
+        arena.execute(run);
+    } else {
+        run();
+    }
+    if (statsOut) *statsOut = std::move(stats);
+    return image;
+}
+
+} // namespace vdb_ewa
