@@ -109,7 +109,9 @@ GridSource makeSampleGrid(SampleGrid kind, double voxelSize)
         for (int j = int(std::floor(lo.y())); j <= int(std::ceil(hi.y())); ++j)
             for (int k = int(std::floor(lo.z())); k <= int(std::ceil(hi.z())); ++k) {
                 const openvdb::Vec3d w = xform.indexToWorld(openvdb::Vec3d(i, j, k));
-                const double d = sampleCloudDensity(Vec3d(w.x(), w.y(), w.z()));
+                double d = sampleCloudDensity(Vec3d(w.x(), w.y(), w.z()));
+                // The tiles variant saturates sooner, so whole leaves hold exactly 1.
+                if (kind == SampleGrid::Tiles) d = std::min(1.0, 2.0 * d);
                 if (d > 0.0) acc.setValueOn(openvdb::Coord(i, j, k), float(d));
             }
     if (kind == SampleGrid::Tiles) {

@@ -14,7 +14,7 @@ enum class SampleGrid
     Cloud,       ///< uniform voxels
     Anisotropic, ///< voxel scale 1:2:4
     Sheared,     ///< rotated and sheared affine map
-    Tiles        ///< uniform voxels, constant core stored as active tiles
+    Tiles        ///< uniform voxels, density doubled (clamped to 1) so its core is stored as active tiles
 };
 
 /// Parse "cloud", "anisotropic", "sheared", "tiles". @throw ValueError otherwise.

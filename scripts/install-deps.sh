@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# Install the Debian 12 packages vdb_ewa needs to build, test and benchmark.
+# Idempotent: installs only what is missing. Uses sudo when not run as root.
+set -euo pipefail
+packages=(
+  cmake g++ make pkg-config
+  libopenvdb-dev libboost-iostreams-dev libopenexr-dev libimath-dev libtbb-dev libglm-dev
+  libcli11-dev libgtest-dev
+  libopenvdb-tools   # vdb_render: the peer the tests and benchmarks compare against
+  openimageio-tools  # oiiotool: EXR -> PNG previews and image diffs
+)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ "${#missing[@]}" -eq 0 ]; then
+  exit 0
+fi
+sudo=""
+if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
+echo "install-deps: installing ${missing[*]}"
+$sudo apt-get update -qq
+DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null

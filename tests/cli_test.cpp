@@ -1,0 +1,144 @@
+/// @file cli_test.cpp
+/// @brief `vdb_ewa` as a user runs it: every error path gives one line on stderr naming the
+///        file and the problem, a documented non-zero exit, and no output file.
+#include "fixtures.h"
+
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+
+#include <fstream>
+#include <sstream>
+
+using namespace vdb_ewa;
+using namespace vdb_ewa::test;
+
+namespace {
+
+struct CliRun
+{
+    int code = -1;
+    std::string out, err;
+};
+
+std::string slurp(const std::string& path)
+{
+    std::ifstream in(path, std::ios::binary);
+    std::stringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+
+CliRun runCli(const TempDir& dir, const std::string& args)
+{
+    const std::string out = dir.file("stdout.txt"), err = dir.file("stderr.txt");
+    const int status = std::system((std::string(VDB_EWA_CLI_PATH) + " " + args + " >" + out + " 2>" + err).c_str());
+    CliRun r;
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = slurp(out);
+    r.err = slurp(err);
+    return r;
+}
+
+class Cli : public ::testing::Test
+{
+protected:
+    void SetUp() override
+    {
+        mGrid = mDir.file("cloud.vdb");
+        writeSampleGrid(SampleGrid::Cloud, mGrid, 0.08);
+    }
+
+    /// Expect a failure with @a code, one stderr line containing @a needle, and no output.
+    void expectFailure(const std::string& args, int code, const std::string& needle)
+    {
+        const std::string out = mDir.file("out.exr");
+        const CliRun r = runCli(mDir, args);
+        EXPECT_EQ(r.code, code) << args << "\n" << r.err;
+        EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+        EXPECT_NE(r.err.find(needle), std::string::npos) << "stderr: " << r.err;
+        EXPECT_FALSE(std::filesystem::exists(out)) << args;
+    }
+
+    TempDir mDir;
+    std::string mGrid;
+};
+
+} // namespace
+
+TEST_F(Cli, RendersAnExr)
+{
+    const std::string out = mDir.file("out.exr");
+    const CliRun r = runCli(mDir, "render " + mGrid + " " + out + " --res 64x48 -translate 0,0,5 -v");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const Image img = readExr(out);
+    EXPECT_EQ(img.width, 64);
+    EXPECT_EQ(img.height, 48);
+    EXPECT_GT(alphaSum(img), 20.0);
+    EXPECT_NE(r.out.find("timings (s): load"), std::string::npos);
+}
+
+TEST_F(Cli, InputErrors)
+{
+    const std::string out = mDir.file("out.exr");
+    expectFailure("render " + mDir.file("missing.vdb") + " " + out, 3, mDir.file("missing.vdb") + ": no such file");
+    const std::string text = mDir.file("text.vdb");
+    std::ofstream(text) << "not a vdb";
+    expectFailure("render " + text + " " + out, 3, text + ": cannot read VDB file");
+    const std::string bytes = slurp(mGrid);
+    const std::string truncated = mDir.file("truncated.vdb");
+    std::ofstream(truncated, std::ios::binary) << bytes.substr(0, bytes.size() / 3);
+    expectFailure("render " + truncated + " " + out, 3, truncated + ": ");
+    expectFailure("render " + mGrid + " " + out + " --name smoke", 3, "no grid named 'smoke'");
+    const std::string ints = mDir.file("int.vdb");
+    auto i = openvdb::Int32Grid::create(0);
+    i->setName("labels");
+    writeGrid(i, ints);
+    expectFailure("render " + ints + " " + out + " --name labels", 3, "holds int32 values");
+}
+
+TEST_F(Cli, ArgumentAndOutputErrors)
+{
+    const std::string out = mDir.file("out.exr");
+    expectFailure("render " + mGrid + " " + out + " --res 0x10", 2, "--res");
+    expectFailure("render " + mGrid + " " + out + " --translate 1,2", 2, "--translate");
+    expectFailure("render " + mGrid + " " + out + " --lookat 0,0,0 --rotate 0,0,0", 2, "not both");
+    expectFailure("render " + mGrid + " " + out + " --fov 30 --focal 50", 2, "not both");
+    expectFailure("render " + mGrid + " " + out + " --translate 0,0,0 --lookat 0,0,0", 2, "impossible camera");
+    expectFailure("render " + mGrid + " " + out + " --near 0", 2, "--near");
+    expectFailure("render " + mGrid + " " + out + " --slab -1", 2, "--slab");
+    expectFailure("render " + mGrid + " " + out + " --aa bilinear", 2, "--aa");
+    expectFailure("render " + mGrid + " " + out + " --bogus 3", 2, "bogus");
+    expectFailure("render " + mGrid + " " + mDir.file("out.png"), 2, "unsupported output format");
+    expectFailure("render " + mGrid + " " + mDir.file("no/such/dir/out.exr"), 3, "does not exist");
+}
+
+TEST_F(Cli, FailureLeavesAnExistingOutputUntouched)
+{
+    const std::string out = mDir.file("keep.exr");
+    ASSERT_EQ(runCli(mDir, "render " + mGrid + " " + out + " --res 32x32 -translate 0,0,5").code, 0);
+    const std::string before = slurp(out);
+    EXPECT_EQ(runCli(mDir, "render " + mGrid + " " + out + " --name missing").code, 3);
+    EXPECT_EQ(runCli(mDir, "render " + mDir.file("nope.vdb") + " " + out).code, 3);
+    EXPECT_EQ(slurp(out), before);
+    // No temporary files are left behind.
+    int files = 0;
+    for (const auto& e : std::filesystem::directory_iterator(std::filesystem::path(out).parent_path())) {
+        files += e.path().filename().string().find(".tmp") != std::string::npos;
+    }
+    EXPECT_EQ(files, 0);
+}
+
+TEST_F(Cli, HelpDocumentsEveryOptionWithItsDefault)
+{
+    const CliRun r = runCli(mDir, "render --help");
+    EXPECT_EQ(r.code, 0);
+    for (const char* opt : {"--res", "--translate", "--rotate", "--lookat", "--up", "--camera", "--fov", "--focal",
+             "--aperture", "--frame", "--near", "--far", "--name", "--absorb", "--scatter", "--light", "--gain",
+             "--cutoff", "--shadowstep", "--step", "--kernel-sigma", "--lowpass", "--aa", "--cutoff-radius", "--slab",
+             "--threads", "--verbose"}) {
+        EXPECT_NE(r.out.find(opt), std::string::npos) << opt;
+    }
+    EXPECT_NE(r.out.find("default: 1920x1080"), std::string::npos);
+    EXPECT_NE(r.out.find("default: 0.1,0.1,0.1"), std::string::npos);
+}

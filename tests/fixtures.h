@@ -1,0 +1,144 @@
+/// @file fixtures.h
+/// @brief Analytic grids built in code, temporary folders, image metrics, external tools.
+#pragma once
+
+#include "detail/grid_source_impl.h"
+
+#include <vdb_ewa/openvdb_grid.h>
+#include <vdb_ewa/vdb_ewa.h>
+
+#include <openvdb/openvdb.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <unistd.h>
+
+namespace vdb_ewa::test {
+
+/// A fresh temporary folder, removed with its contents at destruction.
+class TempDir
+{
+public:
+    TempDir()
+    {
+        std::string tmpl = (std::filesystem::temp_directory_path() / "vdb_ewa_test_XXXXXX").string();
+        mPath = ::mkdtemp(tmpl.data());
+    }
+    ~TempDir() { std::filesystem::remove_all(mPath); }
+    std::string file(const std::string& name) const { return (std::filesystem::path(mPath) / name).string(); }
+
+private:
+    std::string mPath;
+};
+
+/// Box of active voxels [lo, hi] (inclusive index bounds) of constant @a density.
+inline openvdb::FloatGrid::Ptr makeBoxGrid(const openvdb::Coord& lo, const openvdb::Coord& hi, float density,
+    double voxelSize)
+{
+    auto grid = openvdb::FloatGrid::create(0.0f);
+    grid->setTransform(openvdb::math::Transform::createLinearTransform(voxelSize));
+    grid->setGridClass(openvdb::GRID_FOG_VOLUME);
+    grid->setName("density");
+    auto acc = grid->getAccessor();
+    for (int i = lo.x(); i <= hi.x(); ++i)
+        for (int j = lo.y(); j <= hi.y(); ++j)
+            for (int k = lo.z(); k <= hi.z(); ++k) acc.setValueOn(openvdb::Coord(i, j, k), density);
+    return grid;
+}
+
+inline void writeGrid(const openvdb::GridBase::Ptr& grid, const std::string& path)
+{
+    openvdb::io::File file(path);
+    file.write({grid});
+    file.close();
+}
+
+/// Sum of alpha over the image.
+inline double alphaSum(const Image& image)
+{
+    double s = 0.0;
+    for (std::size_t i = 3; i < image.rgba.size(); i += 4) s += image.rgba[i];
+    return s;
+}
+
+/// Intersection over union of the masks alpha > threshold.
+inline double alphaMaskIoU(const Image& a, const Image& b, float threshold = 0.05f)
+{
+    std::size_t inter = 0, uni = 0;
+    for (std::size_t i = 3; i < a.rgba.size(); i += 4) {
+        const bool ma = a.rgba[i] > threshold, mb = b.rgba[i] > threshold;
+        inter += (ma && mb);
+        uni += (ma || mb);
+    }
+    return uni ? double(inter) / double(uni) : 1.0;
+}
+
+/// Root-mean-square difference of channel @a c (0..3), or of all four when c < 0.
+inline double rmse(const Image& a, const Image& b, int c = -1)
+{
+    double s = 0.0;
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < a.rgba.size(); ++i) {
+        if (c >= 0 && int(i % 4) != c) continue;
+        const double d = double(a.rgba[i]) - double(b.rgba[i]);
+        s += d * d;
+        ++n;
+    }
+    return std::sqrt(s / double(n));
+}
+
+/// Path of vdb_render, or empty if it is not installed.
+inline std::string vdbRenderPath()
+{
+    for (const char* p : {"/usr/bin/vdb_render", "/usr/local/bin/vdb_render"}) {
+        if (::access(p, X_OK) == 0) return p;
+    }
+    return "";
+}
+
+/// Folder of the shared real-world assets, or empty if absent ($VDB_EWA_ASSETS overrides).
+inline std::string assetsDir()
+{
+    const char* env = std::getenv("VDB_EWA_ASSETS");
+    const std::string dir = env ? env : VDB_EWA_DEFAULT_ASSETS;
+    return std::filesystem::is_directory(dir) ? dir : "";
+}
+
+/// Settings for a pure absorber with no cutoffs: transmittance tests.
+inline RenderSettings absorberSettings(double sigma)
+{
+    RenderSettings s;
+    s.absorb = Vec3d(sigma);
+    s.scatter = Vec3d(0.0);
+    s.cutoff = 0.0;
+    s.threads = 0;
+    return s;
+}
+
+} // namespace vdb_ewa::test
+
+namespace vdb_ewa::test {
+
+/// Render an in-memory grid.
+inline Image renderGrid(const openvdb::GridBase::Ptr& grid, const CameraSettings& camera,
+    const RenderSettings& settings, RenderStats* stats = nullptr)
+{
+    const GridSource source = gridSourceFromOpenVDB(grid);
+    return Renderer(settings).render(source, Camera(camera, source.worldCentre()), stats);
+}
+
+/// Orthographic camera looking down -z at (x, y), from above z.
+inline CameraSettings orthoDownZ(double x, double y, double z, double frame, int res)
+{
+    CameraSettings c;
+    c.projection = Projection::Orthographic;
+    c.width = c.height = res;
+    c.translate = Vec3d(x, y, z);
+    c.lookAt = Vec3d(x, y, z - 1.0);
+    c.frame = frame;
+    return c;
+}
+
+} // namespace vdb_ewa::test

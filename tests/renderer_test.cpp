@@ -1,0 +1,298 @@
+/// @file renderer_test.cpp
+/// @brief The whole pipeline on analytic cases: a uniform slab, a single voxel, partition of
+///        unity, tiles, anisotropic, sheared and frustum maps, thread-count independence.
+#include "fixtures.h"
+
+#include <gtest/gtest.h>
+
+#include <openvdb/math/Maps.h>
+
+#include <cmath>
+#include <cstring>
+
+using namespace vdb_ewa;
+using namespace vdb_ewa::test;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+/// 40 x 40 x depth voxels of density rho centred on the origin in x, y; z in [0, depth).
+openvdb::FloatGrid::Ptr slab(int depth, float rho, double h)
+{
+    return makeBoxGrid(openvdb::Coord(-20, -20, 0), openvdb::Coord(19, 19, depth - 1), rho, h);
+}
+
+} // namespace
+
+TEST(Renderer, UniformSlabTransmittanceIsExpMinusTau)
+{
+    // tau = sigma * rho * depth (per voxel length), at any voxel size.
+    const double sigma = 0.2, rho = 0.5;
+    const int depth = 10;
+    for (double h : {1e-3, 0.1, 1e3}) {
+        const Image img = renderGrid(slab(depth, float(rho), h), orthoDownZ(-0.5 * h, -0.5 * h, 100 * h, 16 * h, 24),
+            absorberSettings(sigma));
+        const double expected = 1.0 - std::exp(-sigma * rho * depth);
+        for (std::size_t i = 3; i < img.rgba.size(); i += 4) {
+            ASSERT_NEAR(img.rgba[i], expected, 0.005 * expected) << "voxel size " << h;
+        }
+    }
+}
+
+TEST(Renderer, UniformSlabTransmittanceFollowsObliquePerspectiveRays)
+{
+    const double sigma = 0.2, rho = 0.5, h = 0.1;
+    const int depth = 10;
+    CameraSettings cam;
+    cam.width = cam.height = 32;
+    cam.translate = Vec3d(-0.05, -0.05, 8.0);
+    cam.lookAt = Vec3d(-0.05, -0.05, 0.0);
+    cam.setFieldOfView(20.0);
+    const Image img = renderGrid(slab(depth, float(rho), h), cam, absorberSettings(sigma));
+    const Camera camera(cam, Vec3d(0.0));
+    for (int j = 0; j < 32; ++j)
+        for (int i = 0; i < 32; ++i) {
+            Vec3d o, d;
+            camera.worldRay(i + 0.5, j + 0.5, o, d);
+            const double path = depth / std::abs(d.z); // voxel lengths through the slab
+            const double expected = 1.0 - std::exp(-sigma * rho * path);
+            ASSERT_NEAR(img.pixel(i, j)[3], expected, 0.005 * expected) << i << "," << j;
+        }
+}
+
+TEST(Renderer, UniformSlabSingleScatteringMatchesTheClosedForm)
+{
+    // Light from the camera's side: shadow and view paths coincide, so
+    // C = albedo L (1 - exp(-2 tau)) / 2 (gain 0, no absorption).
+    const double sigma = 0.15, rho = 0.5, h = 0.1;
+    const int depth = 12;
+    RenderSettings s;
+    s.absorb = Vec3d(0.0);
+    s.scatter = Vec3d(sigma);
+    s.lightDir = Vec3d(0, 0, 1);
+    s.lightColor = Vec3d(1.0);
+    s.gain = 0.0;
+    s.cutoff = 0.0;
+    s.shadowStep = 0.1;
+    const Image img = renderGrid(slab(depth, float(rho), h), orthoDownZ(-0.05, -0.05, 10.0, 1.0, 16), s);
+    const double tau = sigma * rho * depth;
+    const double expected = 0.5 * (1.0 - std::exp(-2.0 * tau));
+    for (int j = 0; j < 16; ++j)
+        for (int i = 0; i < 16; ++i) {
+            ASSERT_NEAR(img.pixel(i, j)[0], expected, 0.02 * expected) << i << "," << j;
+            ASSERT_NEAR(img.pixel(i, j)[3], 1.0 - std::exp(-tau), 0.005);
+        }
+}
+
+TEST(Renderer, SingleVoxelImageIntegral)
+{
+    // Sum over pixels of the optical depth = sigma rho |det A| / l * |det J| f^2 (Eq. 32, 33):
+    // for a voxel at distance l on a ray at depth t2, |det J| = l / t2^3.
+    const double sigma = 1e-3, rho = 1.0;
+    for (const openvdb::Coord c : {openvdb::Coord(0, 0, 0), openvdb::Coord(30, -20, 0)}) {
+        for (const double h : {0.05, 1.0}) {
+            auto grid = makeBoxGrid(c, c, float(rho), h);
+            CameraSettings cam;
+            cam.width = 400;
+            cam.height = 300;
+            cam.translate = Vec3d(0.0, 0.0, 100 * h);
+            cam.lookAt = Vec3d(0.0);
+            RenderSettings s = absorberSettings(sigma);
+            const Image img = renderGrid(grid, cam, s);
+            const Camera camera(cam, Vec3d(0.0));
+            const Vec3d t = camera.cameraFromWorldPoint(Vec3d(c.x(), c.y(), c.z()) * h);
+            const double f = camera.focalPixels();
+            const double expectedTau = sigma * rho * h * h * glm::length(t) / (t.z * t.z * t.z) * f * f;
+            // alpha = 1 - exp(-tau) ~ tau - tau^2 / 2 for the small peak optical depths here.
+            EXPECT_NEAR(alphaSum(img), expectedTau, 0.01 * expectedTau) << "voxel " << c << " size " << h;
+        }
+    }
+}
+
+TEST(Renderer, PartitionOfUnityRippleShrinksWithKernelSigma)
+{
+    // Sum over the integer lattice of unit-integral Gaussians (Eq. 19) at random points.
+    auto ripple = [](double sigma) {
+        double worst = 0.0;
+        const double norm = 1.0 / std::pow(2.0 * kPi * sigma * sigma, 1.5);
+        for (int n = 0; n < 64; ++n) {
+            const Vec3d x(0.37 * n - std::floor(0.37 * n), 0.61 * n - std::floor(0.61 * n), 0.13 * n - std::floor(0.13 * n));
+            double sum = 0.0;
+            for (int i = -6; i <= 6; ++i)
+                for (int j = -6; j <= 6; ++j)
+                    for (int k = -6; k <= 6; ++k) {
+                        const Vec3d d = x - Vec3d(i, j, k);
+                        sum += norm * std::exp(-0.5 * glm::dot(d, d) / (sigma * sigma));
+                    }
+            worst = std::max(worst, std::abs(sum - 1.0));
+        }
+        return worst;
+    };
+    double previous = 1.0;
+    for (double sigma : {0.4, 0.5, 0.6, 0.7, 0.8}) {
+        const double r = ripple(sigma);
+        std::printf("partition of unity: sigma %.1f voxels, max |sum - 1| = %.2e\n", sigma, r);
+        EXPECT_LT(r, previous);
+        previous = r;
+        if (sigma == 0.6) {
+            EXPECT_LT(r, 0.01);
+        }
+    }
+}
+
+TEST(Renderer, ThreadCountDoesNotChangeTheImage)
+{
+    const GridSource cloud = makeSampleGrid(SampleGrid::Cloud, 0.05);
+    CameraSettings cam;
+    cam.width = 200;
+    cam.height = 150;
+    cam.translate = Vec3d(1.0, 0.5, 4.0);
+    const Camera camera(cam, cloud.worldCentre());
+    RenderSettings one, two;
+    one.threads = 1;
+    two.threads = 2;
+    const Image a = Renderer(one).render(cloud, camera);
+    const Image b = Renderer(two).render(cloud, camera);
+    ASSERT_EQ(a.rgba.size(), b.rgba.size());
+    EXPECT_EQ(std::memcmp(a.rgba.data(), b.rgba.data(), a.rgba.size() * sizeof(float)), 0);
+    EXPECT_GT(alphaSum(a), 100.0); // the cloud is in view
+}
+
+namespace {
+
+/// Render a sample grid of the shared analytic cloud with the same camera.
+Image renderSample(SampleGrid kind, double voxelSize, const RenderSettings& s = RenderSettings())
+{
+    const GridSource g = makeSampleGrid(kind, voxelSize);
+    CameraSettings cam;
+    cam.width = 160;
+    cam.height = 120;
+    cam.translate = Vec3d(0.3, 0.4, 5.0);
+    cam.lookAt = Vec3d(0.0);
+    return Renderer(s).render(g, Camera(cam, g.worldCentre()));
+}
+
+} // namespace
+
+TEST(Renderer, AnisotropicVoxelsAgreeWithAUniformResampling)
+{
+    // Voxels (h, 2h, 4h) have length cbrt(8 h^3) = 2h: the same densities mean the same
+    // extinction as a uniform grid of voxel 2h.
+    const Image aniso = renderSample(SampleGrid::Anisotropic, 0.03);
+    const Image uniform = renderSample(SampleGrid::Cloud, 0.06);
+    EXPECT_GT(alphaMaskIoU(aniso, uniform), 0.95);
+    EXPECT_LT(rmse(aniso, uniform, 3), 0.03);
+    EXPECT_LT(rmse(aniso, uniform, 0), 0.03);
+}
+
+TEST(Renderer, ShearedVoxelsAgreeWithAUniformResampling)
+{
+    const Image sheared = renderSample(SampleGrid::Sheared, 0.04);
+    const Image uniform = renderSample(SampleGrid::Cloud, 0.04);
+    EXPECT_GT(alphaMaskIoU(sheared, uniform), 0.95);
+    EXPECT_LT(rmse(sheared, uniform, 3), 0.03);
+    EXPECT_LT(rmse(sheared, uniform, 0), 0.03);
+}
+
+TEST(Renderer, ActiveTilesAgreeWithTheirVoxels)
+{
+    const GridSource tiles = makeSampleGrid(SampleGrid::Tiles, 0.03);
+    ASSERT_GT(tiles.activeTileCount(), 0u);
+    auto voxelized = openvdb::gridPtrCast<openvdb::FloatGrid>(
+        openvdb::ConstPtrCast<openvdb::FloatGrid>(tiles.impl().grid)->deepCopyGrid());
+    voxelized->tree().voxelizeActiveTiles();
+    ASSERT_EQ(voxelized->tree().activeTileCount(), 0u);
+    const GridSource voxels = gridSourceFromOpenVDB(voxelized);
+
+    CameraSettings cam;
+    cam.width = 160;
+    cam.height = 120;
+    cam.translate = Vec3d(0.3, 0.4, 4.0);
+    const Camera camera(cam, voxels.worldCentre());
+    const Image reference = Renderer(RenderSettings()).render(voxels, camera);
+    for (int spacing : {1, 2, 4, 8}) {
+        RenderSettings s;
+        s.tileKernelSpacing = spacing;
+        const Image img = Renderer(s).render(tiles, camera);
+        const double e = rmse(img, reference);
+        std::printf("active tiles: kernel spacing %d voxels, RMSE against voxelized tiles %.2e\n", spacing, e);
+        if (spacing == 1) {
+            EXPECT_LT(e, 1e-5);
+        }
+        if (spacing == RenderSettings().tileKernelSpacing) {
+            EXPECT_LT(e, 2e-3);
+        }
+    }
+}
+
+TEST(Renderer, FrustumTransformUsesPerVoxelJacobians)
+{
+    // A frustum map with taper 1 is an affine box map in disguise: the per-voxel path
+    // (non-linear transform) must render what the affine path renders.
+    const openvdb::BBoxd box(openvdb::Vec3d(0, 0, 0), openvdb::Vec3d(40, 40, 40));
+    auto frustum = std::make_shared<openvdb::math::NonlinearFrustumMap>(box, 1.0, 2.0);
+    auto gridF = makeBoxGrid(openvdb::Coord(10, 10, 10), openvdb::Coord(29, 29, 29), 0.3f, 1.0);
+    gridF->setTransform(std::make_shared<openvdb::math::Transform>(frustum));
+    ASSERT_FALSE(gridF->transform().isLinear());
+    // The same map as an affine transform, fitted from the frustum map itself.
+    const auto& f = gridF->transform();
+    const openvdb::Vec3d o = f.indexToWorld(openvdb::Vec3d(0.0));
+    openvdb::math::Mat4d m = openvdb::math::Mat4d::identity();
+    for (int i = 0; i < 3; ++i) {
+        openvdb::Vec3d e(0.0);
+        e[i] = 1.0;
+        const openvdb::Vec3d col = f.indexToWorld(e) - o;
+        for (int r = 0; r < 3; ++r) m[i][r] = col[r]; // row-vector convention: row i = image of e_i
+    }
+    m.setTranslation(o);
+    auto gridA = makeBoxGrid(openvdb::Coord(10, 10, 10), openvdb::Coord(29, 29, 29), 0.3f, 1.0);
+    gridA->setTransform(std::make_shared<openvdb::math::Transform>(std::make_shared<openvdb::math::AffineMap>(m)));
+    for (const openvdb::Vec3d probe : {openvdb::Vec3d(29, 3, 7), openvdb::Vec3d(12.5, 33, 21)}) {
+        ASSERT_NEAR((f.indexToWorld(probe) - gridA->transform().indexToWorld(probe)).length(), 0.0, 1e-9);
+    }
+
+    CameraSettings cam;
+    cam.width = 64;
+    cam.height = 64;
+    cam.translate = Vec3d(0.7, 0.5, 4.0);
+    const Image a = renderGrid(gridF, cam, RenderSettings());
+    const Image b = renderGrid(gridA, cam, RenderSettings());
+    EXPECT_GT(alphaSum(a), 50.0);
+    EXPECT_LT(rmse(a, b), 1e-4);
+}
+
+TEST(Renderer, EmptyGridRendersBlackWithAWarning)
+{
+    auto grid = openvdb::FloatGrid::create(0.0f);
+    CameraSettings cam;
+    cam.width = cam.height = 8;
+    cam.translate = Vec3d(0, 0, 5);
+    RenderStats stats;
+    const Image img = renderGrid(grid, cam, RenderSettings(), &stats);
+    EXPECT_EQ(alphaSum(img), 0.0);
+    ASSERT_EQ(stats.warnings.size(), 1u);
+    EXPECT_NE(stats.warnings[0].find("no active values"), std::string::npos);
+}
+
+TEST(Renderer, NonFiniteAndNegativeValuesAreSkippedOrClamped)
+{
+    auto grid = makeBoxGrid(openvdb::Coord(0), openvdb::Coord(7), 0.5f, 0.1);
+    auto acc = grid->getAccessor();
+    acc.setValue(openvdb::Coord(1, 1, 1), std::numeric_limits<float>::quiet_NaN());
+    acc.setValue(openvdb::Coord(2, 2, 2), std::numeric_limits<float>::infinity());
+    acc.setValue(openvdb::Coord(3, 3, 3), -std::numeric_limits<float>::infinity());
+    acc.setValue(openvdb::Coord(4, 4, 4), -3.0f);
+    acc.setValue(openvdb::Coord(5, 5, 5), 1e30f);
+    CameraSettings cam;
+    cam.width = cam.height = 32;
+    cam.translate = Vec3d(0.35, 0.35, 3.0);
+    RenderStats stats;
+    const Image img = renderGrid(grid, cam, RenderSettings(), &stats);
+    EXPECT_TRUE(img.allFinite());
+    EXPECT_GT(alphaSum(img), 1.0);
+    std::string all;
+    for (const auto& w : stats.warnings) all += w + "\n";
+    EXPECT_NE(all.find("1 NaN voxel values skipped"), std::string::npos) << all;
+    EXPECT_NE(all.find("2 voxel values above 1e6"), std::string::npos) << all;
+}

@@ -1,0 +1,86 @@
+/// @file slab_share_test.cpp
+/// @brief Image-aligned slab shares (ewa-brief Sec. 5) against numerical integration.
+#include <vdb_ewa/slab_share.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+using namespace vdb_ewa;
+
+namespace {
+
+std::vector<float> shares(const SlabGrid& g, double mu, double sd, double lo, double hi, std::int64_t& first)
+{
+    std::vector<float> out(1024);
+    out.resize(std::size_t(slabShares(g, mu, sd, 3.0, lo, hi, first, out.data(), 1024)));
+    return out;
+}
+
+} // namespace
+
+TEST(SlabShare, SharesOfAnUnclippedKernelSumToOne)
+{
+    for (double thickness : {0.1, 0.5, 1.0, 3.0}) {
+        for (double mu : {0.0, 0.37, 5.5, 1234.56}) {
+            const SlabGrid g{0.0, thickness};
+            std::int64_t first = 0;
+            const std::vector<float> s = shares(g, mu, 0.6, -1e9, 1e9, first);
+            double sum = 0.0;
+            for (float v : s) sum += v;
+            EXPECT_NEAR(sum, 1.0, 1e-5) << "thickness " << thickness << " mu " << mu;
+            EXPECT_EQ(first, g.index(mu - 1.8));
+        }
+    }
+}
+
+TEST(SlabShare, EachShareIsTheGaussianMassInItsSlab)
+{
+    const SlabGrid g{0.25, 0.4};
+    const double mu = 2.0, sd = 0.5;
+    std::int64_t first = 0;
+    const std::vector<float> s = shares(g, mu, sd, -1e9, 1e9, first);
+    const double mass = std::erf(3.0 / std::sqrt(2.0)); // truncation at 3 sd
+    for (std::size_t i = 0; i < s.size(); ++i) {
+        const double z0 = std::max(g.start(first + std::int64_t(i)), mu - 3 * sd);
+        const double z1 = std::min(g.start(first + std::int64_t(i) + 1), mu + 3 * sd);
+        // Midpoint rule on the Gaussian density.
+        double integral = 0.0;
+        const int n = 2000;
+        for (int k = 0; k < n; ++k) {
+            const double z = z0 + (k + 0.5) * (z1 - z0) / n;
+            integral += std::exp(-0.5 * (z - mu) * (z - mu) / (sd * sd)) / (sd * std::sqrt(2 * M_PI)) * (z1 - z0) / n;
+        }
+        EXPECT_NEAR(s[i], integral / mass, 1e-5);
+    }
+}
+
+TEST(SlabShare, NearPlaneDropsTheHiddenPart)
+{
+    const SlabGrid g{0.0, 0.5};
+    std::int64_t first = 0;
+    const std::vector<float> s = shares(g, 1.0, 0.3, 1.0, 1e9, first); // clip at the mean
+    double sum = 0.0;
+    for (float v : s) sum += v;
+    EXPECT_NEAR(sum, 0.5, 1e-5);
+    EXPECT_TRUE(shares(g, 1.0, 0.3, 5.0, 1e9, first).empty()); // wholly before the near plane
+}
+
+TEST(SlabShare, HomogeneousSlabUpdateIsExact)
+{
+    // One slab of optical depth tau and uniform source c: C = c (1 - e^-tau), T = e^-tau.
+    for (float tau : {1e-9f, 1e-3f, 0.5f, 5.0f, 80.0f}) {
+        float c = 0.0f, t = 1.0f;
+        compositeSlab(tau, 0.7f * tau, c, t);
+        EXPECT_NEAR(t, std::exp(-tau), 1e-6);
+        EXPECT_NEAR(c, 0.7 * (1.0 - std::exp(-double(tau))), 1e-6);
+    }
+    // Splitting a homogeneous segment into two slabs changes nothing.
+    float c1 = 0.0f, t1 = 1.0f, c2 = 0.0f, t2 = 1.0f;
+    compositeSlab(2.0f, 0.4f * 2.0f, c1, t1);
+    compositeSlab(1.0f, 0.4f, c2, t2);
+    compositeSlab(1.0f, 0.4f, c2, t2);
+    EXPECT_NEAR(c1, c2, 1e-6);
+    EXPECT_NEAR(t1, t2, 1e-6);
+}
