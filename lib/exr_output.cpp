@@ -11,12 +11,14 @@
 #include <OpenEXR/ImfInputFile.h>
 #include <OpenEXR/ImfOutputFile.h>
 #include <OpenEXR/ImfStringAttribute.h>
+#include <OpenEXR/ImfThreading.h>
 
 #include <unistd.h>
 
 #include <atomic>
 #include <cstdio>
 #include <filesystem>
+#include <thread>
 
 namespace vdb_ewa {
 namespace {
@@ -83,6 +85,11 @@ void writeExr(const Image& image, const std::string& path,
         std::remove(tmp.c_str());
         throw IoError(path + ": cannot write EXR (" + std::string(e.what()) + ")");
     }
+}
+
+void setExrThreadsProcessWide(int threads)
+{
+    Imf::setGlobalThreadCount(threads > 0 ? threads : int(std::max(1u, std::thread::hardware_concurrency())));
 }
 
 Image readExr(const std::string& path)

@@ -96,6 +96,7 @@ public:
         for (const std::string& w : stats.warnings) std::cerr << "vdb_ewa: warning: " << mInput << ": " << w << "\n";
 
         const auto t1 = std::chrono::steady_clock::now();
+        setExrThreadsProcessWide(rs.threads);
         try {
             writeExr(image, mOutput, {{"software", std::string("vdb_ewa ") + versionString()}});
         } catch (const Error& e) {

@@ -20,6 +20,10 @@ VDB_EWA_API void checkOutputWritable(const std::string& path);
 VDB_EWA_API void writeExr(const Image& image, const std::string& path,
     const std::vector<std::pair<std::string, std::string>>& attributes = {});
 
+/// Let OpenEXR compress with @a threads threads (0 = all cores). Process-wide (OpenEXR's
+/// global thread pool): for applications such as the CLI, not for plugins inside a host.
+VDB_EWA_API void setExrThreadsProcessWide(int threads);
+
 /// Read an RGBA EXR written by us or by vdb_render (for tests and benchmarks).
 /// @throw IoError naming the path.
 VDB_EWA_API Image readExr(const std::string& path);

@@ -29,7 +29,7 @@ struct RenderSettings
     double shadowStep = 3.0;          ///< shadow-ray step in voxels
 
     // --- EWA splatting ---
-    double kernelSigma = 0.6;   ///< reconstruction kernel std. deviation in voxels (Eq. 19, V = s^2 I)
+    double kernelSigma = 0.55;  ///< reconstruction kernel std. deviation in voxels (Eq. 19, V = s^2 I)
     double lowpass = 1.0;       ///< low-pass filter variance in pixels^2 (Eq. 33, V^h = lowpass I)
     AntiAliasing antiAliasing = AntiAliasing::Ewa;
     double cutoffRadius = 3.0;  ///< footprint evaluated where r = d^T Q d < cutoffRadius^2 (in sigma)

@@ -74,20 +74,49 @@ public:
         const int count = int(s.slabCount);
         for (int k = 0; k < count; ++k) markDirty(s.firstSlab + k, lx0, ly0, lx1, ly1);
         for (int ly = ly0; ly <= ly1; ++ly) {
-            const float dy = float(mY0 + ly) + 0.5f - s.cy;
-            for (int lx = lx0; lx <= lx1; ++lx) {
-                const int p = ly * kTileSize + lx;
-                if (!mAlive[p]) continue;
-                const float dx = float(mX0 + lx) + 0.5f - s.cx;
-                const float r = s.qa * dx * dx + 2.0f * s.qb * dx * dy + s.qc * dy * dy;
-                if (!(r < s.cutoff)) continue;
-                const float g = std::exp(-0.5f * r);
-                for (int k = 0; k < count; ++k) {
-                    const float gs = g * shares[k];
-                    const std::size_t base = slot(s.firstSlab + k) * 3 * kTilePixels + std::size_t(p);
-                    for (int c = 0; c < 3; ++c) {
-                        mTau[base + c * kTilePixels] += gs * s.tau[c];
-                        mEmission[base + c * kTilePixels] += gs * s.emission[c];
+            // The row's span inside the ellipse d^T Q d < cutoff (Sec. 7.1), solved for dx.
+            const double dy = double(mY0 + ly) + 0.5 - double(s.cy);
+            const double qa = s.qa, qb = s.qb, qc = s.qc;
+            const double disc = qb * qb * dy * dy - qa * (qc * dy * dy - double(s.cutoff));
+            if (!(disc > 0.0)) continue;
+            const double root = std::sqrt(disc);
+            const double xFirst = double(s.cx) - 0.5 + (-qb * dy - root) / qa;
+            const double xLast = double(s.cx) - 0.5 + (-qb * dy + root) / qa;
+            const int lxa = std::max(lx0, int(std::ceil(xFirst)) - mX0);
+            const int lxb = std::min(lx1, int(std::floor(xLast)) - mX0);
+            if (lxa > lxb) continue;
+            // r is quadratic in x: exp(-r/2) by forward differencing in the exponential domain,
+            // g(x+1) = g(x) m(x), m(x+1) = m(x) k with k = exp(-qa), the paper's two additions
+            // per pixel turned into two multiplications. Very narrow footprints (qa > 16) would
+            // overflow m: evaluate those directly.
+            const double dx0 = double(mX0 + lxa) + 0.5 - double(s.cx);
+            const double r0 = qa * dx0 * dx0 + 2.0 * qb * dx0 * dy + qc * dy * dy;
+            const bool incremental = qa <= 16.0;
+            float g = float(std::exp(-0.5 * r0));
+            float m = incremental ? float(std::exp(-0.5 * (qa * (2.0 * dx0 + 1.0) + 2.0 * qb * dy))) : 0.0f;
+            const float k = incremental ? float(std::exp(-qa)) : 0.0f;
+            float weights[kTileSize]; // the row's footprint values, 0 for terminated pixels
+            const int n = lxb - lxa + 1;
+            const int p0 = ly * kTileSize + lxa;
+            for (int i = 0; i < n; ++i) {
+                if (!incremental && i > 0) {
+                    const double dx = dx0 + double(i);
+                    g = float(std::exp(-0.5 * (qa * dx * dx + 2.0 * qb * dx * dy + qc * dy * dy)));
+                }
+                weights[i] = mAlive[p0 + i] ? g : 0.0f;
+                g *= m;
+                m *= k;
+            }
+            // Spread the row into every slab the kernel overlaps: contiguous, vectorisable.
+            for (int j = 0; j < count; ++j) {
+                const std::size_t base = slot(s.firstSlab + j) * 3 * kTilePixels + std::size_t(p0);
+                for (int c = 0; c < 3; ++c) {
+                    const float wt = shares[j] * s.tau[c], we = shares[j] * s.emission[c];
+                    float* tau = &mTau[base + std::size_t(c) * kTilePixels];
+                    float* em = &mEmission[base + std::size_t(c) * kTilePixels];
+                    for (int i = 0; i < n; ++i) {
+                        tau[i] += weights[i] * wt;
+                        em[i] += weights[i] * we;
                     }
                 }
             }
