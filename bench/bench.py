@@ -93,7 +93,9 @@ def cmd_speed(args):
         t = statistics.median(theirs) if theirs else float("nan")
         s = {k: statistics.median(x[k] for x in st) for k in st[0]}
         vox = re.search(r"(\d+) active voxels", run([EWA, "render", path, os.path.join(tmp, "o.exr"), "-res", "8x8", *cam.split(), "-v"])[1]).group(1)
-        print(f"| {label} | {vox} | {t:.2f} | {o:.2f} | {t / o:.1f}x | {s['load']:.3f} | {s['kernels']:.3f} | "
+        ratio = f"{t / o:.1f}x" if theirs else "n/a"
+        tt = f"{t:.2f}" if theirs else "n/a (double grid)"
+        print(f"| {label} | {vox} | {tt} | {o:.2f} | {ratio} | {s['load']:.3f} | {s['kernels']:.3f} | "
               f"{s['shadows']:.3f} | {s['project']:.3f} | {s['rasterise']:.3f} | {s['write']:.3f} |", flush=True)
 
 

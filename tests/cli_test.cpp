@@ -78,6 +78,17 @@ TEST_F(Cli, RendersAnExr)
     EXPECT_NE(r.out.find("timings (s): load"), std::string::npos);
 }
 
+TEST_F(Cli, OutputIsByteIdenticalForOneAndTwoThreads)
+{
+    const std::string one = mDir.file("one.exr"), two = mDir.file("two.exr");
+    const std::string args = " --res 96x64 -translate 1,0.5,4 --kernel-sigma 0.8";
+    ASSERT_EQ(runCli(mDir, "render " + mGrid + " " + one + args + " --threads 1").code, 0);
+    ASSERT_EQ(runCli(mDir, "render " + mGrid + " " + two + args + " --threads 2").code, 0);
+    const std::string a = slurp(one), b = slurp(two);
+    EXPECT_GT(a.size(), 1000u);
+    EXPECT_TRUE(a == b);
+}
+
 TEST_F(Cli, InputErrors)
 {
     const std::string out = mDir.file("out.exr");

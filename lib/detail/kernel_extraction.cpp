@@ -80,6 +80,16 @@ KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& set
         [](const Kernel& k) { return k.density > 0.0f; });
 
     // Active tiles: a lattice of larger kernels (rule in docs/equations.md#active-tiles).
+    // Collect them in tree order, then expand them in parallel into their own slot ranges.
+    struct Tile
+    {
+        openvdb::Coord min;
+        int dim, spacing;
+        float density;
+        std::size_t offset;
+    };
+    std::vector<Tile> tiles;
+    std::size_t tileKernels = 0;
     auto it = tree.cbeginValueOn();
     it.setMaxDepth(it.getLeafDepth() - 1); // tiles only, no leaf voxels
     for (; it; ++it) {
@@ -95,14 +105,24 @@ KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& set
         if (vc == ValueClass::Clamped) set.clamped += voxelsInTile;
         if (density <= 0.0f) continue;
         const int s = tileLatticeSpacing(dim, settings.tileKernelSpacing);
-        const int n = dim / s;
-        const Vec3d origin = Vec3d(box.min().x(), box.min().y(), box.min().z()) - 0.5 + 0.5 * s;
-        for (int i = 0; i < n; ++i)
-            for (int j = 0; j < n; ++j)
-                for (int k = 0; k < n; ++k) {
-                    set.kernels.push_back({origin + double(s) * Vec3d(i, j, k), density, float(s)});
-                }
+        tiles.push_back({box.min(), dim, s, density, set.kernels.size() + tileKernels});
+        const std::size_t n = std::size_t(dim / s);
+        tileKernels += n * n * n;
     }
+    set.kernels.resize(set.kernels.size() + tileKernels);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tiles.size()), [&](const tbb::blocked_range<std::size_t>& range) {
+        for (std::size_t t = range.begin(); t < range.end(); ++t) {
+            const Tile& tile = tiles[t];
+            const int s = tile.spacing, n = tile.dim / s;
+            const Vec3d origin = Vec3d(tile.min.x(), tile.min.y(), tile.min.z()) - 0.5 + 0.5 * s;
+            std::size_t slot = tile.offset;
+            for (int i = 0; i < n; ++i)
+                for (int j = 0; j < n; ++j)
+                    for (int k = 0; k < n; ++k) {
+                        set.kernels[slot++] = {origin + double(s) * Vec3d(i, j, k), tile.density, float(s)};
+                    }
+        }
+    });
     return set;
 }
 
