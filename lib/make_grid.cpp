@@ -37,6 +37,8 @@ const std::array<Blob, 9> kBlobs{{
     {{-0.75, 0.3, 0.2}, 0.14, 0.6},
 }};
 
+constexpr double kCloudPeakDensity = 0.35;
+
 /// Map of each sample grid, for the smallest voxel edge @a h.
 openvdb::math::Transform::Ptr sampleTransform(SampleGrid kind, double h)
 {
@@ -82,8 +84,11 @@ double sampleCloudDensity(const Vec3d& p)
         const Vec3d q = (p - b.centre) / b.radius;
         d += b.amplitude * std::exp(-glm::dot(q, q));
     }
-    // Soft threshold: a defined edge, a smooth interior that saturates at 1.
-    return std::clamp(1.6 * (d - 0.15), 0.0, 1.0);
+    // Two octaves of smooth product-of-sines detail, so the cloud has billows to shade.
+    const double detail = std::sin(7.1 * p.x + 1.3) * std::sin(6.3 * p.y + 0.7) * std::sin(5.7 * p.z + 2.1) +
+                          0.5 * std::sin(13.7 * p.x + 0.4) * std::sin(12.9 * p.y + 2.3) * std::sin(14.3 * p.z + 1.1);
+    // Soft threshold to [0, 1], scaled to a semi-transparent peak density.
+    return kCloudPeakDensity * std::clamp(1.6 * (d * (1.0 + 0.35 * detail) - 0.15), 0.0, 1.0);
 }
 
 GridSource makeSampleGrid(SampleGrid kind, double voxelSize)
@@ -111,7 +116,7 @@ GridSource makeSampleGrid(SampleGrid kind, double voxelSize)
                 const openvdb::Vec3d w = xform.indexToWorld(openvdb::Vec3d(i, j, k));
                 double d = sampleCloudDensity(Vec3d(w.x(), w.y(), w.z()));
                 // The tiles variant saturates sooner, so whole leaves hold exactly 1.
-                if (kind == SampleGrid::Tiles) d = std::min(1.0, 2.0 * d);
+                if (kind == SampleGrid::Tiles) d = std::min(kCloudPeakDensity, 2.0 * d);
                 if (d > 0.0) acc.setValueOn(openvdb::Coord(i, j, k), float(d));
             }
     if (kind == SampleGrid::Tiles) {

@@ -14,14 +14,14 @@ enum class SampleGrid
     Cloud,       ///< uniform voxels
     Anisotropic, ///< voxel scale 1:2:4
     Sheared,     ///< rotated and sheared affine map
-    Tiles        ///< uniform voxels, density doubled (clamped to 1) so its core is stored as active tiles
+    Tiles        ///< uniform voxels, density doubled (clamped to the peak) so its core is stored as active tiles
 };
 
 /// Parse "cloud", "anisotropic", "sheared", "tiles". @throw ValueError otherwise.
 SampleGrid sampleGridFromName(const std::string& name);
 
 /// Density of the analytic cloud at a world position (world units; about 2 units across,
-/// centred on the origin). Values in [0, 1].
+/// centred on the origin). Values in [0, 0.35].
 double sampleCloudDensity(const Vec3d& pWorld);
 
 /// Build a sample grid in memory. @a voxelSize is the smallest voxel edge in world units.
