@@ -31,11 +31,7 @@ int main(int argc, char* argv[])
 
     try {
         app.parse(args);
-    } catch (const CLI::CallForHelp& e) {
-        return app.exit(e);
-    } catch (const CLI::CallForAllHelp& e) {
-        return app.exit(e);
-    } catch (const CLI::CallForVersion& e) {
+    } catch (const CLI::Success& e) { // --help, --help-all, --version
         return app.exit(e);
     } catch (const CLI::ParseError& e) {
         std::cerr << "vdb_ewa: " << e.what() << " (see vdb_ewa --help)\n";

@@ -6,6 +6,8 @@
 
 #include <vdb_ewa/vdb_ewa.h>
 
+#include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cstdio>
 #include <iomanip>
@@ -80,7 +82,9 @@ public:
         resolve(cam, rs);
         Renderer renderer(rs); // validates the render settings
 
-        if (mOutput.size() < 4 || mOutput.substr(mOutput.size() - 4) != ".exr") {
+        std::string extension = mOutput.size() >= 4 ? mOutput.substr(mOutput.size() - 4) : "";
+        std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return std::tolower(c); });
+        if (extension != ".exr") {
             throw ValueError(mOutput + ": unsupported output format (expected a .exr file)");
         }
         checkOutputWritable(mOutput);
