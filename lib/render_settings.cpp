@@ -23,6 +23,7 @@ void RenderSettings::validate() const
     if (!(gain >= 0.0) || !std::isfinite(gain)) fail("--gain must be finite and >= 0");
     if (!(cutoff >= 0.0 && cutoff < 1.0)) fail("--cutoff must be in [0, 1)");
     if (!(shadowStep > 0.0) || !std::isfinite(shadowStep)) fail("--shadowstep must be > 0 voxels");
+    if (!(step >= 1e-3) || !std::isfinite(step)) fail("--step must be >= 0.001 voxels");
     if (!(kernelSigma >= 0.1 && kernelSigma <= 4.0)) fail("--kernel-sigma must be in [0.1, 4] voxels");
     if (!(lowpass >= 0.0 && lowpass <= 100.0)) fail("--lowpass must be in [0, 100] pixels^2");
     if (antiAliasing != AntiAliasing::None && !(lowpass > 0.0)) fail("--lowpass must be > 0 unless --aa none");

@@ -4,6 +4,7 @@
 
 #include "detail/grid_source_impl.h"
 #include "detail/kernel_extraction.h"
+#include "detail/reference_integrator.h"
 #include "detail/shadow_transmittance.h"
 #include "detail/splat_projection.h"
 #include "detail/tile_rasterizer.h"
@@ -51,6 +52,10 @@ Image Renderer::render(const GridSource& grid, const Camera& camera, RenderStats
     Image image;
     const GridSource::Impl& g = grid.impl();
     auto run = [&] {
+        if (mSettings.method == Method::RayMarch) {
+            image = detail::rayMarchReference(g, camera, mSettings, stats);
+            return;
+        }
         StageTimer timer;
         const detail::KernelSet kernels = detail::extractKernels(g, mSettings);
         stats.kernelSeconds = timer.lap();

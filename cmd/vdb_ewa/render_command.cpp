@@ -62,7 +62,8 @@ public:
         mApp->add_option("--cutoff", mCutoff,
             "density cutoff, and rays stop where |transmittance RGB|^2 < cutoff (default: " + fmt(rs.cutoff) + ")");
         mApp->add_option("--shadowstep", mShadowStep, "shadow-ray step in voxels (default: " + fmt(rs.shadowStep) + ")");
-        mApp->add_option("--step", mStep, "vdb_render's primary-ray step in voxels; the splatter has no primary rays and ignores it");
+        mApp->add_option("--step", mStep, "primary-ray step in voxels for --method raymarch (default: " + fmt(rs.step) + "); the splatter has no primary rays and ignores it");
+        mApp->add_option("--method", mMethod, "splat (EWA volume splatting) or raymarch (reference integrator of the same Gaussian reconstruction, slow) (default: splat)");
         // EWA splatting.
         mApp->add_option("--kernel-sigma", mKernelSigma, "reconstruction kernel std. deviation in voxels (default: " + fmt(rs.kernelSigma) + ")");
         mApp->add_option("--lowpass", mLowpass, "screen-space low-pass filter variance in pixels^2 (default: " + fmt(rs.lowpass) + ")");
@@ -150,6 +151,12 @@ private:
         if (mGain) rs.gain = *mGain;
         if (mCutoff) rs.cutoff = *mCutoff;
         if (mShadowStep) rs.shadowStep = *mShadowStep;
+        if (mStep) rs.step = *mStep;
+        if (!mMethod.empty()) {
+            if (mMethod == "splat") rs.method = Method::Splat;
+            else if (mMethod == "raymarch") rs.method = Method::RayMarch;
+            else throw ValueError("--method: expected splat or raymarch, got '" + mMethod + "'");
+        }
         if (mKernelSigma) rs.kernelSigma = *mKernelSigma;
         if (mLowpass) rs.lowpass = *mLowpass;
         if (!mAa.empty()) {
@@ -178,7 +185,8 @@ private:
                   << "vdb_ewa: model --absorb " << fmt3(rs.absorb) << " --scatter " << fmt3(rs.scatter) << " --light "
                   << fmt3(rs.lightDir) << "," << fmt3(rs.lightColor) << " --gain " << fmt(rs.gain) << " --cutoff "
                   << fmt(rs.cutoff) << " --shadowstep " << fmt(rs.shadowStep) << "\n"
-                  << "vdb_ewa: splatting --kernel-sigma " << fmt(rs.kernelSigma) << " --lowpass " << fmt(rs.lowpass)
+                  << "vdb_ewa: " << (rs.method == Method::RayMarch ? "--method raymarch --step " + fmt(rs.step) + " " : std::string("--method splat "))
+                  << "--kernel-sigma " << fmt(rs.kernelSigma) << " --lowpass " << fmt(rs.lowpass)
                   << " --aa " << (rs.antiAliasing == AntiAliasing::Ewa ? "ewa" : rs.antiAliasing == AntiAliasing::Swan ? "swan" : "none")
                   << " --cutoff-radius " << fmt(rs.cutoffRadius) << " --slab " << fmt(rs.slab) << " --threads "
                   << rs.threads << "\n";
@@ -197,7 +205,7 @@ private:
 
     CLI::App* mApp = nullptr;
     std::string mInput, mOutput, mName, mRes, mTranslate, mRotate, mLookAt, mUp, mCamera;
-    std::string mAbsorb, mScatter, mLight, mAa;
+    std::string mAbsorb, mScatter, mLight, mAa, mMethod;
     std::optional<double> mFov, mFocal, mAperture, mFrame, mNear, mFar, mGain, mCutoff, mShadowStep, mStep;
     std::optional<double> mKernelSigma, mLowpass, mCutoffRadius, mSlab;
     int mThreads = 0;

@@ -17,8 +17,16 @@ enum class AntiAliasing
     None  ///< no low-pass filter: point-sample the projected kernel (aliases when minified)
 };
 
+/// How the image is formed.
+enum class Method
+{
+    Splat,   ///< EWA volume splatting (the renderer)
+    RayMarch ///< reference integrator: ray-march the same Gaussian reconstruction (a yardstick)
+};
+
 struct RenderSettings
 {
+    Method method = Method::Splat;
     // --- Optical model (vdb_render's names and defaults) ---
     Vec3d absorb{0.1, 0.1, 0.1};      ///< absorption per unit density per voxel length, RGB
     Vec3d scatter{1.5, 1.5, 1.5};     ///< scattering per unit density per voxel length, RGB
@@ -27,6 +35,7 @@ struct RenderSettings
     double gain = 0.2;                ///< shadow-ray extinction falls as 1/(1 + gain * s), s in voxels
     double cutoff = 0.005;            ///< density cutoff; rays stop where |T|^2 < cutoff (RGB T)
     double shadowStep = 3.0;          ///< shadow-ray step in voxels
+    double step = 1.0;                ///< primary-ray step in voxels (--method raymarch only)
 
     // --- EWA splatting ---
     double kernelSigma = 0.55;  ///< reconstruction kernel std. deviation in voxels (Eq. 19, V = s^2 I)

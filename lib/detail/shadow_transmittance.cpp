@@ -1,6 +1,7 @@
 /// @file shadow_transmittance.cpp
 #include "shadow_transmittance.h"
 
+#include "empty_space.h"
 #include "grid_source_impl.h"
 
 #include <openvdb/tools/Interpolation.h>
@@ -19,7 +20,7 @@ class ShadowMarcher
 {
 public:
     ShadowMarcher(const GridSource::Impl& grid, const RenderSettings& settings)
-        : mGrid(grid), mAccessor(grid.grid->tree()), mSettings(settings)
+        : mGrid(grid), mSkipper(*grid.grid, 0), mSettings(settings)
     {
         const Vec3d l = glm::normalize(settings.lightDir);
         mLightWorld = l;
@@ -47,14 +48,15 @@ public:
             const Vec3d p = indexAt(pIndex, s);
             const openvdb::Vec3d pv(p.x, p.y, p.z);
             // Skip empty nodes: jump to the first sample past the node's safe interior.
-            const double skipTo = emptyNodeExit(pIndex, p, s);
-            if (skipTo > s) {
+            const double jump = mGrid.linear ? mSkipper.emptyExit(p, mStepIndex) : 0.0;
+            const double skipTo = s + jump;
+            if (jump > 0.0) {
                 s = step * std::ceil(skipTo / step);
                 if (s == skipTo) s += step;
                 continue;
             }
             float d = 0.0f;
-            openvdb::tools::BoxSampler::sample(mAccessor, pv, d);
+            openvdb::tools::BoxSampler::sample(mSkipper.accessor(), pv, d);
             if (d >= cutoff) {
                 const double k = d * step / (1.0 + s * gain);
                 for (int c = 0; c < 3; ++c) t[c] *= std::exp(-mExtinction[c] * k);
@@ -88,39 +90,8 @@ private:
         return boxExit(start, mStepIndex, mBoxMin, mBoxMax + 1.0);
     }
 
-    static double boxExit(const Vec3d& o, const Vec3d& d, const Vec3d& lo, const Vec3d& hi)
-    {
-        double tExit = std::numeric_limits<double>::infinity();
-        for (int a = 0; a < 3; ++a) {
-            if (d[a] > 0.0) tExit = std::min(tExit, (hi[a] - o[a]) / d[a]);
-            else if (d[a] < 0.0) tExit = std::min(tExit, (lo[a] - o[a]) / d[a]);
-        }
-        return tExit;
-    }
-
-    /// If @a p lies in an empty (inactive, background) tree region, the distance along the ray
-    /// where trilinear samples may see data again; otherwise -1.
-    double emptyNodeExit(const Vec3d& start, const Vec3d& p, double s)
-    {
-        if (!mGrid.linear) return -1.0;
-        const openvdb::Coord ijk = openvdb::Coord::floor(openvdb::Vec3d(p.x, p.y, p.z));
-        const int depth = mAccessor.getValueDepth(ijk);
-        const int leafDepth = int(openvdb::FloatTree::DEPTH) - 1;
-        if (depth == leafDepth) return -1.0;
-        if (mAccessor.isValueOn(ijk)) return -1.0;
-        if (mAccessor.getValue(ijk) != 0.0f) return -1.0;
-        // Side of the empty node: root children 4096, then 128, then 8 (5-4-3 tree).
-        static const int kDims[] = {4096, 4096, 128, 8};
-        const int dim = kDims[std::clamp(depth + 1, 0, 3)];
-        const Vec3d lo(double(ijk.x() & ~(dim - 1)), double(ijk.y() & ~(dim - 1)), double(ijk.z() & ~(dim - 1)));
-        // Trilinear samples read floor(p) and floor(p) + 1: safe while p stays in [lo, lo+dim-1).
-        const double t = boxExit(p, mStepIndex, lo, lo + double(dim - 1));
-        (void)start;
-        return (t > 0.0 && std::isfinite(t)) ? s + t : -1.0;
-    }
-
     const GridSource::Impl& mGrid;
-    openvdb::FloatGrid::ConstAccessor mAccessor;
+    EmptySpaceSkipper mSkipper;
     const RenderSettings& mSettings;
     Vec3d mLightWorld;
     Vec3d mStepIndex{0.0};

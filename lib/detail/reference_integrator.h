@@ -1,0 +1,27 @@
+/// @file reference_integrator.h
+/// @brief `--method raymarch`: a ray marcher through the *same* Gaussian reconstruction the
+///        splatter uses (sum of all kernels, exact exponentials, the same optical model and
+///        shadow transmittance). A yardstick for the splatter's approximations, not for speed.
+#pragma once
+
+#include "kernel_extraction.h"
+
+#include <vdb_ewa/camera.h>
+#include <vdb_ewa/image.h>
+#include <vdb_ewa/renderer.h>
+
+namespace vdb_ewa {
+namespace detail {
+
+/// Kernels are truncated at this many standard deviations per axis (mass lost < 1e-4).
+constexpr double kReferenceTruncation = 4.0;
+
+/// March every pixel's centre ray in steps of settings.step voxel lengths, sampling
+/// extinction and emission at step midpoints from all kernels within 4 sigma, and composite
+/// each step with the exact homogeneous update. Active tiles are voxelised (their kernels are
+/// unit-spaced here). @throw ValueError for non-affine grids.
+Image rayMarchReference(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings,
+    RenderStats& stats);
+
+} // namespace detail
+} // namespace vdb_ewa
