@@ -44,6 +44,15 @@ Footprint projectKernel(const Vec3d& tCentre, const Mat3d& covCamera, const Proj
         Vec3d tJ = tCentre;
         tJ.x = std::clamp(tCentre.x / tCentre.z, -params.maxTanX, params.maxTanX) * tCentre.z;
         tJ.y = std::clamp(tCentre.y / tCentre.z, -params.maxTanY, params.maxTanY) * tCentre.z;
+        fp.clampedGrazing = tJ.x != tCentre.x || tJ.y != tCentre.y;
+        // Kernels around the eye: form J no nearer than minDistanceSigmas standard deviations.
+        const double size = std::sqrt(covCamera[0][0] + covCamera[1][1] + covCamera[2][2]);
+        const double minDistance = params.minDistanceSigmas * size;
+        const double distance = glm::length(tJ);
+        if (distance < minDistance) {
+            tJ *= minDistance / distance;
+            fp.clampedNear = true;
+        }
         const Mat3d J = rayJacobian(tJ);
         covRay = J * covCamera * glm::transpose(J);
         detJ = glm::length(tJ) / (tJ.z * tJ.z * tJ.z);

@@ -77,6 +77,15 @@ Image Renderer::render(const GridSource& grid, const Camera& camera, RenderStats
         if (kernels.activeVoxels == 0 && kernels.activeTiles == 0) stats.warnings.push_back("the grid has no active values: the image is empty");
         if (kernels.notANumber) stats.warnings.push_back(countLine(kernels.notANumber, "NaN voxel values skipped"));
         if (kernels.clamped) stats.warnings.push_back(countLine(kernels.clamped, "voxel values above 1e6 (or +Inf) clamped to 1e6"));
+        if (splats.beforeNear) stats.warnings.push_back(countLine(splats.beforeNear, "kernels with their centre before the near plane skipped"));
+        if (splats.clampedNear) stats.warnings.push_back(countLine(splats.clampedNear, "kernels within 3 sigma of the eye projected as if 3 sigma away (clamped Jacobian)"));
+        if (splats.clampedGrazing) stats.warnings.push_back(countLine(splats.clampedGrazing, "kernels beyond 1.3x the frustum edge projected with the edge's Jacobian"));
+        if (splats.requestedThickness > 0.0) {
+            std::ostringstream w;
+            w << "slab thickness raised from " << splats.requestedThickness << " to " << splats.slabs.thickness
+              << " world units so that no kernel spans more than " << detail::kSlabSpanTarget << " slabs";
+            stats.warnings.push_back(w.str());
+        }
         if (splats.clippedSpan) stats.warnings.push_back(countLine(splats.clippedSpan, "kernels spanned more than 1024 slabs and were truncated in depth (raise --slab)"));
     };
     if (mSettings.threads > 0) {

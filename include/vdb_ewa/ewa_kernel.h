@@ -42,6 +42,11 @@ struct ProjectionParams
     /// Perspective only: |t0/t2|, |t1/t2| are clamped to these when forming J, so kernels far
     /// outside the frustum edge do not get unbounded footprints (1.3 x the half-frame, gsplat).
     double maxTanX = 1e300, maxTanY = 1e300;
+    /// Perspective only: J is formed no closer to the eye than this many kernel standard
+    /// deviations (sqrt of the covariance trace), keeping the centre's direction. The peak
+    /// optical depth (the column through the centre) does not depend on the distance; only
+    /// the angular spread is bounded. See docs/numerics.md.
+    double minDistanceSigmas = 3.0;
     AntiAliasing antiAliasing = AntiAliasing::Ewa;
     double lowpass = 1.0;        ///< V^h = lowpass * I, pixels^2
     double cutoffRadius = 3.0;   ///< in standard deviations of the filtered footprint
@@ -60,6 +65,8 @@ struct Footprint
     double depth = 0;    ///< kernel centre along its viewing ray (x2 of Eq. 26; t2 if ortho)
     double depthSd = 0;  ///< std. deviation along the viewing ray (conditional on x0, x1)
     bool valid = false;  ///< false if the centre is not in front of the eye
+    bool clampedGrazing = false; ///< J formed at a direction clamped to the frustum edge
+    bool clampedNear = false;    ///< J formed farther from the eye than the centre lies
 };
 
 /// Project a kernel of camera-space centre @a tCentre and camera-space covariance

@@ -104,7 +104,10 @@ private:
 std::vector<Rgb> shadowTransmittance(const GridSource::Impl& grid, const KernelSet& kernels,
     const RenderSettings& settings)
 {
-    std::vector<Rgb> out(kernels.kernels.size());
+    std::vector<Rgb> out(kernels.kernels.size(), Rgb{1.0f, 1.0f, 1.0f});
+    // No scattering or no light: nothing is lit, so the transmittance is never used.
+    const Vec3d lit = settings.scatter * settings.lightColor;
+    if (lit.x == 0.0 && lit.y == 0.0 && lit.z == 0.0) return out;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.size(), 1024),
         [&](const tbb::blocked_range<std::size_t>& range) {
             ShadowMarcher marcher(grid, settings);

@@ -69,7 +69,7 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
     std::vector<Splat> splats(n);
     std::vector<DepthExtent> extents(n);
     std::vector<std::uint32_t> spans(n, 0);
-    std::vector<std::uint8_t> spanClipped(n, 0);
+    std::vector<std::uint8_t> flags(n, 0); // 1: before near, 2: clamped near, 4: clamped grazing
 
     // Pass 1: footprints and slab spans.
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096),
@@ -93,9 +93,13 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
                 const double s = k.spacing;
                 cov *= sigma2 * s * s;
                 const Vec3d t = camera.cameraFromWorldPoint(pWorld);
-                if (perspective && !(t.z > camera.near())) continue; // centre before the near plane
+                if (perspective && !(t.z > camera.near())) { // centre before the near plane
+                    flags[i] = 1;
+                    continue;
+                }
                 const Footprint fp = projectKernel(t, cov, params);
                 if (!fp.valid) continue;
+                flags[i] = std::uint8_t((fp.clampedNear ? 2 : 0) | (fp.clampedGrazing ? 4 : 0));
 
                 Splat& sp = splats[i];
                 // Pixels whose centre (i + 0.5) lies within the cut-off box.
@@ -113,12 +117,10 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
                 // converted to distance along the ray through the centre).
                 const double toRay = perspective ? glm::length(t) / t.z : 1.0;
                 const DepthExtent extent{fp.depth, fp.depthSd, camera.near() * toRay, camera.far() * toRay};
-                const std::int64_t span = slabSpan(out.slabs, extent.mu, extent.sd, kDepthTruncation,
-                    extent.clipNear, extent.clipFar, sp.firstSlab);
-                if (span <= 0) continue;
-                spanClipped[i] = (span > kMaxSlabSpan);
-                const int count = int(std::min<std::int64_t>(span, kMaxSlabSpan));
-                spans[i] = std::uint32_t(count);
+                if (!(std::min(extent.mu + kDepthTruncation * extent.sd, extent.clipFar) >
+                        std::max(extent.mu - kDepthTruncation * extent.sd, extent.clipNear))) {
+                    continue; // wholly before the near plane or beyond the far plane
+                }
                 extents[i] = extent;
 
                 sp.cx = float(fp.centre.x);
@@ -139,14 +141,32 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
             }
         });
 
-    // Pass 2: compact in kernel order and lay out the shares.
+    // Slab thickness: --slab voxel lengths, raised where a kernel is so long along the ray
+    // (1000:1 voxels, frustum maps) that it would span more than kSlabSpanTarget slabs.
+    double maxSd = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+        if (visible[i]) maxSd = std::max(maxSd, extents[i].sd);
+    }
+    const double minThickness = 2.0 * kDepthTruncation * maxSd / double(kSlabSpanTarget);
+    if (minThickness > out.slabs.thickness) {
+        out.requestedThickness = out.slabs.thickness;
+        out.slabs.thickness = minThickness;
+    }
+
+    // Pass 2: slab spans, compaction in kernel order, and the layout of the shares.
     std::uint64_t total = 0;
     for (std::size_t i = 0; i < n; ++i) {
+        out.beforeNear += (flags[i] & 1);
         if (!visible[i]) continue;
+        const DepthExtent& e = extents[i];
+        const std::int64_t span = slabSpan(out.slabs, e.mu, e.sd, kDepthTruncation, e.clipNear, e.clipFar, splats[i].firstSlab);
+        out.clippedSpan += (span > kMaxSlabSpan);
+        spans[i] = std::uint32_t(std::min<std::int64_t>(span, kMaxSlabSpan));
+        out.clampedNear += (flags[i] >> 1) & 1;
+        out.clampedGrazing += (flags[i] >> 2) & 1;
         splats[i].shareOffset = total;
         splats[i].slabCount = spans[i];
         total += spans[i];
-        out.clippedSpan += spanClipped[i];
     }
     out.shares.resize(total);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096),

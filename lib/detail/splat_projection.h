@@ -35,11 +35,17 @@ struct SplatSet
     std::vector<float> shares; ///< slab shares of all splats
     SlabGrid slabs;
     std::uint64_t culled = 0;     ///< outside the frustum or behind the eye
+    std::uint64_t beforeNear = 0; ///< centre before the near plane: dropped
+    std::uint64_t clampedNear = 0;    ///< within 3 sigma of the eye: J formed at 3 sigma
+    std::uint64_t clampedGrazing = 0; ///< beyond 1.3 x the frustum edge: J formed at the edge
     std::uint64_t clippedSpan = 0; ///< kernels spanning more slabs than kMaxSlabSpan
+    double requestedThickness = 0; ///< > 0 if the slab thickness was raised from this value
 };
 
 /// Most slabs one kernel may span; shares past it are dropped (counted in clippedSpan).
 constexpr int kMaxSlabSpan = 1024;
+/// The slab thickness is raised so that no kernel spans more than this many slabs.
+constexpr int kSlabSpanTarget = 256;
 
 /// Project every kernel through @a camera. One task per block of kernels.
 SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
