@@ -42,9 +42,12 @@ Footprint projectKernel(const Vec3d& tCentre, const Mat3d& covCamera, const Proj
         if (!(tCentre.z > 0.0)) return fp;
         // Clamp the direction used for J at grazing angles (the centre stays exact).
         Vec3d tJ = tCentre;
-        tJ.x = std::clamp(tCentre.x / tCentre.z, -params.maxTanX, params.maxTanX) * tCentre.z;
-        tJ.y = std::clamp(tCentre.y / tCentre.z, -params.maxTanY, params.maxTanY) * tCentre.z;
-        fp.clampedGrazing = tJ.x != tCentre.x || tJ.y != tCentre.y;
+        const double tanX = tCentre.x / tCentre.z, tanY = tCentre.y / tCentre.z;
+        if (std::abs(tanX) > params.maxTanX || std::abs(tanY) > params.maxTanY) {
+            tJ.x = std::clamp(tanX, -params.maxTanX, params.maxTanX) * tCentre.z;
+            tJ.y = std::clamp(tanY, -params.maxTanY, params.maxTanY) * tCentre.z;
+            fp.clampedGrazing = true;
+        }
         // Kernels around the eye: form J no nearer than minDistanceSigmas standard deviations.
         const double size = std::sqrt(covCamera[0][0] + covCamera[1][1] + covCamera[2][2]);
         const double minDistance = params.minDistanceSigmas * size;
@@ -106,7 +109,7 @@ Footprint projectKernel(const Vec3d& tCentre, const Mat3d& covCamera, const Proj
     fp.covariance = cov;
     fp.conic = cov.inverse();
     const double c2 = params.cutoffRadius * params.cutoffRadius;
-    const double keptMass = -std::expm1(-0.5 * c2);
+    const double keptMass = params.renormalize ? -std::expm1(-0.5 * c2) : 1.0;
     const double twoPi = 6.283185307179586476925;
     fp.peak = detJ * f * f / (twoPi * std::sqrt(detCov) * keptMass);
     fp.halfExtent = {std::sqrt(c2 * cov.xx), std::sqrt(c2 * cov.yy)};

@@ -33,4 +33,27 @@ void RenderSettings::validate() const
     if (threads < 0) fail("--threads must be >= 0");
 }
 
+RenderSettings RenderSettings::preset(Quality quality)
+{
+    RenderSettings s;
+    switch (quality) {
+    case Quality::Draft:
+        s.cutoffRadius = 2.0;
+        s.slab = 4.0;
+        s.shadowStep = 6.0;
+        s.tileKernelSpacing = 8;
+        break;
+    case Quality::Default:
+        break;
+    case Quality::High:
+        s.cutoffRadius = 4.0;
+        s.slab = 0.5;
+        s.shadowStep = 0.375;
+        s.tileKernelSpacing = 2;
+        s.expEvaluation = ExpEvaluation::Exact;
+        break;
+    }
+    return s;
+}
+
 } // namespace vdb_ewa

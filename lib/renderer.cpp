@@ -74,6 +74,9 @@ Image Renderer::render(const GridSource& grid, const Camera& camera, RenderStats
         stats.kernelsCulled = splats.culled;
         stats.splats = splats.splats.size();
         stats.splatTilePairs = raster.splatTilePairs;
+        stats.screenTiles = raster.tiles;
+        stats.screenTilesOpaque = raster.tilesOpaque;
+        stats.splatTilePairsSkipped = raster.pairsSkipped;
         if (kernels.activeVoxels == 0 && kernels.activeTiles == 0) stats.warnings.push_back("the grid has no active values: the image is empty");
         if (kernels.notANumber) stats.warnings.push_back(countLine(kernels.notANumber, "NaN voxel values skipped"));
         if (kernels.clamped) stats.warnings.push_back(countLine(kernels.clamped, "voxel values above 1e6 (or +Inf) clamped to 1e6"));

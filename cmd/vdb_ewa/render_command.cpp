@@ -70,6 +70,12 @@ public:
         mApp->add_option("--aa", mAa, "anti-aliasing: ewa (resampling filter), swan (uniform scaling) or none (default: ewa)");
         mApp->add_option("--cutoff-radius", mCutoffRadius, "footprint cut-off radius in std. deviations (default: " + fmt(rs.cutoffRadius) + ")");
         mApp->add_option("--slab", mSlab, "image-aligned slab thickness in voxel lengths (default: " + fmt(rs.slab) + ")");
+        mApp->add_option("--quality", mQuality,
+            "preset of the speed/accuracy knobs: draft, default or high; explicit options override it "
+            "(values in docs/performance.md) (default: default)");
+        mApp->add_option("--exp", mExp, "footprint exp(-r/2): incremental (forward differencing), exact or table (default: incremental)");
+        mApp->add_option("--renormalize", mRenormalize, "on: divide footprints by the mass kept inside --cutoff-radius; off: keep the truncated mass (default: on)");
+        mApp->add_option("--tile-spacing", mTileSpacing, "largest kernel spacing in voxels for active tiles, 1 to voxelise them (default: 4)");
         mApp->add_option("--threads,--cpus", mThreads, "worker threads, 0 = all cores (default: 0)");
         mApp->add_flag("-v,--verbose", mVerbose, "print the resolved settings, counts and stage timings");
     }
@@ -122,6 +128,12 @@ private:
 
     void resolve(CameraSettings& cam, RenderSettings& rs) const
     {
+        if (!mQuality.empty()) {
+            if (mQuality == "draft") rs = RenderSettings::preset(Quality::Draft);
+            else if (mQuality == "default") rs = RenderSettings::preset(Quality::Default);
+            else if (mQuality == "high") rs = RenderSettings::preset(Quality::High);
+            else throw ValueError("--quality: expected draft, default or high, got '" + mQuality + "'");
+        }
         if (!mRes.empty()) parseResolution(mRes, cam.width, cam.height);
         if (!mTranslate.empty()) cam.translate = parseVec3("translate", mTranslate, true);
         if (!mRotate.empty()) cam.rotate = parseVec3("rotate", mRotate, true);
@@ -166,6 +178,18 @@ private:
             else throw ValueError("--aa: expected ewa, swan or none, got '" + mAa + "'");
         }
         if (mCutoffRadius) rs.cutoffRadius = *mCutoffRadius;
+        if (!mExp.empty()) {
+            if (mExp == "incremental") rs.expEvaluation = ExpEvaluation::Incremental;
+            else if (mExp == "exact") rs.expEvaluation = ExpEvaluation::Exact;
+            else if (mExp == "table") rs.expEvaluation = ExpEvaluation::Table;
+            else throw ValueError("--exp: expected incremental, exact or table, got '" + mExp + "'");
+        }
+        if (!mRenormalize.empty()) {
+            if (mRenormalize == "on") rs.renormalize = true;
+            else if (mRenormalize == "off") rs.renormalize = false;
+            else throw ValueError("--renormalize: expected on or off, got '" + mRenormalize + "'");
+        }
+        if (mTileSpacing) rs.tileKernelSpacing = *mTileSpacing;
         if (mSlab) rs.slab = *mSlab;
         rs.threads = mThreads;
     }
@@ -188,8 +212,10 @@ private:
                   << "vdb_ewa: " << (rs.method == Method::RayMarch ? "--method raymarch --step " + fmt(rs.step) + " " : std::string("--method splat "))
                   << "--kernel-sigma " << fmt(rs.kernelSigma) << " --lowpass " << fmt(rs.lowpass)
                   << " --aa " << (rs.antiAliasing == AntiAliasing::Ewa ? "ewa" : rs.antiAliasing == AntiAliasing::Swan ? "swan" : "none")
-                  << " --cutoff-radius " << fmt(rs.cutoffRadius) << " --slab " << fmt(rs.slab) << " --threads "
-                  << rs.threads << "\n";
+                  << " --cutoff-radius " << fmt(rs.cutoffRadius) << " --renormalize " << (rs.renormalize ? "on" : "off")
+                  << " --exp "
+                  << (rs.expEvaluation == ExpEvaluation::Incremental ? "incremental" : rs.expEvaluation == ExpEvaluation::Exact ? "exact" : "table")
+                  << " --slab " << fmt(rs.slab) << " --tile-spacing " << rs.tileKernelSpacing << " --threads " << rs.threads << "\n";
     }
 
     static void printStats(const RenderStats& s, double loadSeconds, double writeSeconds)
@@ -197,7 +223,8 @@ private:
         std::cout << "vdb_ewa: " << s.activeVoxels << " active voxels and " << s.activeTiles << " active tiles read; "
                   << s.kernels << " kernels, " << s.kernelsSkipped << " values skipped (below --cutoff or NaN), "
                   << s.kernelsCulled << " kernels culled, " << s.splats << " splatted into " << s.splatTilePairs
-                  << " (splat, tile) pairs\n"
+                  << " (splat, tile) pairs; " << s.screenTilesOpaque << " of " << s.screenTiles
+                  << " screen tiles turned opaque early, skipping " << s.splatTilePairsSkipped << " pairs\n"
                   << std::fixed << std::setprecision(3) << "vdb_ewa: timings (s): load " << loadSeconds << ", kernels "
                   << s.kernelSeconds << ", shadows " << s.shadowSeconds << ", project " << s.projectSeconds
                   << ", rasterise " << s.rasterSeconds << ", write " << writeSeconds << "\n";
@@ -205,7 +232,8 @@ private:
 
     CLI::App* mApp = nullptr;
     std::string mInput, mOutput, mName, mRes, mTranslate, mRotate, mLookAt, mUp, mCamera;
-    std::string mAbsorb, mScatter, mLight, mAa, mMethod;
+    std::string mAbsorb, mScatter, mLight, mAa, mMethod, mQuality, mExp, mRenormalize;
+    std::optional<int> mTileSpacing;
     std::optional<double> mFov, mFocal, mAperture, mFrame, mNear, mFar, mGain, mCutoff, mShadowStep, mStep;
     std::optional<double> mKernelSigma, mLowpass, mCutoffRadius, mSlab;
     int mThreads = 0;

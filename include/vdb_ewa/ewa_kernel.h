@@ -50,6 +50,7 @@ struct ProjectionParams
     AntiAliasing antiAliasing = AntiAliasing::Ewa;
     double lowpass = 1.0;        ///< V^h = lowpass * I, pixels^2
     double cutoffRadius = 3.0;   ///< in standard deviations of the filtered footprint
+    bool renormalize = true;     ///< divide the peak by the mass kept inside the cut-off
 };
 
 /// A kernel's screen-space resampling filter rho(p) = peak * exp(-0.5 d^T Q d), d = p - centre.
@@ -59,7 +60,8 @@ struct Footprint
     Sym2 covariance;     ///< S V'_2x2 S^T + V^h, pixels^2 (Eq. 33)
     Sym2 conic;          ///< Q = covariance^-1
     /// Footprint value at the centre for a unit-weight kernel: |J| f^2 / (2 pi sqrt(det Cov)),
-    /// divided by the mass kept inside the cut-off (1 - exp(-c^2/2)), in 1/world-length^2.
+    /// divided by the mass kept inside the cut-off (1 - exp(-c^2/2)) when renormalising,
+    /// in 1/world-length^2.
     double peak = 0;
     Vec2d halfExtent;    ///< half size of the box of the ellipse d^T Q d = cutoffRadius^2, pixels
     double depth = 0;    ///< kernel centre along its viewing ray (x2 of Eq. 26; t2 if ortho)

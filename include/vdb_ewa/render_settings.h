@@ -17,6 +17,17 @@ enum class AntiAliasing
     None  ///< no low-pass filter: point-sample the projected kernel (aliases when minified)
 };
 
+/// How the rasteriser evaluates exp(-r/2) over a footprint (Sec. 7.1).
+enum class ExpEvaluation
+{
+    Incremental, ///< forward differencing in the exponential domain: two multiplications a pixel
+    Exact,       ///< std::exp at every pixel
+    Table        ///< the paper's 1D table indexed by r (1024 entries, linear interpolation)
+};
+
+/// Quality presets: named bundles of the speed/accuracy knobs (docs/performance.md).
+enum class Quality { Draft, Default, High };
+
 /// How the image is formed.
 enum class Method
 {
@@ -42,6 +53,8 @@ struct RenderSettings
     double lowpass = 1.0;       ///< low-pass filter variance in pixels^2 (Eq. 33, V^h = lowpass I)
     AntiAliasing antiAliasing = AntiAliasing::Ewa;
     double cutoffRadius = 3.0;  ///< footprint evaluated where r = d^T Q d < cutoffRadius^2 (in sigma)
+    bool renormalize = true;    ///< divide by the mass kept inside the cut-off, 1 - exp(-c^2/2)
+    ExpEvaluation expEvaluation = ExpEvaluation::Incremental;
     double slab = 1.0;          ///< image-aligned slab thickness in voxel lengths
     int tileKernelSpacing = 4;  ///< largest kernel spacing (voxels) used to model active tiles
 
@@ -50,6 +63,9 @@ struct RenderSettings
 
     /// Throw ValueError naming the first setting out of range.
     void validate() const;
+
+    /// Settings of a quality preset (the optical model and threads keep their defaults).
+    static RenderSettings preset(Quality quality);
 };
 
 } // namespace vdb_ewa

@@ -27,7 +27,10 @@ struct RenderStats
     std::uint64_t kernelsSkipped = 0; ///< below the density cutoff, or invalid values
     std::uint64_t kernelsCulled = 0;  ///< outside the view frustum
     std::uint64_t splats = 0;         ///< kernels splatted
-    std::uint64_t splatTilePairs = 0; ///< (splat, screen tile) pairs rasterised
+    std::uint64_t splatTilePairs = 0; ///< (splat, screen tile) pairs binned
+    std::uint64_t screenTiles = 0;         ///< 16x16 screen tiles
+    std::uint64_t screenTilesOpaque = 0;   ///< tiles that turned opaque before their last splat
+    std::uint64_t splatTilePairsSkipped = 0; ///< pairs skipped because their tile was opaque
     std::vector<std::string> warnings; ///< what was clamped or skipped, one line each
 };
 

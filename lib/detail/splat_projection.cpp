@@ -27,6 +27,7 @@ ProjectionParams projectionParams(const Camera& camera, const RenderSettings& se
     p.antiAliasing = settings.antiAliasing;
     p.lowpass = settings.lowpass;
     p.cutoffRadius = settings.cutoffRadius;
+    p.renormalize = settings.renormalize;
     return p;
 }
 

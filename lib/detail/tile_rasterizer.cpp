@@ -43,13 +43,35 @@ TileBins binSplats(const std::vector<Splat>& splats, int width, int height)
     return bins;
 }
 
+/// exp(-r/2) for r in [0, rMax] in a 1D table, linearly interpolated (Sec. 7.1).
+class ExpTable
+{
+public:
+    explicit ExpTable(float rMax) : mScale(float(kSize - 1) / rMax)
+    {
+        for (int i = 0; i < kSize; ++i) mValues[i] = std::exp(-0.5f * float(i) / mScale);
+        mValues[kSize] = mValues[kSize - 1];
+    }
+    float lookup(float r) const
+    {
+        const float x = std::min(r * mScale, float(kSize - 1));
+        const int i = int(x);
+        return mValues[i] + (x - float(i)) * (mValues[i + 1] - mValues[i]);
+    }
+
+private:
+    static constexpr int kSize = 1024;
+    float mScale;
+    float mValues[kSize + 1];
+};
+
 /// The slab sweep of one screen tile: a ring of slab accumulators (optical depth and
 /// emission per channel and pixel), flushed front to back with the exact update.
 class TileCompositor
 {
 public:
-    TileCompositor(int x0, int y0, int w, int h, int ringSize, float cutoff)
-        : mX0(x0), mY0(y0), mW(w), mH(h), mMask(ringSize - 1), mCutoff(cutoff),
+    TileCompositor(int x0, int y0, int w, int h, int ringSize, float cutoff, ExpEvaluation exp, const ExpTable* table)
+        : mX0(x0), mY0(y0), mW(w), mH(h), mMask(ringSize - 1), mCutoff(cutoff), mExp(exp), mTable(table),
           mTau(std::size_t(ringSize) * 3 * kTilePixels, 0.0f),
           mEmission(std::size_t(ringSize) * 3 * kTilePixels, 0.0f),
           mDirty(std::size_t(ringSize))
@@ -63,6 +85,36 @@ public:
     }
 
     bool opaque() const { return mAliveCount == 0; }
+
+    /// exp(-r/2) along a row, r = qa dx^2 + 2 qb dx dy + qc dy^2, dx = dx0, dx0 + 1, ...
+    void rowWeights(double qa, double qb, double qc, double dx0, double dy, int n, float* out) const
+    {
+        auto r = [&](double dx) { return qa * dx * dx + 2.0 * qb * dx * dy + qc * dy * dy; };
+        // Very narrow footprints (qa > 16) would overflow the incremental factor: exact exp.
+        const ExpEvaluation mode = (mExp == ExpEvaluation::Incremental && qa > 16.0) ? ExpEvaluation::Exact : mExp;
+        switch (mode) {
+        case ExpEvaluation::Incremental: {
+            // r is quadratic in x: forward differencing in the exponential domain,
+            // g(x+1) = g(x) m(x), m(x+1) = m(x) k with k = exp(-qa): the paper's two additions
+            // per pixel turned into two multiplications.
+            float g = float(std::exp(-0.5 * r(dx0)));
+            float m = float(std::exp(-0.5 * (qa * (2.0 * dx0 + 1.0) + 2.0 * qb * dy)));
+            const float k = float(std::exp(-qa));
+            for (int i = 0; i < n; ++i) {
+                out[i] = g;
+                g *= m;
+                m *= k;
+            }
+            break;
+        }
+        case ExpEvaluation::Exact:
+            for (int i = 0; i < n; ++i) out[i] = float(std::exp(-0.5 * r(dx0 + double(i))));
+            break;
+        case ExpEvaluation::Table:
+            for (int i = 0; i < n; ++i) out[i] = mTable->lookup(float(r(dx0 + double(i))));
+            break;
+        }
+    }
 
     void add(const Splat& s, const float* shares)
     {
@@ -85,27 +137,14 @@ public:
             const int lxa = std::max(lx0, int(std::ceil(xFirst)) - mX0);
             const int lxb = std::min(lx1, int(std::floor(xLast)) - mX0);
             if (lxa > lxb) continue;
-            // r is quadratic in x: exp(-r/2) by forward differencing in the exponential domain,
-            // g(x+1) = g(x) m(x), m(x+1) = m(x) k with k = exp(-qa), the paper's two additions
-            // per pixel turned into two multiplications. Very narrow footprints (qa > 16) would
-            // overflow m: evaluate those directly.
-            const double dx0 = double(mX0 + lxa) + 0.5 - double(s.cx);
-            const double r0 = qa * dx0 * dx0 + 2.0 * qb * dx0 * dy + qc * dy * dy;
-            const bool incremental = qa <= 16.0;
-            float g = float(std::exp(-0.5 * r0));
-            float m = incremental ? float(std::exp(-0.5 * (qa * (2.0 * dx0 + 1.0) + 2.0 * qb * dy))) : 0.0f;
-            const float k = incremental ? float(std::exp(-qa)) : 0.0f;
-            float weights[kTileSize]; // the row's footprint values, 0 for terminated pixels
+            // The row's footprint values exp(-r/2), 0 for terminated pixels.
+            float weights[kTileSize];
             const int n = lxb - lxa + 1;
             const int p0 = ly * kTileSize + lxa;
+            const double dx0 = double(mX0 + lxa) + 0.5 - double(s.cx);
+            rowWeights(qa, qb, qc, dx0, dy, n, weights);
             for (int i = 0; i < n; ++i) {
-                if (!incremental && i > 0) {
-                    const double dx = dx0 + double(i);
-                    g = float(std::exp(-0.5 * (qa * dx * dx + 2.0 * qb * dx * dy + qc * dy * dy)));
-                }
-                weights[i] = mAlive[p0 + i] ? g : 0.0f;
-                g *= m;
-                m *= k;
+                if (!mAlive[p0 + i]) weights[i] = 0.0f;
             }
             // Spread the row into every slab the kernel overlaps: contiguous, vectorisable.
             for (int j = 0; j < count; ++j) {
@@ -201,6 +240,8 @@ private:
     int mX0, mY0, mW, mH;
     std::int64_t mMask;
     float mCutoff;
+    ExpEvaluation mExp;
+    const ExpTable* mTable;
     std::vector<float> mTau, mEmission; ///< [slot][channel][pixel]
     std::vector<Dirty> mDirty;
     std::vector<std::int64_t> mPending; ///< slabs holding contributions, not yet composited
@@ -227,6 +268,8 @@ Image rasterizeSplats(const SplatSet& set, int width, int height, const RenderSe
     stats.splatTilePairs = bins.indices.size();
     const float cutoff = float(settings.cutoff);
     const int tiles = bins.tilesX * bins.tilesY;
+    const ExpTable table(float(settings.cutoffRadius * settings.cutoffRadius));
+    std::vector<std::uint64_t> skipped(std::size_t(tiles), 0);
     tbb::parallel_for(tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& range) {
         std::vector<std::uint32_t> order;
         for (int t = range.begin(); t < range.end(); ++t) {
@@ -241,15 +284,21 @@ Image rasterizeSplats(const SplatSet& set, int width, int height, const RenderSe
             });
             std::uint32_t maxSpan = 1;
             for (std::uint32_t i : order) maxSpan = std::max(maxSpan, set.splats[i].slabCount);
-            TileCompositor tile(x0, y0, w, h, ringSizeFor(maxSpan), cutoff);
-            for (std::uint32_t i : order) {
-                if (tile.opaque()) break;
-                const Splat& s = set.splats[i];
+            TileCompositor tile(x0, y0, w, h, ringSizeFor(maxSpan), cutoff, settings.expEvaluation, &table);
+            std::size_t done = 0;
+            for (; done < order.size() && !tile.opaque(); ++done) {
+                const Splat& s = set.splats[order[done]];
                 tile.add(s, set.shares.data() + s.shareOffset);
             }
+            skipped[std::size_t(t)] = order.size() - done;
             tile.finish(image);
         }
     });
+    stats.tiles = std::uint64_t(tiles);
+    for (std::uint64_t n : skipped) {
+        stats.tilesOpaque += (n > 0);
+        stats.pairsSkipped += n;
+    }
     return image;
 }
 

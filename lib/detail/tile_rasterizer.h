@@ -15,6 +15,9 @@ constexpr int kTileSize = 16;
 struct RasterStats
 {
     std::uint64_t splatTilePairs = 0;
+    std::uint64_t tiles = 0;
+    std::uint64_t tilesOpaque = 0;  ///< tiles that turned opaque before their last splat
+    std::uint64_t pairsSkipped = 0; ///< pairs skipped in those tiles
 };
 
 /// Composite @a set into a width x height image (premultiplied RGB, A = 1 - mean T).
