@@ -3,9 +3,14 @@
 
   bench/bench.py speed  [--res 1920x1080] [--repeat 3]   time per asset, vdb_ewa / vdb_render
   bench/bench.py sigma  [--res 480x270]                  --kernel-sigma sweep: error vs converged vdb_render
+  bench/bench.py tradeoff [--scenes smoke,pyro] [--res 960x540] [--plot docs/pareto.png]
+                                                         presets and knob sweeps: time and error against
+                                                         (a) --method raymarch at a fine step and
+                                                         (b) vdb_render's converged image
 
 Needs a Release build in build/ (scripts/setup.sh), vdb_render and the shared assets
-($VDB_EWA_ASSETS, default ../shared/grids). Machines are noisy: compare ratios, not seconds.
+($VDB_EWA_ASSETS, default ../shared/grids); the Pareto plot needs python3-matplotlib.
+Machines are noisy: compare ratios, not seconds.
 """
 import argparse
 import os
@@ -122,6 +127,106 @@ def cmd_sigma(args):
         print(f"| {label} | " + " | ".join(row) + " |", flush=True)
 
 
+# Knob sweeps around --quality default, and the presets (label, extra vdb_ewa arguments).
+EWA_CONFIGS = [
+    ("quality draft", ["--quality", "draft"]),
+    ("quality default", ["--quality", "default"]),
+    ("quality high", ["--quality", "high"]),
+] + [(f"--cutoff-radius {v}", ["--cutoff-radius", v]) for v in ["2", "2.5", "4"]] \
+  + [(f"--slab {v}", ["--slab", v]) for v in ["0.5", "2", "4"]] \
+  + [(f"--lowpass {v}", ["--lowpass", v]) for v in ["0.3", "2"]] \
+  + [(f"--kernel-sigma {v}", ["--kernel-sigma", v]) for v in ["0.45", "0.7"]] \
+  + [(f"--shadowstep {v}", ["--shadowstep", v]) for v in ["0.375", "1", "6"]] \
+  + [(f"--exp {v}", ["--exp", v]) for v in ["exact", "table"]] \
+  + [("--renormalize off", ["--renormalize", "off"]), ("--aa swan", ["--aa", "swan"]), ("--aa none", ["--aa", "none"])]
+# vdb_render's curve: its defaults and finer steps (label, arguments).
+VDB_CONFIGS = [
+    ("vdb_render defaults", []),
+    ("vdb_render -step 0.5 -shadowstep 1.5", ["-step", "0.5", "-shadowstep", "1.5"]),
+    ("vdb_render -step 0.25 -shadowstep 0.75", ["-step", "0.25", "-shadowstep", "0.75"]),
+]
+
+
+def timed(cmd, repeat):
+    times = []
+    for _ in range(repeat):
+        times.append(run(cmd)[0])
+    return statistics.median(times)
+
+
+def cmd_tradeoff(args):
+    tmp = tempfile.mkdtemp(prefix="vdb_ewa_tradeoff_")
+    wanted = args.scenes.split(",")
+    scenes = [s for s in SCENES if s[0].split()[0] in wanted]
+    rows = []
+    for label, path, cam in scenes:
+        if not os.path.exists(path):
+            continue
+        for res in args.res.split(","):
+            common = ["-res", res, *cam.split()]
+            conv = os.path.join(tmp, "conv.exr")
+            ref = os.path.join(tmp, "ref.exr")
+            t_conv = run(["vdb_render", path, conv, *common, "-step", "0.125", "-shadowstep", "0.375"])[0]
+            t_ref = run([EWA, "render", path, ref, *common, "--method", "raymarch", "--step", "0.25",
+                         "--shadowstep", "0.375", "--kernel-sigma", "0.55"])[0]
+            print(f"# {label} {res}: vdb_render converged {t_conv:.1f} s, vdb_ewa raymarch reference {t_ref:.1f} s",
+                  flush=True)
+            configs = [("vdb_render", l, ["vdb_render", path, os.path.join(tmp, "o.exr"), *common, *a])
+                       for l, a in VDB_CONFIGS]
+            configs += [("vdb_ewa", l, [EWA, "render", path, os.path.join(tmp, "o.exr"), *common, *a])
+                        for l, a in EWA_CONFIGS]
+            for renderer, name, cmd in configs:
+                t = timed(cmd, args.repeat)
+                out = os.path.join(tmp, "o.exr")
+                rms_a, psnr_a = diff(out, ref)
+                rms_b, psnr_b = diff(out, conv)
+                alpha_a = diff(out, ref, "A")[0]
+                alpha_b = diff(out, conv, "A")[0]
+                rows.append(dict(scene=label, res=res, renderer=renderer, config=name, time=t, psnr_ref=psnr_a,
+                                 rmse_ref=rms_a, alpha_ref=alpha_a, psnr_conv=psnr_b, rmse_conv=rms_b,
+                                 alpha_conv=alpha_b))
+                print(f"| {label} | {res} | {name} | {t:.2f} | {psnr_a:.1f} | {rms_a:.4f} | {alpha_a:.4f} | "
+                      f"{psnr_b:.1f} | {rms_b:.4f} | {alpha_b:.4f} |", flush=True)
+    if args.plot:
+        plot(rows, args.plot)
+
+
+def plot(rows, path):
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        print("# no plot: apt-get install python3-matplotlib", file=sys.stderr)
+        return
+    groups = sorted({(r["scene"], r["res"]) for r in rows})
+    fig, axes = plt.subplots(1, len(groups), figsize=(6 * len(groups), 4.5), squeeze=False)
+    for ax, (scene, res) in zip(axes[0], groups):
+        for renderer, colour in (("vdb_render", "tab:red"), ("vdb_ewa", "tab:blue")):
+            pts = [(r["time"], r["psnr_conv"], r["config"]) for r in rows
+                   if r["scene"] == scene and r["res"] == res and r["renderer"] == renderer]
+            pts.sort()
+            front, best = [], -1e9
+            for t, p, c in pts:
+                if p > best:
+                    front.append((t, p))
+                    best = p
+            ax.scatter([p[0] for p in pts], [p[1] for p in pts], color=colour, s=12, alpha=0.5)
+            ax.plot([p[0] for p in front], [p[1] for p in front], color=colour, label=renderer)
+            for t, p, c in pts:
+                if c.startswith("quality") or c.endswith("defaults"):
+                    ax.annotate(c.replace("quality ", ""), (t, p), fontsize=7)
+        ax.set_xscale("log")
+        ax.set_xlabel("wall time (s)")
+        ax.set_ylabel("PSNR vs vdb_render converged (dB)")
+        ax.set_title(f"{scene} {res}")
+        ax.legend()
+        ax.grid(True, alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    print(f"# wrote {path}")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -130,8 +235,13 @@ def main():
     sp.add_argument("--repeat", type=int, default=3)
     sg = sub.add_parser("sigma")
     sg.add_argument("--res", default="480x270")
+    st = sub.add_parser("tradeoff")
+    st.add_argument("--scenes", default="smoke,pyro,cloud")
+    st.add_argument("--res", default="960x540")
+    st.add_argument("--repeat", type=int, default=1)
+    st.add_argument("--plot", default="")
     a = ap.parse_args()
-    {"speed": cmd_speed, "sigma": cmd_sigma}[a.cmd](a)
+    {"speed": cmd_speed, "sigma": cmd_sigma, "tradeoff": cmd_tradeoff}[a.cmd](a)
 
 
 if __name__ == "__main__":

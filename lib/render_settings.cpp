@@ -23,6 +23,7 @@ void RenderSettings::validate() const
     if (!(gain >= 0.0) || !std::isfinite(gain)) fail("--gain must be finite and >= 0");
     if (!(cutoff >= 0.0 && cutoff < 1.0)) fail("--cutoff must be in [0, 1)");
     if (!(shadowStep > 0.0) || !std::isfinite(shadowStep)) fail("--shadowstep must be > 0 voxels");
+    if (shadowResolution < 1 || shadowResolution > 16) fail("--shadow-res must be in [1, 16] voxels");
     if (!(step >= 1e-3) || !std::isfinite(step)) fail("--step must be >= 0.001 voxels");
     if (!(kernelSigma >= 0.1 && kernelSigma <= 4.0)) fail("--kernel-sigma must be in [0.1, 4] voxels");
     if (!(lowpass >= 0.0 && lowpass <= 100.0)) fail("--lowpass must be in [0, 100] pixels^2");
@@ -40,7 +41,7 @@ RenderSettings RenderSettings::preset(Quality quality)
     case Quality::Draft:
         s.cutoffRadius = 2.0;
         s.slab = 4.0;
-        s.shadowStep = 6.0;
+        s.shadowResolution = 4;
         s.tileKernelSpacing = 8;
         break;
     case Quality::Default:
@@ -49,6 +50,7 @@ RenderSettings RenderSettings::preset(Quality quality)
         s.cutoffRadius = 4.0;
         s.slab = 0.5;
         s.shadowStep = 0.375;
+        s.shadowResolution = 1;
         s.tileKernelSpacing = 2;
         s.expEvaluation = ExpEvaluation::Exact;
         break;

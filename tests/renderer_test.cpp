@@ -276,8 +276,10 @@ TEST(Renderer, FrustumTransformUsesPerVoxelJacobians)
     cam.width = 64;
     cam.height = 64;
     cam.translate = Vec3d(0.7, 0.5, 4.0);
-    const Image a = renderGrid(gridF, cam, RenderSettings());
-    const Image b = renderGrid(gridA, cam, RenderSettings());
+    RenderSettings s;
+    s.shadowResolution = 1; // the shadow lattice serves affine grids only: compare like with like
+    const Image a = renderGrid(gridF, cam, s);
+    const Image b = renderGrid(gridA, cam, s);
     EXPECT_GT(alphaSum(a), 50.0);
     EXPECT_LT(rmse(a, b), 1e-4);
 }
@@ -382,4 +384,68 @@ TEST(Renderer, RayMarchReferenceRefusesFrustumGrids)
     RenderSettings s;
     s.method = Method::RayMarch;
     EXPECT_THROW(renderGrid(grid, cam, s), ValueError);
+}
+
+TEST(Renderer, ExpEvaluationModesAgree)
+{
+    RenderSettings s;
+    const Image incremental = renderSample(SampleGrid::Cloud, 0.05, s);
+    s.expEvaluation = ExpEvaluation::Exact;
+    const Image exact = renderSample(SampleGrid::Cloud, 0.05, s);
+    s.expEvaluation = ExpEvaluation::Table;
+    const Image table = renderSample(SampleGrid::Cloud, 0.05, s);
+    EXPECT_LT(rmse(incremental, exact), 1e-5);
+    EXPECT_LT(rmse(table, exact), 1e-4);
+    EXPECT_GT(alphaSum(exact), 1000.0);
+}
+
+TEST(Renderer, RenormalisationRestoresTheTruncatedMass)
+{
+    // Without renormalisation a footprint cut at radius c keeps 1 - exp(-c^2/2) of its mass.
+    auto grid = makeBoxGrid(openvdb::Coord(0), openvdb::Coord(0), 1.0f, 0.1);
+    CameraSettings cam;
+    cam.width = cam.height = 64;
+    cam.translate = Vec3d(0, 0, 2.0);
+    cam.lookAt = Vec3d(0.0);
+    RenderSettings s = absorberSettings(1e-2); // peak optical depth ~1e-3: alpha ~ tau, float-exact
+    s.cutoffRadius = 2.0;
+    const double on = alphaSum(renderGrid(grid, cam, s));
+    s.renormalize = false;
+    const double off = alphaSum(renderGrid(grid, cam, s));
+    EXPECT_NEAR(off / on, 1.0 - std::exp(-2.0), 2e-3);
+}
+
+TEST(Renderer, QualityPresetsOrderTheirErrorAgainstTheReference)
+{
+    RenderSettings ref = RenderSettings::preset(Quality::High);
+    ref.method = Method::RayMarch;
+    ref.step = 0.125;
+    const Image reference = renderSample(SampleGrid::Cloud, 0.05, ref);
+    double previous = 1e30;
+    for (Quality q : {Quality::Draft, Quality::Default, Quality::High}) {
+        const double e = rmse(renderSample(SampleGrid::Cloud, 0.05, RenderSettings::preset(q)), reference);
+        std::printf("quality preset %d: RMSE against the reference %.2e\n", int(q), e);
+        EXPECT_LT(e, previous);
+        previous = e;
+    }
+}
+
+TEST(Renderer, ShadowLatticeConvergesToPerKernelShadows)
+{
+    // Shadow rays every N voxels, trilinear in between (--shadow-res): error grows with N.
+    RenderSettings s;
+    s.shadowStep = 0.5;
+    s.shadowResolution = 1;
+    const Image perKernel = renderSample(SampleGrid::Cloud, 0.04, s);
+    double previous = 0.0;
+    for (int n : {2, 4, 8}) {
+        s.shadowResolution = n;
+        const double e = rmse(renderSample(SampleGrid::Cloud, 0.04, s), perKernel, 0);
+        std::printf("shadow lattice every %d voxels: red RMSE against per-kernel shadows %.2e\n", n, e);
+        EXPECT_GT(e, previous);
+        previous = e;
+        if (n == 2) {
+            EXPECT_LT(e, 5e-3);
+        }
+    }
 }

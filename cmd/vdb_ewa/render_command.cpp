@@ -62,6 +62,7 @@ public:
         mApp->add_option("--cutoff", mCutoff,
             "density cutoff, and rays stop where |transmittance RGB|^2 < cutoff (default: " + fmt(rs.cutoff) + ")");
         mApp->add_option("--shadowstep", mShadowStep, "shadow-ray step in voxels (default: " + fmt(rs.shadowStep) + ")");
+        mApp->add_option("--shadow-res", mShadowRes, "shadow rays start every N voxels and are interpolated trilinearly in between; 1 = one per kernel (default: " + std::to_string(rs.shadowResolution) + ")");
         mApp->add_option("--step", mStep, "primary-ray step in voxels for --method raymarch (default: " + fmt(rs.step) + "); the splatter has no primary rays and ignores it");
         mApp->add_option("--method", mMethod, "splat (EWA volume splatting) or raymarch (reference integrator of the same Gaussian reconstruction, slow) (default: splat)");
         // EWA splatting.
@@ -163,6 +164,7 @@ private:
         if (mGain) rs.gain = *mGain;
         if (mCutoff) rs.cutoff = *mCutoff;
         if (mShadowStep) rs.shadowStep = *mShadowStep;
+        if (mShadowRes) rs.shadowResolution = *mShadowRes;
         if (mStep) rs.step = *mStep;
         if (!mMethod.empty()) {
             if (mMethod == "splat") rs.method = Method::Splat;
@@ -208,7 +210,7 @@ private:
                   << ") --frame " << fmt(c.frame) << " --near " << fmt(c.near) << " --far " << fmt(c.far) << "\n"
                   << "vdb_ewa: model --absorb " << fmt3(rs.absorb) << " --scatter " << fmt3(rs.scatter) << " --light "
                   << fmt3(rs.lightDir) << "," << fmt3(rs.lightColor) << " --gain " << fmt(rs.gain) << " --cutoff "
-                  << fmt(rs.cutoff) << " --shadowstep " << fmt(rs.shadowStep) << "\n"
+                  << fmt(rs.cutoff) << " --shadowstep " << fmt(rs.shadowStep) << " --shadow-res " << rs.shadowResolution << "\n"
                   << "vdb_ewa: " << (rs.method == Method::RayMarch ? "--method raymarch --step " + fmt(rs.step) + " " : std::string("--method splat "))
                   << "--kernel-sigma " << fmt(rs.kernelSigma) << " --lowpass " << fmt(rs.lowpass)
                   << " --aa " << (rs.antiAliasing == AntiAliasing::Ewa ? "ewa" : rs.antiAliasing == AntiAliasing::Swan ? "swan" : "none")
@@ -233,7 +235,7 @@ private:
     CLI::App* mApp = nullptr;
     std::string mInput, mOutput, mName, mRes, mTranslate, mRotate, mLookAt, mUp, mCamera;
     std::string mAbsorb, mScatter, mLight, mAa, mMethod, mQuality, mExp, mRenormalize;
-    std::optional<int> mTileSpacing;
+    std::optional<int> mTileSpacing, mShadowRes;
     std::optional<double> mFov, mFocal, mAperture, mFrame, mNear, mFar, mGain, mCutoff, mShadowStep, mStep;
     std::optional<double> mKernelSigma, mLowpass, mCutoffRadius, mSlab;
     int mThreads = 0;

@@ -45,7 +45,8 @@ struct RenderSettings
     Vec3d lightColor{0.7, 0.7, 0.7};  ///< radiance of the directional light, RGB
     double gain = 0.2;                ///< shadow-ray extinction falls as 1/(1 + gain * s), s in voxels
     double cutoff = 0.005;            ///< density cutoff; rays stop where |T|^2 < cutoff (RGB T)
-    double shadowStep = 3.0;          ///< shadow-ray step in voxels
+    double shadowStep = 1.0;          ///< shadow-ray step in voxels (vdb_render's default is 3)
+    int shadowResolution = 2;         ///< shadow rays start every N voxels (trilinear in between); 1 = at every kernel
     double step = 1.0;                ///< primary-ray step in voxels (--method raymarch only)
 
     // --- EWA splatting ---
@@ -55,7 +56,7 @@ struct RenderSettings
     double cutoffRadius = 3.0;  ///< footprint evaluated where r = d^T Q d < cutoffRadius^2 (in sigma)
     bool renormalize = true;    ///< divide by the mass kept inside the cut-off, 1 - exp(-c^2/2)
     ExpEvaluation expEvaluation = ExpEvaluation::Incremental;
-    double slab = 1.0;          ///< image-aligned slab thickness in voxel lengths
+    double slab = 2.0;          ///< image-aligned slab thickness in voxel lengths
     int tileKernelSpacing = 4;  ///< largest kernel spacing (voxels) used to model active tiles
 
     // --- Execution ---
