@@ -168,7 +168,7 @@ def cmd_tradeoff(args):
             ref = os.path.join(tmp, "ref.exr")
             t_conv = run(["vdb_render", path, conv, *common, "-step", "0.125", "-shadowstep", "0.375"])[0]
             t_ref = run([EWA, "render", path, ref, *common, "--method", "raymarch", "--step", "0.25",
-                         "--shadowstep", "0.375", "--kernel-sigma", "0.55"])[0]
+                         "--shadowstep", "0.375", "--shadow-res", "1", "--kernel-sigma", "0.55"])[0]
             print(f"# {label} {res}: vdb_render converged {t_conv:.1f} s, vdb_ewa raymarch reference {t_ref:.1f} s",
                   flush=True)
             configs = [("vdb_render", l, ["vdb_render", path, os.path.join(tmp, "o.exr"), *common, *a])
