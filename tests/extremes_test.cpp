@@ -170,19 +170,29 @@ TEST(Extremes, SmallVoxelsFarFromTheOrigin)
 {
     // Voxels of 1e-3 a million units from the origin, camera beside them: camera-relative
     // double precision keeps the image equal to the one at the origin.
-    auto render = [](const Vec3d& offset) {
+    auto render = [](const Vec3d& offset, bool doublePrecision) {
         auto grid = cube(12, 0.3f, 1e-3);
         grid->transform().postTranslate(openvdb::Vec3d(offset.x, offset.y, offset.z));
         CameraSettings cam = camera(offset + Vec3d(0.01, 0.02, 0.06), offset, 64, 48);
         cam.near = 1e-5;
         RenderSettings s;
+        s.doublePrecision = doublePrecision;
         return renderGrid(grid, cam, s);
     };
-    const Image origin = render(Vec3d(0.0));
-    const Image far = render(Vec3d(1e6, -1e6, 1e6));
+    const Image origin = render(Vec3d(0.0), true);
+    const Image far = render(Vec3d(1e6, -1e6, 1e6), true);
     expectSane(far);
     EXPECT_GT(alphaSum(origin), 100.0);
     EXPECT_LT(rmse(origin, far), 1e-3);
+    // --precision float: positions rounded to float 1e6 from the origin (ulp 0.06) lose the
+    // 1e-3 voxels entirely; the image is wrong but still finite.
+    const Image farFloat = render(Vec3d(1e6, -1e6, 1e6), false);
+    expectSane(farFloat);
+    const Image originFloat = render(Vec3d(0.0), false);
+    std::printf("  1e6 offset: RMSE double %.2e, float %.2e; at the origin float vs double %.2e\n", rmse(origin, far),
+        rmse(origin, farFloat), rmse(origin, originFloat));
+    EXPECT_GT(rmse(origin, farFloat), 100.0 * std::max(rmse(origin, far), 1e-6));
+    EXPECT_LT(rmse(origin, originFloat), 1e-3);
 }
 
 TEST(Extremes, Anisotropy1000To1)

@@ -76,6 +76,7 @@ public:
             "(values in docs/performance.md) (default: default)");
         mApp->add_option("--exp", mExp, "footprint exp(-r/2): incremental (forward differencing), exact or table (default: incremental)");
         mApp->add_option("--renormalize", mRenormalize, "on: divide footprints by the mass kept inside --cutoff-radius; off: keep the truncated mass (default: on)");
+        mApp->add_option("--precision", mPrecision, "world-to-camera transform and covariances in double or float (default: double)");
         mApp->add_option("--tile-spacing", mTileSpacing, "largest kernel spacing in voxels for active tiles, 1 to voxelise them (default: 4)");
         mApp->add_option("--threads,--cpus", mThreads, "worker threads, 0 = all cores (default: 0)");
         mApp->add_flag("-v,--verbose", mVerbose, "print the resolved settings, counts and stage timings");
@@ -192,6 +193,11 @@ private:
             else throw ValueError("--renormalize: expected on or off, got '" + mRenormalize + "'");
         }
         if (mTileSpacing) rs.tileKernelSpacing = *mTileSpacing;
+        if (!mPrecision.empty()) {
+            if (mPrecision == "double") rs.doublePrecision = true;
+            else if (mPrecision == "float") rs.doublePrecision = false;
+            else throw ValueError("--precision: expected double or float, got '" + mPrecision + "'");
+        }
         if (mSlab) rs.slab = *mSlab;
         rs.threads = mThreads;
     }
@@ -217,7 +223,7 @@ private:
                   << " --cutoff-radius " << fmt(rs.cutoffRadius) << " --renormalize " << (rs.renormalize ? "on" : "off")
                   << " --exp "
                   << (rs.expEvaluation == ExpEvaluation::Incremental ? "incremental" : rs.expEvaluation == ExpEvaluation::Exact ? "exact" : "table")
-                  << " --slab " << fmt(rs.slab) << " --tile-spacing " << rs.tileKernelSpacing << " --threads " << rs.threads << "\n";
+                  << " --precision " << (rs.doublePrecision ? "double" : "float") << " --slab " << fmt(rs.slab) << " --tile-spacing " << rs.tileKernelSpacing << " --threads " << rs.threads << "\n";
     }
 
     static void printStats(const RenderStats& s, double loadSeconds, double writeSeconds)
@@ -234,7 +240,7 @@ private:
 
     CLI::App* mApp = nullptr;
     std::string mInput, mOutput, mName, mRes, mTranslate, mRotate, mLookAt, mUp, mCamera;
-    std::string mAbsorb, mScatter, mLight, mAa, mMethod, mQuality, mExp, mRenormalize;
+    std::string mAbsorb, mScatter, mLight, mAa, mMethod, mQuality, mExp, mRenormalize, mPrecision;
     std::optional<int> mTileSpacing, mShadowRes;
     std::optional<double> mFov, mFocal, mAperture, mFrame, mNear, mFar, mGain, mCutoff, mShadowStep, mStep;
     std::optional<double> mKernelSigma, mLowpass, mCutoffRadius, mSlab;

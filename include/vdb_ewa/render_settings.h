@@ -56,6 +56,7 @@ struct RenderSettings
     double cutoffRadius = 3.0;  ///< footprint evaluated where r = d^T Q d < cutoffRadius^2 (in sigma)
     bool renormalize = true;    ///< divide by the mass kept inside the cut-off, 1 - exp(-c^2/2)
     ExpEvaluation expEvaluation = ExpEvaluation::Incremental;
+    bool doublePrecision = true; ///< world -> camera transform and covariances in double (false: float)
     double slab = 2.0;          ///< image-aligned slab thickness in voxel lengths
     int tileKernelSpacing = 4;  ///< largest kernel spacing (voxels) used to model active tiles
 

@@ -31,6 +31,14 @@ ProjectionParams projectionParams(const Camera& camera, const RenderSettings& se
     return p;
 }
 
+/// --precision float: the world -> camera transform in single precision, as a float
+/// pipeline would do it (world positions and the eye rounded to float before subtracting).
+Vec3d cameraFromWorldFloat(const Camera& camera, const Vec3d& pWorld)
+{
+    const glm::vec3 d = glm::vec3(pWorld) - glm::vec3(camera.eye());
+    return Vec3d(glm::mat3(camera.cameraFromWorld()) * d);
+}
+
 /// Where a kernel lies along its viewing ray; slabShares() turns it into shares twice
 /// (once to count, once to fill), with identical results.
 struct DepthExtent
@@ -93,7 +101,9 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
                 }
                 const double s = k.spacing;
                 cov *= sigma2 * s * s;
-                const Vec3d t = camera.cameraFromWorldPoint(pWorld);
+                const Vec3d t = settings.doublePrecision ? camera.cameraFromWorldPoint(pWorld)
+                                                         : cameraFromWorldFloat(camera, pWorld);
+                if (!settings.doublePrecision) cov = Mat3d(glm::mat3(cov));
                 if (perspective && !(t.z > camera.near())) { // centre before the near plane
                     flags[i] = 1;
                     continue;
