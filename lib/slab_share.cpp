@@ -9,9 +9,8 @@ namespace vdb_ewa {
 std::int64_t slabSpan(const SlabGrid& slabs, double mu, double sd, double truncation,
     double clipNear, double clipFar, std::int64_t& first)
 {
-    const double lo = std::max(mu - truncation * sd, clipNear);
-    const double hi = std::min(mu + truncation * sd, clipFar);
-    if (!(hi > lo)) return 0;
+    double lo, hi;
+    if (!clippedDepthRange(mu, sd, truncation, clipNear, clipFar, lo, hi)) return 0;
     first = slabs.index(lo);
     return slabs.index(hi) - first + 1;
 }
@@ -21,8 +20,8 @@ int slabShares(const SlabGrid& slabs, double mu, double sd, double truncation,
 {
     const std::int64_t span = slabSpan(slabs, mu, sd, truncation, clipNear, clipFar, first);
     if (span <= 0) return 0;
-    const double lo = std::max(mu - truncation * sd, clipNear);
-    const double hi = std::min(mu + truncation * sd, clipFar);
+    double lo, hi;
+    clippedDepthRange(mu, sd, truncation, clipNear, clipFar, lo, hi);
     const double mass = 2.0 * normalCdf(truncation) - 1.0;
     const double invSd = 1.0 / sd;
     const int count = int(std::min<std::int64_t>(span, maxCount));

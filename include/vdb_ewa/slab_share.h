@@ -22,6 +22,16 @@ struct SlabGrid
     double start(std::int64_t k) const { return zBase + double(k) * thickness; }
 };
 
+/// The depth range [lo, hi] of a Gaussian truncated to mu +- truncation * sd and clipped to
+/// [clipNear, clipFar]; false if that range is empty.
+inline bool clippedDepthRange(double mu, double sd, double truncation, double clipNear, double clipFar,
+    double& lo, double& hi)
+{
+    lo = mu - truncation * sd > clipNear ? mu - truncation * sd : clipNear;
+    hi = mu + truncation * sd < clipFar ? mu + truncation * sd : clipFar;
+    return hi > lo;
+}
+
 /// Slabs overlapped by mu +- truncation * sd clipped to [clipNear, clipFar]: sets @a first
 /// and returns their number (0 if the clipped range is empty).
 std::int64_t slabSpan(const SlabGrid& slabs, double mu, double sd, double truncation,

@@ -77,10 +77,9 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
     std::vector<std::uint8_t> visible(n, 0);
     std::vector<Splat> splats(n);
     std::vector<DepthExtent> extents(n);
-    std::vector<std::uint32_t> spans(n, 0);
     std::vector<std::uint8_t> flags(n, 0); // 1: before near, 2: clamped near, 4: clamped grazing
 
-    // Pass 1: footprints and slab spans.
+    // Pass 1: footprints, culling and depth extents.
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096),
         [&](const tbb::blocked_range<std::size_t>& range) {
             for (std::size_t i = range.begin(); i < range.end(); ++i) {
@@ -128,8 +127,8 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
                 // converted to distance along the ray through the centre).
                 const double toRay = perspective ? glm::length(t) / t.z : 1.0;
                 const DepthExtent extent{fp.depth, fp.depthSd, camera.near() * toRay, camera.far() * toRay};
-                if (!(std::min(extent.mu + kDepthTruncation * extent.sd, extent.clipFar) >
-                        std::max(extent.mu - kDepthTruncation * extent.sd, extent.clipNear))) {
+                double lo, hi;
+                if (!clippedDepthRange(extent.mu, extent.sd, kDepthTruncation, extent.clipNear, extent.clipFar, lo, hi)) {
                     continue; // wholly before the near plane or beyond the far plane
                 }
                 extents[i] = extent;
@@ -172,12 +171,11 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
         const DepthExtent& e = extents[i];
         const std::int64_t span = slabSpan(out.slabs, e.mu, e.sd, kDepthTruncation, e.clipNear, e.clipFar, splats[i].firstSlab);
         out.clippedSpan += (span > kMaxSlabSpan);
-        spans[i] = std::uint32_t(std::min<std::int64_t>(span, kMaxSlabSpan));
         out.clampedNear += (flags[i] >> 1) & 1;
         out.clampedGrazing += (flags[i] >> 2) & 1;
         splats[i].shareOffset = total;
-        splats[i].slabCount = spans[i];
-        total += spans[i];
+        splats[i].slabCount = std::uint32_t(std::min<std::int64_t>(span, kMaxSlabSpan));
+        total += splats[i].slabCount;
     }
     out.shares.resize(total);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096),
@@ -187,7 +185,7 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
                 const DepthExtent& e = extents[i];
                 std::int64_t first = 0;
                 slabShares(out.slabs, e.mu, e.sd, kDepthTruncation, e.clipNear, e.clipFar, first,
-                    out.shares.data() + splats[i].shareOffset, int(spans[i]));
+                    out.shares.data() + splats[i].shareOffset, int(splats[i].slabCount));
             }
         });
     out.splats.reserve(std::size_t(std::count(visible.begin(), visible.end(), 1)));
