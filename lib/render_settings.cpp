@@ -31,6 +31,7 @@ void RenderSettings::validate() const
     if (!(cutoffRadius >= 1.0 && cutoffRadius <= 6.0)) fail("--cutoff-radius must be in [1, 6] sigma");
     if (!(slab >= 0.05 && slab <= 1.0e4)) fail("--slab must be in [0.05, 10000] voxels");
     if (tileKernelSpacing < 1 || tileKernelSpacing > 64) fail("tile kernel spacing must be in [1, 64] voxels");
+    if (!(lodPixels >= 0.0 && lodPixels <= 64.0)) fail("--lod must be in [0, 64] pixels");
     if (threads < 0) fail("--threads must be >= 0");
 }
 
@@ -43,6 +44,7 @@ RenderSettings RenderSettings::preset(Quality quality)
         s.slab = 4.0;
         s.shadowResolution = 4;
         s.tileKernelSpacing = 8;
+        s.lodPixels = 12.0;
         break;
     case Quality::Default:
         break;
@@ -53,6 +55,7 @@ RenderSettings RenderSettings::preset(Quality quality)
         s.shadowResolution = 1;
         s.tileKernelSpacing = 2;
         s.expEvaluation = ExpEvaluation::Exact;
+        s.lodPixels = 0.0;
         break;
     }
     return s;

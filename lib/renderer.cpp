@@ -57,7 +57,8 @@ Image Renderer::render(const GridSource& grid, const Camera& camera, RenderStats
             return;
         }
         StageTimer timer;
-        const detail::KernelSet kernels = detail::extractKernels(g, mSettings);
+        const detail::LevelOfDetail lod(g, camera, mSettings.lodPixels);
+        const detail::KernelSet kernels = detail::extractKernels(g, mSettings, &lod);
         stats.kernelSeconds = timer.lap();
         const std::vector<detail::Rgb> shadows = detail::shadowTransmittance(g, kernels, mSettings);
         stats.shadowSeconds = timer.lap();
@@ -71,6 +72,8 @@ Image Renderer::render(const GridSource& grid, const Camera& camera, RenderStats
         stats.activeTiles = kernels.activeTiles;
         stats.kernels = kernels.kernels.size();
         stats.kernelsSkipped = kernels.belowCutoff + kernels.notANumber;
+        stats.voxelsMerged = kernels.mergedVoxels;
+        stats.mergedKernels = kernels.mergedKernels;
         stats.kernelsCulled = splats.culled;
         stats.splats = splats.splats.size();
         stats.splatTilePairs = raster.splatTilePairs;

@@ -108,6 +108,20 @@ TEST_F(Cli, InputErrors)
     expectFailure("render " + ints + " " + out + " --name labels", 3, "holds int32 values");
 }
 
+TEST_F(Cli, VerbosePrintsThePresetResolvedWithOverrides)
+{
+    const std::string out = mDir.file("out.exr");
+    const CliRun draft = runCli(mDir, "render " + mGrid + " " + out + " --res 32x32 -translate 0,0,5 --quality draft -v");
+    ASSERT_EQ(draft.code, 0) << draft.err;
+    for (const char* value : {"--cutoff-radius 2 ", "--slab 4 ", "--shadow-res 4", "--tile-spacing 8 ", "--lod 12 "}) {
+        EXPECT_NE(draft.out.find(value), std::string::npos) << value << " in\n" << draft.out;
+    }
+    const CliRun over = runCli(mDir, "render " + mGrid + " " + out + " --res 32x32 -translate 0,0,5 --quality draft --lod 0 -v");
+    ASSERT_EQ(over.code, 0) << over.err;
+    EXPECT_NE(over.out.find("--lod 0 "), std::string::npos) << over.out;
+    EXPECT_NE(over.out.find("--slab 4 "), std::string::npos) << over.out;
+}
+
 TEST_F(Cli, ArgumentAndOutputErrors)
 {
     const std::string out = mDir.file("out.exr");
@@ -119,6 +133,8 @@ TEST_F(Cli, ArgumentAndOutputErrors)
     expectFailure("render " + mGrid + " " + out + " --near 0", 2, "--near");
     expectFailure("render " + mGrid + " " + out + " --slab -1", 2, "--slab");
     expectFailure("render " + mGrid + " " + out + " --aa bilinear", 2, "--aa");
+    expectFailure("render " + mGrid + " " + out + " --lod -1", 2, "--lod");
+    expectFailure("render " + mGrid + " " + out + " --quality fast", 2, "--quality");
     expectFailure("render " + mGrid + " " + out + " --bogus 3", 2, "bogus");
     expectFailure("render " + mGrid + " " + mDir.file("out.png"), 2, "unsupported output format");
     expectFailure("render " + mGrid + " " + mDir.file("no/such/dir/out.exr"), 3, "does not exist");
@@ -147,7 +163,8 @@ TEST_F(Cli, HelpDocumentsEveryOptionWithItsDefault)
     for (const char* opt : {"--res", "--translate", "--rotate", "--lookat", "--up", "--camera", "--fov", "--focal",
              "--aperture", "--frame", "--near", "--far", "--name", "--absorb", "--scatter", "--light", "--gain",
              "--cutoff", "--shadowstep", "--step", "--kernel-sigma", "--lowpass", "--aa", "--cutoff-radius", "--slab",
-             "--threads", "--verbose"}) {
+             "--quality", "--exp", "--renormalize", "--precision", "--tile-spacing", "--shadow-res", "--method",
+             "--lod", "--threads", "--verbose"}) {
         EXPECT_NE(r.out.find(opt), std::string::npos) << opt;
     }
     EXPECT_NE(r.out.find("default: 1920x1080"), std::string::npos);

@@ -78,6 +78,7 @@ public:
         mApp->add_option("--renormalize", mRenormalize, "on: divide footprints by the mass kept inside --cutoff-radius; off: keep the truncated mass (default: on)");
         mApp->add_option("--precision", mPrecision, "world-to-camera transform and covariances in double or float (default: double)");
         mApp->add_option("--tile-spacing", mTileSpacing, "largest kernel spacing in voxels for active tiles, 1 to voxelise them (default: 4)");
+        mApp->add_option("--lod", mLod, "level of detail: blocks of 2, 4 or 8 voxels a side become one kernel where the block projects to at most this many pixels; 0 = off (default: " + fmt(rs.lodPixels) + ")");
         mApp->add_option("--threads,--cpus", mThreads, "worker threads, 0 = all cores (default: 0)");
         mApp->add_flag("-v,--verbose", mVerbose, "print the resolved settings, counts and stage timings");
     }
@@ -199,6 +200,7 @@ private:
             else throw ValueError("--precision: expected double or float, got '" + mPrecision + "'");
         }
         if (mSlab) rs.slab = *mSlab;
+        if (mLod) rs.lodPixels = *mLod;
         rs.threads = mThreads;
     }
 
@@ -223,13 +225,14 @@ private:
                   << " --cutoff-radius " << fmt(rs.cutoffRadius) << " --renormalize " << (rs.renormalize ? "on" : "off")
                   << " --exp "
                   << (rs.expEvaluation == ExpEvaluation::Incremental ? "incremental" : rs.expEvaluation == ExpEvaluation::Exact ? "exact" : "table")
-                  << " --precision " << (rs.doublePrecision ? "double" : "float") << " --slab " << fmt(rs.slab) << " --tile-spacing " << rs.tileKernelSpacing << " --threads " << rs.threads << "\n";
+                  << " --precision " << (rs.doublePrecision ? "double" : "float") << " --slab " << fmt(rs.slab) << " --tile-spacing " << rs.tileKernelSpacing << " --lod " << fmt(rs.lodPixels) << " --threads " << rs.threads << "\n";
     }
 
     static void printStats(const RenderStats& s, double loadSeconds, double writeSeconds)
     {
         std::cout << "vdb_ewa: " << s.activeVoxels << " active voxels and " << s.activeTiles << " active tiles read; "
-                  << s.kernels << " kernels, " << s.kernelsSkipped << " values skipped (below --cutoff or NaN), "
+                  << s.kernels << " kernels (" << s.voxelsMerged << " voxels merged into " << s.mergedKernels
+                  << " by --lod), " << s.kernelsSkipped << " values skipped (below --cutoff or NaN), "
                   << s.kernelsCulled << " kernels culled, " << s.splats << " splatted into " << s.splatTilePairs
                   << " (splat, tile) pairs; " << s.screenTilesOpaque << " of " << s.screenTiles
                   << " screen tiles turned opaque early, skipping " << s.splatTilePairsSkipped << " pairs\n"
@@ -242,7 +245,7 @@ private:
     std::string mInput, mOutput, mName, mRes, mTranslate, mRotate, mLookAt, mUp, mCamera;
     std::string mAbsorb, mScatter, mLight, mAa, mMethod, mQuality, mExp, mRenormalize, mPrecision;
     std::optional<int> mTileSpacing, mShadowRes;
-    std::optional<double> mFov, mFocal, mAperture, mFrame, mNear, mFar, mGain, mCutoff, mShadowStep, mStep;
+    std::optional<double> mFov, mFocal, mAperture, mFrame, mNear, mFar, mGain, mCutoff, mShadowStep, mStep, mLod;
     std::optional<double> mKernelSigma, mLowpass, mCutoffRadius, mSlab;
     int mThreads = 0;
     bool mVerbose = false;

@@ -59,6 +59,8 @@ struct RenderSettings
     bool doublePrecision = true; ///< world -> camera transform and covariances in double (false: float)
     double slab = 2.0;          ///< image-aligned slab thickness in voxel lengths
     int tileKernelSpacing = 4;  ///< largest kernel spacing (voxels) used to model active tiles
+    double lodPixels = 2.0;     ///< level of detail: merge blocks of 2^L voxels into one kernel where
+                                ///< the block spacing projects to at most this many pixels; 0 = off
 
     // --- Execution ---
     int threads = 0;            ///< worker threads, 0 = all cores (a tbb::task_arena, never global)

@@ -36,7 +36,7 @@ int tileLatticeSpacing(int tileDim, int maxSpacing)
     return s;
 }
 
-KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& settings)
+KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& settings, const LevelOfDetail* lod)
 {
     using LeafT = openvdb::FloatTree::LeafNodeType;
     const openvdb::FloatTree& tree = grid.grid->tree();
@@ -47,33 +47,58 @@ KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& set
     leaves.reserve(tree.leafCount());
     tree.getNodes(leaves);
 
-    // Pass 1: each leaf writes its active voxels into its own slot range.
+    // Pass 1: each leaf writes its kernels into its own slot range, one slot per active
+    // voxel (merged blocks need fewer; unused slots keep density 0 and are dropped).
     std::vector<std::size_t> offsets(leaves.size() + 1, 0);
     for (std::size_t i = 0; i < leaves.size(); ++i) offsets[i + 1] = offsets[i] + leaves[i]->onVoxelCount();
     set.activeVoxels = offsets.back();
-    std::vector<Kernel> voxels(offsets.back());
-    std::vector<std::uint64_t> counts(leaves.size() * 3, 0); // below cutoff, NaN, clamped
+    std::vector<Kernel> voxels(offsets.back(), Kernel{Vec3d(0.0), 0.0f, 1.0f});
+    std::vector<std::uint64_t> counts(leaves.size() * 5, 0); // below cutoff, NaN, clamped, merged voxels, merged kernels
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size()),
         [&](const tbb::blocked_range<std::size_t>& range) {
             for (std::size_t i = range.begin(); i < range.end(); ++i) {
+                std::uint64_t* count = &counts[5 * i];
+                const openvdb::Coord origin = leaves[i]->origin();
+                const int block = lod ? lod->blockSize(origin, int(LeafT::DIM)) : 1;
+                const int blocks = int(LeafT::DIM) / block;
+                float sums[LeafT::SIZE] = {}; // per block, used when block > 1
                 std::size_t slot = offsets[i];
-                for (auto it = leaves[i]->cbeginValueOn(); it; ++it, ++slot) {
-                    Kernel& k = voxels[slot];
+                for (auto it = leaves[i]->cbeginValueOn(); it; ++it) {
+                    float density = 0.0f;
+                    const ValueClass vc = classify(*it, cutoff, density);
+                    if (vc == ValueClass::BelowCutoff) ++count[0];
+                    if (vc == ValueClass::NotANumber) ++count[1];
+                    if (vc == ValueClass::Clamped) ++count[2];
                     const openvdb::Coord c = it.getCoord();
-                    k.pIndex = Vec3d(c.x(), c.y(), c.z());
-                    k.spacing = 1.0f;
-                    k.density = 0.0f;
-                    const ValueClass vc = classify(*it, cutoff, k.density);
-                    if (vc == ValueClass::BelowCutoff) ++counts[3 * i];
-                    if (vc == ValueClass::NotANumber) ++counts[3 * i + 1];
-                    if (vc == ValueClass::Clamped) ++counts[3 * i + 2];
+                    if (block == 1) {
+                        voxels[slot++] = {Vec3d(c.x(), c.y(), c.z()), density, 1.0f};
+                        continue;
+                    }
+                    const int bx = (c.x() - origin.x()) / block, by = (c.y() - origin.y()) / block,
+                              bz = (c.z() - origin.z()) / block;
+                    sums[(bx * blocks + by) * blocks + bz] += density;
+                    ++count[3];
                 }
+                if (block == 1) continue;
+                // Merged kernel: the block's mean density at its centre (docs/equations.md#level-of-detail).
+                const double volume = double(block) * block * block;
+                const Vec3d first = Vec3d(origin.x(), origin.y(), origin.z()) - 0.5 + 0.5 * double(block);
+                for (int bx = 0; bx < blocks; ++bx)
+                    for (int by = 0; by < blocks; ++by)
+                        for (int bz = 0; bz < blocks; ++bz) {
+                            const float sum = sums[(bx * blocks + by) * blocks + bz];
+                            if (!(sum > 0.0f)) continue;
+                            voxels[slot++] = {first + double(block) * Vec3d(bx, by, bz), float(double(sum) / volume), float(block)};
+                            ++count[4];
+                        }
             }
         });
     for (std::size_t i = 0; i < leaves.size(); ++i) {
-        set.belowCutoff += counts[3 * i];
-        set.notANumber += counts[3 * i + 1];
-        set.clamped += counts[3 * i + 2];
+        set.belowCutoff += counts[5 * i];
+        set.notANumber += counts[5 * i + 1];
+        set.clamped += counts[5 * i + 2];
+        set.mergedVoxels += counts[5 * i + 3];
+        set.mergedKernels += counts[5 * i + 4];
     }
     set.kernels.reserve(voxels.size());
     std::copy_if(voxels.begin(), voxels.end(), std::back_inserter(set.kernels),

@@ -5,14 +5,17 @@
 #include <vdb_ewa/grid_source.h>
 #include <vdb_ewa/render_settings.h>
 
+#include "level_of_detail.h"
+
 #include <cstdint>
 #include <vector>
 
 namespace vdb_ewa {
 namespace detail {
 
-/// One reconstruction kernel r_k = G_V(u - u_k): a voxel (spacing 1) or one kernel of the
-/// lattice that models an active tile (spacing s > 1: sigma and weight scale with s).
+/// One reconstruction kernel r_k = G_V(u - u_k): a voxel (spacing 1), a block of s^3 voxels
+/// merged for level of detail, or one kernel of the lattice that models an active tile
+/// (spacing s > 1: sigma and weight scale with s).
 struct Kernel
 {
     Vec3d pIndex;   ///< centre, index space
@@ -28,6 +31,8 @@ struct KernelSet
     std::uint64_t belowCutoff = 0; ///< values < cutoff (including negative and -Inf): skipped
     std::uint64_t notANumber = 0;  ///< NaN values: skipped
     std::uint64_t clamped = 0;     ///< values > kMaxDensity (including +Inf): clamped
+    std::uint64_t mergedVoxels = 0; ///< active voxels merged into level-of-detail kernels
+    std::uint64_t mergedKernels = 0; ///< level-of-detail kernels they became
 };
 
 /// Densities above this are clamped: a voxel this dense is opaque at any sane setting.
@@ -38,8 +43,11 @@ constexpr float kMaxDensity = 1.0e6f;
 /// 64^3 kernels. See docs/equations.md#active-tiles.
 int tileLatticeSpacing(int tileDim, int maxSpacing);
 
-/// Build the kernels of every active voxel and tile, one TBB task per leaf node.
-KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& settings);
+/// Build the kernels of every active voxel and tile, one TBB task per leaf node. With @a lod,
+/// a leaf node whose voxels project small enough becomes blocks of merged kernels (the
+/// block's mean density at the block's centre, spacing = block size: mass is kept).
+KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& settings,
+    const LevelOfDetail* lod = nullptr);
 
 } // namespace detail
 } // namespace vdb_ewa
