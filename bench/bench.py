@@ -7,6 +7,10 @@
                                                          presets and knob sweeps: time and error against
                                                          (a) --method raymarch at a fine step and
                                                          (b) vdb_render's converged image
+  bench/bench.py plot TABLE.txt --plot OUT.png           redraw the Pareto plot from a saved tradeoff table
+  bench/bench.py targets --cache DIR [--scene smoke] [--res 1920x1080] [--repeat 5]
+                                                         issue 3's targets: vdb_render's defaults and
+                                                         the presets in interleaved rounds
 
 Needs a Release build in build/ (scripts/setup.sh), vdb_render and the shared assets
 ($VDB_EWA_ASSETS, default ../shared/grids); the Pareto plot needs python3-matplotlib.
@@ -202,6 +206,46 @@ def cmd_tradeoff(args):
         plot([r for r in rows if r["psnr_conv"] == r["psnr_conv"]], args.plot)
 
 
+def cmd_plot(args):
+    """Redraw the Pareto plot from the table a tradeoff run printed (saved to a file)."""
+    rows = []
+    for line in open(args.table):
+        c = [x.strip() for x in line.strip().strip("|").split("|")]
+        if not line.startswith("| ") or len(c) != 10:
+            continue
+        rows.append(dict(scene=c[0], res=c[1], config=c[2], time=float(c[3]), psnr_conv=float(c[7]),
+                         renderer="vdb_render" if c[2].startswith("vdb_render") else "vdb_ewa"))
+    plot([r for r in rows if r["psnr_conv"] == r["psnr_conv"]], args.plot)
+
+
+def cmd_targets(args):
+    """Issue 3's targets: vdb_render's defaults and the three presets, interleaved round by round
+    so that the machine's drifting speed hits all of them alike; medians, ratios and PSNR."""
+    tmp = tempfile.mkdtemp(prefix="vdb_ewa_targets_")
+    label, path, cam = next(s for s in SCENES if s[0] == args.scene)
+    common = ["-res", args.res, *cam.split()]
+    conv = os.path.join(args.cache, f"{label}_{args.res}_conv.exr")
+    ref = os.path.join(args.cache, f"{label}_{args.res}_ref.exr")
+    if not (os.path.exists(conv) and os.path.exists(ref)):
+        sys.exit(f"run `bench.py tradeoff --scenes {label} --res {args.res} --cache {args.cache}` first")
+    configs = [("vdb_render defaults", ["vdb_render", path, os.path.join(tmp, "v.exr"), *common])]
+    configs += [(f"quality {q}", [EWA, "render", path, os.path.join(tmp, f"{q}.exr"), *common, "--quality", q])
+                for q in ("draft", "default", "high")]
+    times = {name: [] for name, _ in configs}
+    for _ in range(args.repeat):
+        for name, cmd in configs:
+            times[name].append(run(cmd)[0])
+    base = statistics.median(times["vdb_render defaults"])
+    print(f"# {label} {args.res}: median of {args.repeat} interleaved rounds, {os.cpu_count()} cores")
+    print("| setting | median time (s) | all times (s) | speed-up vs vdb_render defaults | PSNR vs raymarch (dB) | PSNR vs vdb_render converged (dB) |")
+    print("|---|---|---|---|---|---|")
+    for name, cmd in configs:
+        t = statistics.median(times[name])
+        out = next(a for a in cmd if a.endswith(".exr"))
+        print(f"| {name} | {t:.2f} | {', '.join(f'{x:.2f}' for x in times[name])} | {base / t:.1f}x | "
+              f"{diff(out, ref)[1]:.1f} | {diff(out, conv)[1]:.1f} |", flush=True)
+
+
 def plot(rows, path):
     try:
         import matplotlib
@@ -211,8 +255,12 @@ def plot(rows, path):
         print("# no plot: apt-get install python3-matplotlib", file=sys.stderr)
         return
     groups = sorted({(r["scene"], r["res"]) for r in rows})
-    fig, axes = plt.subplots(1, len(groups), figsize=(6 * len(groups), 4.5), squeeze=False)
-    for ax, (scene, res) in zip(axes[0], groups):
+    cols = min(4, len(groups))
+    lines = (len(groups) + cols - 1) // cols
+    fig, axes = plt.subplots(lines, cols, figsize=(6 * cols, 4.5 * lines), squeeze=False)
+    for ax in axes.flat[len(groups):]:
+        ax.set_visible(False)
+    for ax, (scene, res) in zip(axes.flat, groups):
         for renderer, colour in (("vdb_render", "tab:red"), ("vdb_ewa", "tab:blue")):
             pts = [(r["time"], r["psnr_conv"], r["config"]) for r in rows
                    if r["scene"] == scene and r["res"] == res and r["renderer"] == renderer]
@@ -252,8 +300,17 @@ def main():
     st.add_argument("--repeat", type=int, default=1)
     st.add_argument("--plot", default="")
     st.add_argument("--cache", default="", help="folder that keeps the reference images between runs")
+    sx = sub.add_parser("targets")
+    sx.add_argument("--scene", default="smoke")
+    sx.add_argument("--res", default="1920x1080")
+    sx.add_argument("--repeat", type=int, default=5)
+    sx.add_argument("--cache", required=True, help="folder holding the tradeoff run's reference images")
+    sp2 = sub.add_parser("plot")
+    sp2.add_argument("table", help="saved output of a tradeoff run")
+    sp2.add_argument("--plot", required=True)
     a = ap.parse_args()
-    {"speed": cmd_speed, "sigma": cmd_sigma, "tradeoff": cmd_tradeoff}[a.cmd](a)
+    {"speed": cmd_speed, "sigma": cmd_sigma, "tradeoff": cmd_tradeoff, "targets": cmd_targets,
+     "plot": cmd_plot}[a.cmd](a)
 
 
 if __name__ == "__main__":

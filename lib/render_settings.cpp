@@ -44,7 +44,7 @@ RenderSettings RenderSettings::preset(Quality quality)
         s.slab = 4.0;
         s.shadowResolution = 4;
         s.tileKernelSpacing = 8;
-        s.lodPixels = 12.0;
+        s.lodPixels = 10.0;
         break;
     case Quality::Default:
         break;
