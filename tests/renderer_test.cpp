@@ -170,6 +170,35 @@ TEST(Renderer, ThreadCountDoesNotChangeTheImage)
     EXPECT_GT(alphaSum(a), 100.0); // the cloud is in view
 }
 
+TEST(Renderer, GreyFastPathEqualsTheThreeChannelPath)
+{
+    // Grey model: one channel composited and copied. A coloured light changes only the
+    // emission, not the transmittance (absorb and scatter stay grey), so each channel of the
+    // coloured image must be bit-identical to the grey image rendered with that channel's
+    // light level.
+    const GridSource cloud = makeSampleGrid(SampleGrid::Cloud, 0.05);
+    CameraSettings cam;
+    cam.width = 120;
+    cam.height = 90;
+    cam.translate = Vec3d(1.0, 0.5, 4.0);
+    const Camera camera(cam, cloud.worldCentre());
+    RenderSettings colour;
+    colour.lightColor = Vec3d(0.9, 0.5, 0.2);
+    const Image c = Renderer(colour).render(cloud, camera);
+    for (int ch = 0; ch < 3; ++ch) {
+        RenderSettings grey;
+        grey.lightColor = Vec3d(colour.lightColor[ch]);
+        const Image g = Renderer(grey).render(cloud, camera);
+        std::size_t same = 0, n = 0;
+        for (std::size_t i = 0; i < g.rgba.size(); i += 4, ++n) {
+            same += std::memcmp(&g.rgba[i + std::size_t(ch)], &c.rgba[i + std::size_t(ch)], sizeof(float)) == 0 &&
+                    std::memcmp(&g.rgba[i + 3], &c.rgba[i + 3], sizeof(float)) == 0;
+        }
+        EXPECT_EQ(same, n) << "channel " << ch;
+    }
+    EXPECT_GT(alphaSum(c), 50.0);
+}
+
 namespace {
 
 /// Render a sample grid of the shared analytic cloud with the same camera.

@@ -182,8 +182,9 @@ public:
                 const int p = ly * kTileSize + lx;
                 float* px = image.pixel(mX0 + lx, mY0 + ly);
                 if (C == 1) {
+                    const float t = mT[p];
                     px[0] = px[1] = px[2] = mC[p];
-                    px[3] = 1.0f - mT[p];
+                    px[3] = 1.0f - (t + t + t) / 3.0f; // the three-channel mean's rounding, bit for bit
                     continue;
                 }
                 for (int c = 0; c < 3; ++c) px[c] = mC[c * kTilePixels + p];
