@@ -26,6 +26,14 @@ std::string fmt(double v)
 
 std::string fmt3(const Vec3d& v) { return fmt(v.x) + "," + fmt(v.y) + "," + fmt(v.z); }
 
+const Choices<Quality> kQualities = {{"draft", Quality::Draft}, {"default", Quality::Default}, {"high", Quality::High}};
+const Choices<Method> kMethods = {{"splat", Method::Splat}, {"raymarch", Method::RayMarch}};
+const Choices<AntiAliasing> kAntiAliasing = {{"ewa", AntiAliasing::Ewa}, {"swan", AntiAliasing::Swan}, {"none", AntiAliasing::None}};
+const Choices<ExpEvaluation> kExpEvaluations = {
+    {"incremental", ExpEvaluation::Incremental}, {"exact", ExpEvaluation::Exact}, {"table", ExpEvaluation::Table}};
+const Choices<bool> kOnOff = {{"on", true}, {"off", false}};
+const Choices<bool> kPrecisions = {{"double", true}, {"float", false}}; // doublePrecision
+
 class RenderCommand : public Command
 {
 public:
@@ -131,12 +139,7 @@ private:
 
     void resolve(CameraSettings& cam, RenderSettings& rs) const
     {
-        if (!mQuality.empty()) {
-            if (mQuality == "draft") rs = RenderSettings::preset(Quality::Draft);
-            else if (mQuality == "default") rs = RenderSettings::preset(Quality::Default);
-            else if (mQuality == "high") rs = RenderSettings::preset(Quality::High);
-            else throw ValueError("--quality: expected draft, default or high, got '" + mQuality + "'");
-        }
+        if (!mQuality.empty()) rs = RenderSettings::preset(parseChoice("quality", mQuality, kQualities));
         if (!mRes.empty()) parseResolution(mRes, cam.width, cam.height);
         if (!mTranslate.empty()) cam.translate = parseVec3("translate", mTranslate, true);
         if (!mRotate.empty()) cam.rotate = parseVec3("rotate", mRotate, true);
@@ -168,37 +171,15 @@ private:
         if (mShadowStep) rs.shadowStep = *mShadowStep;
         if (mShadowRes) rs.shadowResolution = *mShadowRes;
         if (mStep) rs.step = *mStep;
-        if (!mMethod.empty()) {
-            if (mMethod == "splat") rs.method = Method::Splat;
-            else if (mMethod == "raymarch") rs.method = Method::RayMarch;
-            else throw ValueError("--method: expected splat or raymarch, got '" + mMethod + "'");
-        }
+        if (!mMethod.empty()) rs.method = parseChoice("method", mMethod, kMethods);
         if (mKernelSigma) rs.kernelSigma = *mKernelSigma;
         if (mLowpass) rs.lowpass = *mLowpass;
-        if (!mAa.empty()) {
-            if (mAa == "ewa") rs.antiAliasing = AntiAliasing::Ewa;
-            else if (mAa == "swan") rs.antiAliasing = AntiAliasing::Swan;
-            else if (mAa == "none") rs.antiAliasing = AntiAliasing::None;
-            else throw ValueError("--aa: expected ewa, swan or none, got '" + mAa + "'");
-        }
+        if (!mAa.empty()) rs.antiAliasing = parseChoice("aa", mAa, kAntiAliasing);
         if (mCutoffRadius) rs.cutoffRadius = *mCutoffRadius;
-        if (!mExp.empty()) {
-            if (mExp == "incremental") rs.expEvaluation = ExpEvaluation::Incremental;
-            else if (mExp == "exact") rs.expEvaluation = ExpEvaluation::Exact;
-            else if (mExp == "table") rs.expEvaluation = ExpEvaluation::Table;
-            else throw ValueError("--exp: expected incremental, exact or table, got '" + mExp + "'");
-        }
-        if (!mRenormalize.empty()) {
-            if (mRenormalize == "on") rs.renormalize = true;
-            else if (mRenormalize == "off") rs.renormalize = false;
-            else throw ValueError("--renormalize: expected on or off, got '" + mRenormalize + "'");
-        }
+        if (!mExp.empty()) rs.expEvaluation = parseChoice("exp", mExp, kExpEvaluations);
+        if (!mRenormalize.empty()) rs.renormalize = parseChoice("renormalize", mRenormalize, kOnOff);
         if (mTileSpacing) rs.tileKernelSpacing = *mTileSpacing;
-        if (!mPrecision.empty()) {
-            if (mPrecision == "double") rs.doublePrecision = true;
-            else if (mPrecision == "float") rs.doublePrecision = false;
-            else throw ValueError("--precision: expected double or float, got '" + mPrecision + "'");
-        }
+        if (!mPrecision.empty()) rs.doublePrecision = parseChoice("precision", mPrecision, kPrecisions);
         if (mSlab) rs.slab = *mSlab;
         if (mLod) rs.lodPixels = *mLod;
         rs.threads = mThreads;
@@ -219,13 +200,13 @@ private:
                   << "vdb_ewa: model --absorb " << fmt3(rs.absorb) << " --scatter " << fmt3(rs.scatter) << " --light "
                   << fmt3(rs.lightDir) << "," << fmt3(rs.lightColor) << " --gain " << fmt(rs.gain) << " --cutoff "
                   << fmt(rs.cutoff) << " --shadowstep " << fmt(rs.shadowStep) << " --shadow-res " << rs.shadowResolution << "\n"
-                  << "vdb_ewa: " << (rs.method == Method::RayMarch ? "--method raymarch --step " + fmt(rs.step) + " " : std::string("--method splat "))
+                  << "vdb_ewa: --method " << choiceName(rs.method, kMethods) << " "
+                  << (rs.method == Method::RayMarch ? "--step " + fmt(rs.step) + " " : std::string())
                   << "--kernel-sigma " << fmt(rs.kernelSigma) << " --lowpass " << fmt(rs.lowpass)
-                  << " --aa " << (rs.antiAliasing == AntiAliasing::Ewa ? "ewa" : rs.antiAliasing == AntiAliasing::Swan ? "swan" : "none")
-                  << " --cutoff-radius " << fmt(rs.cutoffRadius) << " --renormalize " << (rs.renormalize ? "on" : "off")
-                  << " --exp "
-                  << (rs.expEvaluation == ExpEvaluation::Incremental ? "incremental" : rs.expEvaluation == ExpEvaluation::Exact ? "exact" : "table")
-                  << " --precision " << (rs.doublePrecision ? "double" : "float") << " --slab " << fmt(rs.slab) << " --tile-spacing " << rs.tileKernelSpacing << " --lod " << fmt(rs.lodPixels) << " --threads " << rs.threads << "\n";
+                  << " --aa " << choiceName(rs.antiAliasing, kAntiAliasing)
+                  << " --cutoff-radius " << fmt(rs.cutoffRadius) << " --renormalize " << choiceName(rs.renormalize, kOnOff)
+                  << " --exp " << choiceName(rs.expEvaluation, kExpEvaluations)
+                  << " --precision " << choiceName(rs.doublePrecision, kPrecisions) << " --slab " << fmt(rs.slab) << " --tile-spacing " << rs.tileKernelSpacing << " --lod " << fmt(rs.lodPixels) << " --threads " << rs.threads << "\n";
     }
 
     static void printStats(const RenderStats& s, double loadSeconds, double writeSeconds)
