@@ -152,14 +152,24 @@ TEST(Renderer, PartitionOfUnityRippleShrinksWithKernelSigma)
     }
 }
 
+namespace {
+
+/// A view of the sample cloud from (1, 0.5, 4), looking at its centre.
+Camera cloudCamera(const GridSource& cloud, int width, int height)
+{
+    CameraSettings cam;
+    cam.width = width;
+    cam.height = height;
+    cam.translate = Vec3d(1.0, 0.5, 4.0);
+    return Camera(cam, cloud.worldCentre());
+}
+
+} // namespace
+
 TEST(Renderer, ThreadCountDoesNotChangeTheImage)
 {
     const GridSource cloud = makeSampleGrid(SampleGrid::Cloud, 0.05);
-    CameraSettings cam;
-    cam.width = 200;
-    cam.height = 150;
-    cam.translate = Vec3d(1.0, 0.5, 4.0);
-    const Camera camera(cam, cloud.worldCentre());
+    const Camera camera = cloudCamera(cloud, 200, 150);
     RenderSettings one, two;
     one.threads = 1;
     two.threads = 2;
@@ -177,11 +187,7 @@ TEST(Renderer, GreyFastPathEqualsTheThreeChannelPath)
     // coloured image must be bit-identical to the grey image rendered with that channel's
     // light level.
     const GridSource cloud = makeSampleGrid(SampleGrid::Cloud, 0.05);
-    CameraSettings cam;
-    cam.width = 120;
-    cam.height = 90;
-    cam.translate = Vec3d(1.0, 0.5, 4.0);
-    const Camera camera(cam, cloud.worldCentre());
+    const Camera camera = cloudCamera(cloud, 120, 90);
     RenderSettings colour;
     colour.lightColor = Vec3d(0.9, 0.5, 0.2);
     const Image c = Renderer(colour).render(cloud, camera);
