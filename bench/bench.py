@@ -162,6 +162,12 @@ def timed(cmd, repeat):
     return statistics.median(times)
 
 
+def reference_paths(cache, label, res):
+    """Where a tradeoff run keeps (vdb_render's converged image, the raymarch reference)."""
+    key = f"{label.split()[0]}_{res}"
+    return os.path.join(cache, f"{key}_conv.exr"), os.path.join(cache, f"{key}_ref.exr")
+
+
 def cmd_tradeoff(args):
     tmp = tempfile.mkdtemp(prefix="vdb_ewa_tradeoff_")
     wanted = args.scenes.split(",")
@@ -176,11 +182,9 @@ def cmd_tradeoff(args):
             common = ["-res", res, *cam.split()]
             # The two reference images are not timed: --cache keeps them between runs (vdb_render's
             # converged image takes about 10 minutes at 1920x1080 on 2 cores).
-            key = f"{label.split()[0]}_{res}"
             cache = args.cache or tmp
             os.makedirs(cache, exist_ok=True)
-            conv = os.path.join(cache, f"{key}_conv.exr")
-            ref = os.path.join(cache, f"{key}_ref.exr")
+            conv, ref = reference_paths(cache, label, res)
             if peer and not os.path.exists(conv):
                 run(["vdb_render", path, conv, *common, "-step", "0.125", "-shadowstep", "0.375"])
             if not os.path.exists(ref):
@@ -224,8 +228,7 @@ def cmd_targets(args):
     tmp = tempfile.mkdtemp(prefix="vdb_ewa_targets_")
     label, path, cam = next(s for s in SCENES if s[0] == args.scene)
     common = ["-res", args.res, *cam.split()]
-    conv = os.path.join(args.cache, f"{label}_{args.res}_conv.exr")
-    ref = os.path.join(args.cache, f"{label}_{args.res}_ref.exr")
+    conv, ref = reference_paths(args.cache, label, args.res)
     if not (os.path.exists(conv) and os.path.exists(ref)):
         sys.exit(f"run `bench.py tradeoff --scenes {label} --res {args.res} --cache {args.cache}` first")
     configs = [("vdb_render defaults", ["vdb_render", path, os.path.join(tmp, "v.exr"), *common])]

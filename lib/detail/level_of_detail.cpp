@@ -23,8 +23,8 @@ double LevelOfDetail::voxelPixels(const openvdb::Coord& min, int dim) const
     const Mat3d a = indexToWorldJacobian(xform, cIndex);
     double axis = 0.0; // world length of the longest index axis
     for (int i = 0; i < 3; ++i) axis = std::max(axis, glm::length(a[i]));
-    const openvdb::Vec3d w = xform.indexToWorld(cIndex);
     if (mCamera.projection() == Projection::Orthographic) return axis * mCamera.focalPixels();
+    const openvdb::Vec3d w = xform.indexToWorld(cIndex);
     // Nearest depth of the node: its centre's depth less the radius of its bounding sphere.
     const double radius = 0.5 * std::sqrt(3.0) * double(dim) * axis;
     const double depth = mCamera.cameraFromWorldPoint(Vec3d(w.x(), w.y(), w.z())).z - radius;
