@@ -20,6 +20,12 @@ void RenderSettings::validate() const
     if (!nonNegative3(scatter)) fail("--scatter must be finite and >= 0");
     if (!finite3(lightDir) || !(glm::length(lightDir) > 0.0)) fail("--light direction must be a finite non-zero vector");
     if (!nonNegative3(lightColor)) fail("--light colour must be finite and >= 0");
+    if (!nonNegative3(emission)) fail("--emission must be finite and >= 0");
+    for (int c = 0; c < 3; ++c) {
+        if (emission[c] > 0.0 && !(absorb[c] + scatter[c] > 0.0)) {
+            fail("--emission needs --absorb + --scatter > 0 in every channel that emits (the slab update divides by the optical depth)");
+        }
+    }
     if (!(gain >= 0.0) || !std::isfinite(gain)) fail("--gain must be finite and >= 0");
     if (!(cutoff >= 0.0 && cutoff < 1.0)) fail("--cutoff must be in [0, 1)");
     if (!(shadowStep > 0.0) || !std::isfinite(shadowStep)) fail("--shadowstep must be > 0 voxels");

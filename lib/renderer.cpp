@@ -48,12 +48,18 @@ Renderer::Renderer(const RenderSettings& settings) : mSettings(settings)
 
 Image Renderer::render(const GridSource& grid, const Camera& camera, RenderStats* statsOut) const
 {
+    return renderFrame(grid, camera, PassRequest{}, statsOut).beauty;
+}
+
+Frame Renderer::renderFrame(const GridSource& grid, const Camera& camera, const PassRequest& passes,
+    RenderStats* statsOut) const
+{
     RenderStats stats;
-    Image image;
+    Frame frame;
     const GridSource::Impl& g = grid.impl();
     auto run = [&] {
         if (mSettings.method == Method::RayMarch) {
-            image = detail::rayMarchReference(g, camera, mSettings, stats);
+            frame = detail::rayMarchReference(g, camera, mSettings, passes, stats);
             return;
         }
         StageTimer timer;
@@ -62,10 +68,10 @@ Image Renderer::render(const GridSource& grid, const Camera& camera, RenderStats
         stats.kernelSeconds = timer.lap();
         const std::vector<detail::Rgb> shadows = detail::shadowTransmittance(g, kernels, mSettings);
         stats.shadowSeconds = timer.lap();
-        const detail::SplatSet splats = detail::projectSplats(g, kernels, shadows, camera, mSettings);
+        const detail::SplatSet splats = detail::projectSplats(g, kernels, shadows, camera, mSettings, passes);
         stats.projectSeconds = timer.lap();
         detail::RasterStats raster;
-        image = detail::rasterizeSplats(splats, camera.width(), camera.height(), mSettings, raster);
+        frame = detail::rasterizeSplats(splats, camera, mSettings, passes, raster);
         stats.rasterSeconds = timer.lap();
 
         stats.activeVoxels = kernels.activeVoxels;
@@ -101,7 +107,7 @@ Image Renderer::render(const GridSource& grid, const Camera& camera, RenderStats
         run();
     }
     if (statsOut) *statsOut = std::move(stats);
-    return image;
+    return frame;
 }
 
 } // namespace vdb_ewa

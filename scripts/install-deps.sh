@@ -5,6 +5,7 @@ set -euo pipefail
 packages=(
   cmake g++ make pkg-config
   libopenvdb-dev libboost-iostreams-dev libopenexr-dev libimath-dev libtbb-dev libglm-dev
+  libopencolorio-dev libpng-dev
   libcli11-dev libgtest-dev
   libopenvdb-tools   # vdb_render: the peer the tests and benchmarks compare against
   openimageio-tools  # oiiotool: EXR -> PNG previews and image diffs

@@ -29,10 +29,12 @@ std::string slurp(const std::string& path)
     return s.str();
 }
 
-CliRun runCli(const TempDir& dir, const std::string& args)
+/// Run the CLI with @a args; $OCIO is unset unless @a ocio names a value for it.
+CliRun runCli(const TempDir& dir, const std::string& args, const std::string& ocio = "")
 {
     const std::string out = dir.file("stdout.txt"), err = dir.file("stderr.txt");
-    const int status = std::system((std::string(VDB_EWA_CLI_PATH) + " " + args + " >" + out + " 2>" + err).c_str());
+    const std::string env = ocio.empty() ? "env -u OCIO " : "env OCIO='" + ocio + "' ";
+    const int status = std::system((env + VDB_EWA_CLI_PATH + " " + args + " >" + out + " 2>" + err).c_str());
     CliRun r;
     r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     r.out = slurp(out);
@@ -164,9 +166,81 @@ TEST_F(Cli, HelpDocumentsEveryOptionWithItsDefault)
              "--aperture", "--frame", "--near", "--far", "--name", "--absorb", "--scatter", "--light", "--gain",
              "--cutoff", "--shadowstep", "--step", "--kernel-sigma", "--lowpass", "--aa", "--cutoff-radius", "--slab",
              "--quality", "--exp", "--renormalize", "--precision", "--tile-spacing", "--shadow-res", "--method",
-             "--lod", "--threads", "--verbose"}) {
+             "--lod", "--threads", "--verbose", "--emission", "--ocio-config", "--working-space", "--output-space",
+             "--preview", "--display", "--view", "--exr-type", "--compression", "--aov", "--deep"}) {
         EXPECT_NE(r.out.find(opt), std::string::npos) << opt;
     }
     EXPECT_NE(r.out.find("default: 1920x1080"), std::string::npos);
     EXPECT_NE(r.out.find("default: 0.1,0.1,0.1"), std::string::npos);
+}
+
+TEST_F(Cli, OutputOptionErrorsLeaveAnExistingOutputByteIdentical)
+{
+    const std::string out = mDir.file("out.exr");
+    const std::string args = "render " + mGrid + " " + out + " --res 32x32 -translate 0,0,5 ";
+    expectFailure(args + "--exr-type double", 2, "--exr-type");
+    expectFailure(args + "--compression lzw", 2, "--compression");
+    expectFailure(args + "--deep --compression piz", 2, "not valid for --deep");
+    expectFailure(args + "--deep --compression zip", 2, "not valid for --deep");
+    expectFailure(args + "--deep --aov shadow", 2, "--deep");
+    expectFailure(args + "--aov depth", 2, "--aov");
+    expectFailure(args + "--output-space 'Linear P3'", 2, "'Linear P3' is not in vdb_ewa's shipped config");
+    expectFailure(args + "--working-space Raw", 2, "data space");
+    expectFailure(args + "--preview " + mDir.file("p.jpg"), 2, "--preview writes a .png");
+    expectFailure(args + "--view Filmic", 2, "--preview");
+    expectFailure(args + "--preview " + mDir.file("p.png") + " --view Filmic", 2, "view 'Filmic'");
+    expectFailure(args + "--preview " + mDir.file("no/p.png"), 3, "does not exist");
+    expectFailure(args + "--emission 1 --absorb 0 --scatter 0", 2, "--emission");
+
+    ASSERT_EQ(runCli(mDir, args).code, 0);
+    const std::string before = slurp(out);
+    for (const char* bad : {"--output-space Bogus", "--deep --compression dwaa", "--preview /no/such/p.png"}) {
+        EXPECT_NE(runCli(mDir, args + bad).code, 0) << bad;
+        EXPECT_EQ(slurp(out), before) << bad;
+    }
+    EXPECT_FALSE(std::filesystem::exists(mDir.file("p.png")));
+}
+
+TEST_F(Cli, OcioConfigPrecedenceAndFallback)
+{
+    const std::string out = mDir.file("out.exr");
+    const std::string args = "render " + mGrid + " " + out + " --res 32x32 -translate 0,0,5 -v ";
+    const CliRun shipped = runCli(mDir, args);
+    ASSERT_EQ(shipped.code, 0) << shipped.err;
+    EXPECT_NE(shipped.out.find("--ocio-config 'vdb_ewa's shipped config' --working-space ACEScg"), std::string::npos) << shipped.out;
+    EXPECT_TRUE(shipped.err.empty()) << shipped.err;
+
+    const std::string config = mDir.file("studio.ocio");
+    std::filesystem::copy_file(std::string(VDB_EWA_SOURCE_DIR) + "/share/ocio/config.ocio", config);
+    const CliRun env = runCli(mDir, args + "--working-space lin_rec709", config);
+    ASSERT_EQ(env.code, 0) << env.err;
+    EXPECT_NE(env.out.find("--ocio-config " + config + " --working-space 'Linear Rec.709 (sRGB)'"), std::string::npos) << env.out;
+
+    for (const std::string& broken : {mDir.file("missing.ocio"), std::string("ocio://studio-config-latest")}) {
+        const CliRun r = runCli(mDir, args, broken);
+        ASSERT_EQ(r.code, 0) << r.err;
+        EXPECT_NE(r.err.find("vdb_ewa: warning: $OCIO: " + broken), std::string::npos) << r.err;
+        EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+        EXPECT_NE(r.out.find("vdb_ewa's shipped config"), std::string::npos) << r.out;
+    }
+    const CliRun flag = runCli(mDir, args + "--ocio-config " + mDir.file("missing.ocio"), config);
+    ASSERT_EQ(flag.code, 0) << flag.err;
+    EXPECT_NE(flag.out.find("--ocio-config " + config), std::string::npos) << "a broken --ocio-config falls back to $OCIO";
+}
+
+TEST_F(Cli, WritesPreviewAndDeepFiles)
+{
+    const std::string out = mDir.file("out.exr"), png = mDir.file("out.png"), deep = mDir.file("deep.exr");
+    const std::string args = " --res 48x32 -translate 0,0,5 ";
+    const CliRun r = runCli(mDir, "render " + mGrid + " " + out + args + "--preview " + png + " --aov shadow --output-space lin_rec709");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(slurp(png).substr(1, 3), "PNG");
+    EXPECT_GT(alphaSum(readExr(out)), 10.0);
+    const CliRun d = runCli(mDir, "render " + mGrid + " " + deep + args + "--deep --exr-type float");
+    ASSERT_EQ(d.code, 0) << d.err;
+    ASSERT_EQ(runCli(mDir, "render " + mGrid + " " + out + args + "--exr-type float").code, 0);
+    // OpenEXR's InputFile flattens deep files itself (CompositeDeepScanLine): an independent flatten.
+    const Image flat = readExr(out), flattened = readExr(deep);
+    ASSERT_EQ(flat.rgba.size(), flattened.rgba.size());
+    for (std::size_t i = 0; i < flat.rgba.size(); ++i) EXPECT_NEAR(flattened.rgba[i], flat.rgba[i], 1e-3) << i;
 }

@@ -129,6 +129,16 @@ inline Image renderGrid(const openvdb::GridBase::Ptr& grid, const CameraSettings
     return Renderer(settings).render(source, Camera(camera, source.worldCentre()), stats);
 }
 
+/// Perspective camera on the sample cloud (makeSampleGrid), from (1, 0.5, 4).
+inline Camera cloudCamera(const GridSource& cloud, int width, int height)
+{
+    CameraSettings cam;
+    cam.width = width;
+    cam.height = height;
+    cam.translate = Vec3d(1.0, 0.5, 4.0);
+    return Camera(cam, cloud.worldCentre());
+}
+
 /// Orthographic camera looking down -z at (x, y), from above z.
 inline CameraSettings orthoDownZ(double x, double y, double z, double frame, int res)
 {

@@ -152,19 +152,6 @@ TEST(Renderer, PartitionOfUnityRippleShrinksWithKernelSigma)
     }
 }
 
-namespace {
-
-/// A view of the sample cloud from (1, 0.5, 4), looking at its centre.
-Camera cloudCamera(const GridSource& cloud, int width, int height)
-{
-    CameraSettings cam;
-    cam.width = width;
-    cam.height = height;
-    cam.translate = Vec3d(1.0, 0.5, 4.0);
-    return Camera(cam, cloud.worldCentre());
-}
-
-} // namespace
 
 TEST(Renderer, ThreadCountDoesNotChangeTheImage)
 {

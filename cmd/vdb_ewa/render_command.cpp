@@ -3,6 +3,7 @@
 #include "commands.h"
 #include "exit_codes.h"
 #include "option_values.h"
+#include "output_options.h"
 
 #include <vdb_ewa/vdb_ewa.h>
 
@@ -43,7 +44,8 @@ public:
         const CameraSettings cs;
         mApp = app.add_subcommand("render", "Render a VDB fog volume to an EXR with EWA volume splatting");
         mApp->add_option("input", mInput, "input .vdb file")->required();
-        mApp->add_option("output", mOutput, "output .exr file (float RGBA, premultiplied)")->required();
+        mApp->add_option("output", mOutput,
+            "output .exr file: premultiplied RGBA and Z, in the output colour space (docs/output.md)")->required();
         mApp->add_option("--name", mName, "grid to render (default: the first scalar float or double grid)");
         // Camera (vdb_render semantics).
         mApp->add_option("--res", mRes, "image size in pixels, WxH (default: 1920x1080)");
@@ -66,6 +68,9 @@ public:
         mApp->add_option("--light", mLight,
             "direction towards the light X,Y,Z[,R,G,B] with optional colour (default: " + fmt3(rs.lightDir) + "," +
                 fmt3(rs.lightColor) + ")");
+        mApp->add_option("--emission", mEmission,
+            "self-emission R,G,B per unit density per voxel length, added to the scattered light (default: " +
+                fmt3(rs.emission) + ")");
         mApp->add_option("--gain", mGain, "shadow-ray extinction falls as 1/(1 + gain * distance in voxels) (default: " + fmt(rs.gain) + ")");
         mApp->add_option("--cutoff", mCutoff,
             "density cutoff, and rays stop where |transmittance RGB|^2 < cutoff (default: " + fmt(rs.cutoff) + ")");
@@ -88,6 +93,7 @@ public:
         mApp->add_option("--tile-spacing", mTileSpacing, "largest kernel spacing in voxels for active tiles, 1 to voxelise them (default: 4)");
         mApp->add_option("--lod", mLod, "level of detail: blocks of 2, 4 or 8 voxels a side become one kernel where the block projects to at most this many pixels; 0 = off (default: " + fmt(rs.lodPixels) + ")");
         mApp->add_option("--threads,--cpus", mThreads, "worker threads, 0 = all cores (default: 0)");
+        mOutputOptions.add(mApp);
         mApp->add_flag("-v,--verbose", mVerbose, "print the resolved settings, counts and stage timings");
     }
 
@@ -99,29 +105,33 @@ public:
         RenderSettings rs;
         resolve(cam, rs);
         Renderer renderer(rs); // validates the render settings
-
-        std::string extension = mOutput.size() >= 4 ? mOutput.substr(mOutput.size() - 4) : "";
-        std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return std::tolower(c); });
-        if (extension != ".exr") {
-            throw ValueError(mOutput + ": unsupported output format (expected a .exr file)");
-        }
-        checkOutputWritable(mOutput);
+        std::vector<std::string> warnings;
+        mOutputOptions.prepare(mOutput, warnings); // colour config, spaces, output paths
+        for (const std::string& w : warnings) std::cerr << "vdb_ewa: warning: " << w << "\n";
 
         const auto t0 = std::chrono::steady_clock::now();
         GridSource grid = openInput();
         const double loadSeconds = seconds(t0);
         Camera camera(cam, grid.worldCentre());
-        if (mVerbose) printSettings(grid, camera, rs);
+        const std::vector<Attributes> options = resolvedOptions(grid, camera, rs);
+        if (mVerbose) printSettings(grid, options);
 
         RenderStats stats;
-        Image image = renderer.render(grid, camera, &stats);
+        Frame frame = renderer.renderFrame(grid, camera, mOutputOptions.passes(), &stats);
         for (const std::string& w : stats.warnings) std::cerr << "vdb_ewa: warning: " << mInput << ": " << w << "\n";
 
         const auto t1 = std::chrono::steady_clock::now();
         setExrThreadsProcessWide(rs.threads);
+        Attributes attributes{{"software", std::string("vdb_ewa ") + versionString()},
+            {"vdb_ewa/input", mInput}, {"vdb_ewa/grid", grid.name()}};
+        for (const Attributes& group : options)
+            for (const auto& [key, value] : group) {
+                // The thread count never changes the image; leaving it out keeps files byte-identical.
+                if (key != "threads") attributes.emplace_back("vdb_ewa/" + key, value);
+            }
         try {
-            writeExr(image, mOutput, {{"software", std::string("vdb_ewa ") + versionString()}});
-        } catch (const Error& e) {
+            mOutputOptions.write(frame, camera, mOutput, attributes);
+        } catch (const IoError& e) {
             std::cerr << "vdb_ewa: " << e.what() << "\n";
             return kExitRenderFailed;
         }
@@ -160,6 +170,7 @@ private:
 
         if (!mAbsorb.empty()) rs.absorb = parseVec3("absorb", mAbsorb, true);
         if (!mScatter.empty()) rs.scatter = parseVec3("scatter", mScatter, true);
+        if (!mEmission.empty()) rs.emission = parseVec3("emission", mEmission, true);
         if (!mLight.empty()) {
             const std::vector<double> v = parseNumbers("light", mLight);
             if (v.size() != 3 && v.size() != 6) throw ValueError("--light: expected X,Y,Z or X,Y,Z,R,G,B, got '" + mLight + "'");
@@ -185,28 +196,51 @@ private:
         rs.threads = mThreads;
     }
 
-    void printSettings(const GridSource& grid, const Camera& camera, const RenderSettings& rs) const
+    /// The resolved options in groups (camera, optical model, method and splatting, output),
+    /// as (option, value): printed by -v and written to the EXR header.
+    std::vector<Attributes> resolvedOptions(const GridSource& grid, const Camera& camera, const RenderSettings& rs) const
     {
         const CameraSettings& c = camera.settings();
+        Attributes cameraGroup{{"camera", c.projection == Projection::Perspective ? "perspective" : "orthographic"},
+            {"res", std::to_string(c.width) + "x" + std::to_string(c.height)}, {"translate", fmt3(c.translate)}};
+        if (c.rotate) {
+            cameraGroup.emplace_back("rotate", fmt3(*c.rotate));
+        } else {
+            cameraGroup.emplace_back("lookat", fmt3(c.lookAt ? *c.lookAt : grid.worldCentre()));
+            cameraGroup.emplace_back("up", fmt3(c.up));
+        }
+        for (const auto& [k, v] : Attributes{{"focal", fmt(c.focal)}, {"aperture", fmt(c.aperture)}, {"fov", fmt(c.fieldOfView())},
+                 {"frame", fmt(c.frame)}, {"near", fmt(c.near)}, {"far", fmt(c.far)}})
+            cameraGroup.emplace_back(k, v);
+        const Attributes model{{"absorb", fmt3(rs.absorb)}, {"scatter", fmt3(rs.scatter)}, {"emission", fmt3(rs.emission)},
+            {"light", fmt3(rs.lightDir) + "," + fmt3(rs.lightColor)}, {"gain", fmt(rs.gain)}, {"cutoff", fmt(rs.cutoff)},
+            {"shadowstep", fmt(rs.shadowStep)}, {"shadow-res", std::to_string(rs.shadowResolution)}};
+        Attributes method{{"method", choiceName(rs.method, kMethods)}};
+        if (rs.method == Method::RayMarch) method.emplace_back("step", fmt(rs.step));
+        for (const auto& [k, v] : Attributes{{"kernel-sigma", fmt(rs.kernelSigma)}, {"lowpass", fmt(rs.lowpass)},
+                 {"aa", choiceName(rs.antiAliasing, kAntiAliasing)}, {"cutoff-radius", fmt(rs.cutoffRadius)},
+                 {"renormalize", choiceName(rs.renormalize, kOnOff)}, {"exp", choiceName(rs.expEvaluation, kExpEvaluations)},
+                 {"precision", choiceName(rs.doublePrecision, kPrecisions)}, {"slab", fmt(rs.slab)},
+                 {"tile-spacing", std::to_string(rs.tileKernelSpacing)}, {"lod", fmt(rs.lodPixels)},
+                 {"threads", std::to_string(rs.threads)}})
+            method.emplace_back(k, v);
+        return {cameraGroup, model, method, mOutputOptions.resolved()};
+    }
+
+    void printSettings(const GridSource& grid, const std::vector<Attributes>& groups) const
+    {
         std::cout << "vdb_ewa: grid '" << grid.name() << "' (" << grid.storedType() << ") from " << mInput << ": "
                   << grid.activeVoxelCount() << " active voxels, " << grid.activeTileCount() << " active tiles, "
-                  << (grid.isLinear() ? "affine" : "non-linear") << " transform\n"
-                  << "vdb_ewa: camera " << (c.projection == Projection::Perspective ? "perspective" : "orthographic")
-                  << " --res " << c.width << "x" << c.height << " --translate " << fmt3(c.translate);
-        if (c.rotate) std::cout << " --rotate " << fmt3(*c.rotate);
-        else std::cout << " --lookat " << fmt3(c.lookAt ? *c.lookAt : grid.worldCentre()) << " --up " << fmt3(c.up);
-        std::cout << " --focal " << fmt(c.focal) << " --aperture " << fmt(c.aperture) << " (fov " << fmt(c.fieldOfView())
-                  << ") --frame " << fmt(c.frame) << " --near " << fmt(c.near) << " --far " << fmt(c.far) << "\n"
-                  << "vdb_ewa: model --absorb " << fmt3(rs.absorb) << " --scatter " << fmt3(rs.scatter) << " --light "
-                  << fmt3(rs.lightDir) << "," << fmt3(rs.lightColor) << " --gain " << fmt(rs.gain) << " --cutoff "
-                  << fmt(rs.cutoff) << " --shadowstep " << fmt(rs.shadowStep) << " --shadow-res " << rs.shadowResolution << "\n"
-                  << "vdb_ewa: --method " << choiceName(rs.method, kMethods) << " "
-                  << (rs.method == Method::RayMarch ? "--step " + fmt(rs.step) + " " : std::string())
-                  << "--kernel-sigma " << fmt(rs.kernelSigma) << " --lowpass " << fmt(rs.lowpass)
-                  << " --aa " << choiceName(rs.antiAliasing, kAntiAliasing)
-                  << " --cutoff-radius " << fmt(rs.cutoffRadius) << " --renormalize " << choiceName(rs.renormalize, kOnOff)
-                  << " --exp " << choiceName(rs.expEvaluation, kExpEvaluations)
-                  << " --precision " << choiceName(rs.doublePrecision, kPrecisions) << " --slab " << fmt(rs.slab) << " --tile-spacing " << rs.tileKernelSpacing << " --lod " << fmt(rs.lodPixels) << " --threads " << rs.threads << "\n";
+                  << (grid.isLinear() ? "affine" : "non-linear") << " transform\n";
+        const char* titles[] = {"camera", "model", "splat", "output"};
+        for (std::size_t g = 0; g < groups.size(); ++g) {
+            std::cout << "vdb_ewa: " << titles[g];
+            for (const auto& [key, value] : groups[g]) {
+                const bool spaces = value.find(' ') != std::string::npos;
+                std::cout << " --" << key << " " << (spaces ? "'" + value + "'" : value);
+            }
+            std::cout << "\n";
+        }
     }
 
     static void printStats(const RenderStats& s, double loadSeconds, double writeSeconds)
@@ -224,12 +258,13 @@ private:
 
     CLI::App* mApp = nullptr;
     std::string mInput, mOutput, mName, mRes, mTranslate, mRotate, mLookAt, mUp, mCamera;
-    std::string mAbsorb, mScatter, mLight, mAa, mMethod, mQuality, mExp, mRenormalize, mPrecision;
+    std::string mAbsorb, mScatter, mEmission, mLight, mAa, mMethod, mQuality, mExp, mRenormalize, mPrecision;
     std::optional<int> mTileSpacing, mShadowRes;
     std::optional<double> mFov, mFocal, mAperture, mFrame, mNear, mFar, mGain, mCutoff, mShadowStep, mStep, mLod;
     std::optional<double> mKernelSigma, mLowpass, mCutoffRadius, mSlab;
     int mThreads = 0;
     bool mVerbose = false;
+    OutputOptions mOutputOptions;
 };
 
 } // namespace

@@ -43,6 +43,8 @@ struct RenderSettings
     Vec3d scatter{1.5, 1.5, 1.5};     ///< scattering per unit density per voxel length, RGB
     Vec3d lightDir{0.3, 0.3, 0.0};    ///< direction *towards* the light, world space (normalised)
     Vec3d lightColor{0.7, 0.7, 0.7};  ///< radiance of the directional light, RGB
+    Vec3d emission{0.0, 0.0, 0.0};    ///< self-emission R,G,B per unit density per voxel length (radiance
+                                      ///< per unit optical length, like scatter x light colour); 0 = none
     double gain = 0.2;                ///< shadow-ray extinction falls as 1/(1 + gain * s), s in voxels
     double cutoff = 0.005;            ///< density cutoff; rays stop where |T|^2 < cutoff (RGB T)
     double shadowStep = 1.0;          ///< shadow-ray step in voxels (vdb_render's default is 3)

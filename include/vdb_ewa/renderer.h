@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "camera.h"
+#include "frame.h"
 #include "grid_source.h"
 #include "image.h"
 #include "render_settings.h"
@@ -47,6 +48,11 @@ public:
     /// Render @a grid through @a camera. Thread-safe: a Renderer holds no mutable state.
     /// The result does not depend on the thread count (bit-identical).
     Image render(const GridSource& grid, const Camera& camera, RenderStats* stats = nullptr) const;
+
+    /// Render the beauty and the passes in @a passes (docs/output.md); the beauty is the same
+    /// image render() returns. @throw ValueError for passes --method raymarch cannot make.
+    Frame renderFrame(const GridSource& grid, const Camera& camera, const PassRequest& passes,
+        RenderStats* stats = nullptr) const;
 
 private:
     RenderSettings mSettings;

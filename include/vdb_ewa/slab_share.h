@@ -57,4 +57,14 @@ inline void compositeSlab(float tau, float emission, float& colour, float& trans
     transmittance *= 1.0f - absorbed;
 }
 
+/// Where a homogeneous slab's mean transmittance, falling exponentially from @a before at its
+/// front to @a after at its back, reaches 0.5 (alpha 0.5, the Z pass): the fraction of the
+/// slab's thickness, in [0, 1], or 2 if it stays above 0.5. Exact for grey media.
+inline double halfAlphaFraction(float before, float after)
+{
+    if (!(after <= 0.5f)) return 2.0;
+    if (!(before > 0.5f) || !(after > 0.0f)) return 0.0;
+    return std::log(double(before) / 0.5) / std::log(double(before) / double(after));
+}
+
 } // namespace vdb_ewa

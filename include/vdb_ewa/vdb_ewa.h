@@ -3,12 +3,16 @@
 #pragma once
 
 #include "camera.h"
+#include "color_management.h"
 #include "error.h"
 #include "ewa_kernel.h"
 #include "exr_output.h"
+#include "frame.h"
 #include "grid_source.h"
 #include "image.h"
 #include "make_grid.h"
+#include "output_file.h"
+#include "preview_output.h"
 #include "render_settings.h"
 #include "renderer.h"
 #include "slab_share.h"

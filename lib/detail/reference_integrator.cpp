@@ -12,6 +12,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 namespace vdb_ewa {
 namespace detail {
@@ -20,7 +21,8 @@ namespace {
 using Vec3fGrid = openvdb::Vec3SGrid;
 
 /// The reconstruction's inputs per voxel: density (sanitised as for kernels) and density x
-/// source colour (albedo x light x shadow transmittance), on the same topology.
+/// source colour (albedo x light x shadow transmittance + emission / extinction), on the
+/// same topology.
 struct ReferenceVolume
 {
     openvdb::FloatGrid::Ptr density;
@@ -46,10 +48,12 @@ ReferenceVolume buildVolume(const GridSource::Impl& grid, const RenderSettings& 
     stats.kernelSeconds = t1;
     stats.shadowSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() - t1;
 
-    double albedo[3];
+    // Source colour per unit optical depth: scattered light, plus emission / extinction.
+    double albedo[3], emitted[3];
     for (int c = 0; c < 3; ++c) {
         const double ext = settings.absorb[c] + settings.scatter[c];
         albedo[c] = ext > 0.0 ? settings.lightColor[c] * settings.scatter[c] / ext : 0.0;
+        emitted[c] = ext > 0.0 ? settings.emission[c] / ext : 0.0;
     }
     ReferenceVolume v;
     v.density = openvdb::FloatGrid::create(0.0f);
@@ -61,8 +65,9 @@ ReferenceVolume buildVolume(const GridSource::Impl& grid, const RenderSettings& 
         const Kernel& k = kernels.kernels[i];
         const openvdb::Coord ijk(int(std::lround(k.pIndex.x)), int(std::lround(k.pIndex.y)), int(std::lround(k.pIndex.z)));
         dAcc.setValueOn(ijk, k.density);
-        eAcc.setValueOn(ijk, openvdb::Vec3s(float(k.density * albedo[0] * shadows[i][0]),
-                                 float(k.density * albedo[1] * shadows[i][1]), float(k.density * albedo[2] * shadows[i][2])));
+        openvdb::Vec3s source;
+        for (int c = 0; c < 3; ++c) source[c] = float(k.density * (albedo[c] * shadows[i][c] + emitted[c]));
+        eAcc.setValueOn(ijk, source);
     }
     return v;
 }
@@ -121,10 +126,13 @@ private:
 
 } // namespace
 
-Image rayMarchReference(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings,
-    RenderStats& stats)
+Frame rayMarchReference(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings,
+    const PassRequest& passes, RenderStats& stats)
 {
     if (!grid.linear) throw ValueError("--method raymarch needs an affine grid transform (this grid has a frustum map)");
+    if (passes.shadow || passes.emission || passes.deep) {
+        throw ValueError("--method raymarch renders the beauty, Z and transmittance only (shadow, emission and deep passes need --method splat)");
+    }
     const ReferenceVolume volume = buildVolume(grid, settings, stats);
     const auto t0 = std::chrono::steady_clock::now();
 
@@ -139,8 +147,13 @@ Image rayMarchReference(const GridSource::Impl& grid, const Camera& camera, cons
     const Vec3d boxLo = Vec3d(box.min().x(), box.min().y(), box.min().z()) - pad;
     const Vec3d boxHi = Vec3d(box.max().x(), box.max().y(), box.max().z()) + pad;
     const int width = camera.width(), height = camera.height();
-    Image image(width, height);
-    if (box.empty()) return image;
+    Frame frame;
+    frame.beauty = Image(width, height);
+    const std::size_t pixels = std::size_t(width) * std::size_t(height);
+    if (passes.depth) frame.depth.assign(pixels, std::numeric_limits<float>::infinity());
+    if (passes.transmittance) frame.transmittance.assign(pixels * 3, 1.0f);
+    if (box.empty()) return frame;
+    const Vec3d forward = glm::transpose(camera.cameraFromWorld())[2];
 
     tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
         KernelSum sum(volume, settings.kernelSigma);
@@ -157,6 +170,7 @@ Image rayMarchReference(const GridSource::Impl& grid, const Camera& camera, cons
                 const Vec3d dIndex = indexFromWorld * dir; // index units per world unit
                 double s0, s1;
                 float T[3] = {1.0f, 1.0f, 1.0f}, C[3] = {0.0f, 0.0f, 0.0f};
+                float z = std::numeric_limits<float>::infinity();
                 if (boxClip(oIndex, dIndex, boxLo, boxHi, s0, s1)) {
                     s0 = std::max(s0, 0.0);
                     s1 = std::min(s1, sFar);
@@ -173,21 +187,29 @@ Image rayMarchReference(const GridSource::Impl& grid, const Camera& camera, cons
                         Vec3d emission;
                         sum.sample(p, density, emission);
                         if (density <= 0.0) continue;
+                        const float before = (T[0] + T[1] + T[2]) / 3.0f;
                         for (int c = 0; c < 3; ++c) {
                             // Extinction per world unit is sigma_t rho / l: tau = sigma_t rho step.
                             const float tau = float(extinction[c] * density * step);
                             compositeSlab(tau, float(extinction[c] * emission[c] * step), C[c], T[c]);
                         }
+                        if (passes.depth && before > 0.5f && !std::isfinite(z)) {
+                            const double u = halfAlphaFraction(before, (T[0] + T[1] + T[2]) / 3.0f);
+                            if (u <= 1.0) z = float(camera.near() + (s + u * ds) * glm::dot(dir, forward));
+                        }
                         if (T[0] * T[0] + T[1] * T[1] + T[2] * T[2] < cutoff) break;
                     }
                 }
-                float* px = image.pixel(x, y);
+                float* px = frame.beauty.pixel(x, y);
                 for (int c = 0; c < 3; ++c) px[c] = C[c];
                 px[3] = 1.0f - (T[0] + T[1] + T[2]) / 3.0f;
+                const std::size_t i = std::size_t(y) * std::size_t(width) + std::size_t(x);
+                if (passes.depth) frame.depth[i] = z;
+                if (passes.transmittance) std::copy(T, T + 3, &frame.transmittance[3 * i]);
             }
     });
     stats.rasterSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    return image;
+    return frame;
 }
 
 } // namespace detail

@@ -7,7 +7,7 @@
 #include "kernel_extraction.h"
 
 #include <vdb_ewa/camera.h>
-#include <vdb_ewa/image.h>
+#include <vdb_ewa/frame.h>
 #include <vdb_ewa/renderer.h>
 
 namespace vdb_ewa {
@@ -19,9 +19,10 @@ constexpr double kReferenceTruncation = 4.0;
 /// March every pixel's centre ray in steps of settings.step voxel lengths, sampling
 /// extinction and emission at step midpoints from all kernels within 4 sigma, and composite
 /// each step with the exact homogeneous update. Active tiles are voxelised (their kernels are
-/// unit-spaced here). @throw ValueError for non-affine grids.
-Image rayMarchReference(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings,
-    RenderStats& stats);
+/// unit-spaced here). Passes: Z (the crossing found within a step as in the splatter) and
+/// transmittance. @throw ValueError for non-affine grids and for the other passes.
+Frame rayMarchReference(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings,
+    const PassRequest& passes, RenderStats& stats);
 
 } // namespace detail
 } // namespace vdb_ewa

@@ -49,7 +49,8 @@ struct DepthExtent
 } // namespace
 
 SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
-    const std::vector<Rgb>& shadows, const Camera& camera, const RenderSettings& settings)
+    const std::vector<Rgb>& shadows, const Camera& camera, const RenderSettings& settings,
+    const PassRequest& passes)
 {
     SplatSet out;
     const ProjectionParams params = projectionParams(camera, settings);
@@ -74,6 +75,8 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
     const auto& xform = grid.grid->transform();
 
     const std::size_t n = kernels.kernels.size();
+    const int passCount = int(passes.shadow) + int(passes.emission);
+    std::vector<float> passSources(n * std::size_t(passCount) * 3);
     std::vector<std::uint8_t> visible(n, 0);
     std::vector<Splat> splats(n);
     std::vector<DepthExtent> extents(n);
@@ -142,10 +145,17 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
                 // Weight w_k = density x voxel volume / voxel length (Eq. 8 with extinction
                 // per voxel length), times the footprint peak (Eq. 32, 33).
                 const double weight = double(k.density) * volume * s * s * s / ell * fp.peak;
+                // Source terms (optical depth x colour): single scattering of the light, and
+                // the medium's own emission, emission x density per voxel length.
+                float* pass = passSources.data() + i * std::size_t(passCount) * 3;
                 for (int c = 0; c < 3; ++c) {
                     const double tau = extinction[c] * weight;
+                    const double emitted = settings.emission[c] * weight;
                     sp.tau[c] = float(tau);
-                    sp.emission[c] = float(tau * albedo[c] * double(shadows[i][c]));
+                    sp.emission[c] = float(tau * albedo[c] * double(shadows[i][c]) + emitted);
+                    int j = 0;
+                    if (passes.shadow) pass[3 * j++ + c] = float(tau * double(shadows[i][c]));
+                    if (passes.emission) pass[3 * j++ + c] = float(emitted);
                 }
                 visible[i] = 1;
             }
@@ -189,8 +199,13 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
             }
         });
     out.splats.reserve(std::size_t(std::count(visible.begin(), visible.end(), 1)));
+    out.passSourceCount = passCount;
+    out.passSources.reserve(out.splats.capacity() * std::size_t(passCount) * 3);
     for (std::size_t i = 0; i < n; ++i) {
-        if (visible[i]) out.splats.push_back(splats[i]);
+        if (!visible[i]) continue;
+        out.splats.push_back(splats[i]);
+        const float* pass = passSources.data() + i * std::size_t(passCount) * 3;
+        out.passSources.insert(out.passSources.end(), pass, pass + passCount * 3);
     }
     out.culled = n - out.splats.size();
     return out;

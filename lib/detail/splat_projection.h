@@ -6,6 +6,7 @@
 #include "shadow_transmittance.h"
 
 #include <vdb_ewa/camera.h>
+#include <vdb_ewa/frame.h>
 #include <vdb_ewa/slab_share.h>
 
 #include <cstdint>
@@ -40,6 +41,10 @@ struct SplatSet
     std::uint64_t clampedGrazing = 0; ///< beyond 1.3 x the frustum edge: J formed at the edge
     std::uint64_t clippedSpan = 0; ///< kernels spanning more slabs than kMaxSlabSpan
     double requestedThickness = 0; ///< > 0 if the slab thickness was raised from this value
+    /// Extra source terms for the shadow and emission passes, like Splat::emission (peak
+    /// optical depth x source colour), passSourceCount x RGB per splat, in splat order.
+    int passSourceCount = 0;
+    std::vector<float> passSources;
 };
 
 /// Most slabs one kernel may span; shares past it are dropped (counted in clippedSpan).
@@ -48,8 +53,10 @@ constexpr int kMaxSlabSpan = 1024;
 constexpr int kSlabSpanTarget = 256;
 
 /// Project every kernel through @a camera. One task per block of kernels.
+/// @a passes: the shadow and emission passes add their source terms to SplatSet::passSources.
 SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
-    const std::vector<Rgb>& shadows, const Camera& camera, const RenderSettings& settings);
+    const std::vector<Rgb>& shadows, const Camera& camera, const RenderSettings& settings,
+    const PassRequest& passes = {});
 
 } // namespace detail
 } // namespace vdb_ewa

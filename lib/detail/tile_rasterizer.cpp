@@ -70,18 +70,40 @@ private:
 /// @tparam C colour channels carried: 3, or 1 when every splat is grey (tau and emission the
 ///           same in R, G and B, as with vdb_render's default model): the same arithmetic per
 ///           channel, so the image is bit-identical, at a third of the work.
+/// What every tile compositor of a frame shares.
+struct CompositeOptions
+{
+    float cutoff = 0.0f;
+    ExpEvaluation exp = ExpEvaluation::Incremental;
+    const ExpTable* table = nullptr;
+    SlabGrid slabs;
+    PassRequest passes;
+    int passSources = 0; ///< extra source terms (shadow, emission passes), SplatSet::passSourceCount
+};
+
+/// A tile's deep samples, grouped by tile pixel in depth order (depths still along the ray).
+struct TileDeep
+{
+    std::uint32_t counts[kTilePixels] = {};
+    std::vector<DeepSample> samples;
+};
+
 template <int C>
 class TileCompositor
 {
 public:
-    TileCompositor(int x0, int y0, int w, int h, int ringSize, float cutoff, ExpEvaluation exp, const ExpTable* table)
-        : mX0(x0), mY0(y0), mW(w), mH(h), mMask(ringSize - 1), mCutoff(cutoff), mExp(exp), mTable(table),
+    TileCompositor(int x0, int y0, int w, int h, int ringSize, const CompositeOptions& options)
+        : mX0(x0), mY0(y0), mW(w), mH(h), mMask(ringSize - 1), mCutoff(options.cutoff), mExp(options.exp),
+          mTable(options.table), mOptions(options), mPassCount(options.passSources),
           mTau(std::size_t(ringSize) * C * kTilePixels, 0.0f),
           mEmission(std::size_t(ringSize) * C * kTilePixels, 0.0f),
+          mPassEmission(std::size_t(ringSize) * std::size_t(mPassCount) * C * kTilePixels, 0.0f),
+          mPassC(std::size_t(mPassCount) * C * kTilePixels, 0.0f),
           mDirty(std::size_t(ringSize))
     {
         std::fill(std::begin(mT), std::end(mT), 1.0f);
         std::fill(std::begin(mC), std::end(mC), 0.0f);
+        std::fill(std::begin(mZ), std::end(mZ), std::numeric_limits<float>::infinity());
         std::fill(std::begin(mAlive), std::end(mAlive), 0);
         for (int y = 0; y < h; ++y)
             for (int x = 0; x < w; ++x) mAlive[y * kTileSize + x] = 1;
@@ -119,7 +141,8 @@ public:
         }
     }
 
-    void add(const Splat& s, const float* shares)
+    /// @a passSources: the splat's extra source terms (mPassCount x RGB), or null if none.
+    void add(const Splat& s, const float* shares, const float* passSources)
     {
         // Slabs in front of this splat's first one can receive nothing more: flush them.
         flushBefore(s.firstSlab);
@@ -168,28 +191,51 @@ public:
                         tau[i] += weights[i] * wt;
                         em[i] += weights[i] * we;
                     }
+                    for (int k = 0; k < mPassCount; ++k) {
+                        const float wp = shares[j] * passSources[3 * k + c];
+                        float* pe = &mPassEmission[passIndex(s.firstSlab + j, k, c) + std::size_t(p0)];
+                        for (int i = 0; i < n; ++i) pe[i] += weights[i] * wp;
+                    }
                 }
             }
         }
     }
 
-    /// Flush every pending slab and write the tile's pixels.
-    void finish(Image& image)
+    /// Flush every pending slab and write the tile's pixels and passes. @a depthScale: camera
+    /// depth per unit of distance along each pixel's ray (frame order).
+    void finish(Frame& frame, const std::vector<float>& depthScale, TileDeep* deep)
     {
         flushBefore(std::numeric_limits<std::int64_t>::max());
+        const PassRequest& passes = mOptions.passes;
+        const int width = frame.beauty.width;
         for (int ly = 0; ly < mH; ++ly)
             for (int lx = 0; lx < mW; ++lx) {
                 const int p = ly * kTileSize + lx;
-                float* px = image.pixel(mX0 + lx, mY0 + ly);
-                if (C == 1) {
-                    const float t = mT[p];
-                    px[0] = px[1] = px[2] = mC[p];
-                    px[3] = 1.0f - (t + t + t) / 3.0f; // the three-channel mean's rounding, bit for bit
-                    continue;
+                const std::size_t i = std::size_t(mY0 + ly) * std::size_t(width) + std::size_t(mX0 + lx);
+                float* px = frame.beauty.pixel(mX0 + lx, mY0 + ly);
+                for (int c = 0; c < 3; ++c) px[c] = mC[channel(c) * kTilePixels + p];
+                // The three-channel mean, with the same rounding whatever C is (bit for bit).
+                px[3] = 1.0f - (mT[p] + mT[channel(1) * kTilePixels + p] + mT[channel(2) * kTilePixels + p]) / 3.0f;
+                if (passes.depth) frame.depth[i] = mZ[p] * depthScale[i];
+                if (passes.transmittance) {
+                    for (int c = 0; c < 3; ++c) frame.transmittance[3 * i + c] = mT[channel(c) * kTilePixels + p];
                 }
-                for (int c = 0; c < 3; ++c) px[c] = mC[c * kTilePixels + p];
-                px[3] = 1.0f - (mT[p] + mT[kTilePixels + p] + mT[2 * kTilePixels + p]) / 3.0f;
+                int k = 0;
+                for (std::vector<float>* pass : {&frame.shadow, &frame.emission}) {
+                    if (pass->empty()) continue;
+                    for (int c = 0; c < 3; ++c) (*pass)[3 * i + c] = mPassC[(std::size_t(k) * C + channel(c)) * kTilePixels + p];
+                    ++k;
+                }
             }
+        if (deep) {
+            // Group the samples by pixel; a stable sort keeps each pixel's depth order.
+            std::stable_sort(mDeep.begin(), mDeep.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+            deep->samples.reserve(mDeep.size());
+            for (const auto& [p, sample] : mDeep) {
+                ++deep->counts[p];
+                deep->samples.push_back(sample);
+            }
+        }
     }
 
 private:
@@ -201,6 +247,13 @@ private:
     };
 
     std::size_t slot(std::int64_t slab) const { return std::size_t(slab & mMask); }
+    /// Channel carried for colour channel c (all three share channel 0 when C == 1).
+    static int channel(int c) { return C == 1 ? 0 : c; }
+    /// Start of pass k, channel c of a slab in mPassEmission.
+    std::size_t passIndex(std::int64_t slab, int k, int c) const
+    {
+        return ((slot(slab) * std::size_t(mPassCount) + std::size_t(k)) * C + std::size_t(c)) * kTilePixels;
+    }
 
     void markDirty(std::int64_t slab, int x0, int y0, int x1, int y1)
     {
@@ -226,14 +279,64 @@ private:
         mPending.erase(mPending.begin(), mPending.begin() + std::ptrdiff_t(n));
     }
 
+    /// Mean transmittance over R, G, B of pixel p.
+    float meanT(int p) const
+    {
+        return (mT[p] + mT[channel(1) * kTilePixels + p] + mT[channel(2) * kTilePixels + p]) / 3.0f;
+    }
+
+    /// The passes' share of a slab at pixel p: Z crossing, deep sample, extra sources.
+    void flushPasses(std::int64_t slab, int p, float meanBefore)
+    {
+        const std::size_t base = slot(slab) * C * kTilePixels + std::size_t(p);
+        if (mOptions.passes.depth && meanBefore > 0.5f && std::isinf(mZ[p])) {
+            const double u = halfAlphaFraction(meanBefore, meanT(p));
+            if (u <= 1.0) mZ[p] = float(mOptions.slabs.start(slab) + u * mOptions.slabs.thickness);
+        }
+        for (int k = 0; k < mPassCount; ++k)
+            for (int c = 0; c < C; ++c) {
+                // The beauty's transmittance before this slab, recovered per channel.
+                float t = mTBefore[c];
+                compositeSlab(mTau[base + c * kTilePixels], mPassEmission[passIndex(slab, k, c) + std::size_t(p)],
+                    mPassC[(std::size_t(k) * C + c) * kTilePixels + p], t);
+            }
+        if (mOptions.passes.deep) {
+            // The slab on its own: colour and transmittance as if nothing were in front.
+            float colour[C], t[C];
+            bool empty = true;
+            for (int c = 0; c < C; ++c) {
+                colour[c] = 0.0f;
+                t[c] = 1.0f;
+                compositeSlab(mTau[base + c * kTilePixels], mEmission[base + c * kTilePixels], colour[c], t[c]);
+                empty = empty && !(mTau[base + c * kTilePixels] > 0.0f);
+            }
+            if (!empty) {
+                DeepSample d;
+                d.z = float(mOptions.slabs.start(slab));
+                d.zBack = float(mOptions.slabs.start(slab + 1));
+                d.r = colour[0];
+                d.g = colour[channel(1)];
+                d.b = colour[channel(2)];
+                d.a = 1.0f - (t[0] + t[channel(1)] + t[channel(2)]) / 3.0f;
+                mDeep.emplace_back(std::uint16_t(p), d);
+            }
+        }
+    }
+
     void flush(std::int64_t slab)
     {
         Dirty& d = mDirty[slot(slab)];
         const std::size_t base = slot(slab) * C * kTilePixels;
+        const bool passes = mPassCount > 0 || mOptions.passes.depth || mOptions.passes.deep;
         for (int ly = d.y0; ly <= d.y1; ++ly)
             for (int lx = d.x0; lx <= d.x1; ++lx) {
                 const int p = ly * kTileSize + lx;
                 if (mAlive[p]) {
+                    float meanBefore = 0.0f;
+                    if (passes) {
+                        for (int c = 0; c < C; ++c) mTBefore[c] = mT[c * kTilePixels + p];
+                        meanBefore = meanT(p);
+                    }
                     float t2 = 0.0f; // |T|^2 over R, G, B
                     for (int c = 0; c < C; ++c) {
                         const std::size_t i = base + c * kTilePixels + std::size_t(p);
@@ -241,6 +344,7 @@ private:
                         compositeSlab(mTau[i], mEmission[i], mC[c * kTilePixels + p], t);
                         t2 += t * t;
                     }
+                    if (passes) flushPasses(slab, p, meanBefore);
                     // vdb_render's ray termination: |T|^2 < cutoff (early termination, Sec. 5).
                     if (t2 * float(3 / C) < mCutoff) {
                         mAlive[p] = 0;
@@ -251,6 +355,7 @@ private:
                     const std::size_t i = base + c * kTilePixels + std::size_t(p);
                     mTau[i] = 0.0f;
                     mEmission[i] = 0.0f;
+                    for (int k = 0; k < mPassCount; ++k) mPassEmission[passIndex(slab, k, c) + std::size_t(p)] = 0.0f;
                 }
             }
         d.on = false;
@@ -261,7 +366,14 @@ private:
     float mCutoff;
     ExpEvaluation mExp;
     const ExpTable* mTable;
+    const CompositeOptions& mOptions;
+    int mPassCount;
     std::vector<float> mTau, mEmission; ///< [slot][channel][pixel]
+    std::vector<float> mPassEmission;   ///< [slot][pass][channel][pixel]
+    std::vector<float> mPassC;          ///< [pass][channel][pixel]
+    float mZ[kTilePixels];              ///< Z pass along the ray, +inf until alpha reaches 0.5
+    float mTBefore[C];
+    std::vector<std::pair<std::uint16_t, DeepSample>> mDeep;
     std::vector<Dirty> mDirty;
     std::vector<std::int64_t> mPending; ///< slabs holding contributions, not yet composited
     float mT[C * kTilePixels];
@@ -277,23 +389,27 @@ int ringSizeFor(std::uint32_t maxSpan)
     return r;
 }
 
-/// Splats whose optical depth and emission are the same in R, G and B.
-bool allGrey(const std::vector<Splat>& splats)
+/// Splats whose optical depth and source terms are the same in R, G and B.
+bool allGrey(const SplatSet& set)
 {
-    return std::all_of(splats.begin(), splats.end(), [](const Splat& s) {
-        return s.tau[0] == s.tau[1] && s.tau[0] == s.tau[2] && s.emission[0] == s.emission[1] &&
-               s.emission[0] == s.emission[2];
-    });
+    const auto grey = [](const float* v) { return v[0] == v[1] && v[0] == v[2]; };
+    for (std::size_t i = 0; i < set.splats.size(); ++i) {
+        const Splat& s = set.splats[i];
+        if (!grey(s.tau) || !grey(s.emission)) return false;
+        for (int k = 0; k < set.passSourceCount; ++k) {
+            if (!grey(&set.passSources[(i * std::size_t(set.passSourceCount) + std::size_t(k)) * 3])) return false;
+        }
+    }
+    return true;
 }
 
 /// Composite every tile with a C-channel compositor.
 template <int C>
-void compositeTiles(const SplatSet& set, const TileBins& bins, int width, int height, const RenderSettings& settings,
-    Image& image, std::vector<std::uint64_t>& skipped)
+void compositeTiles(const SplatSet& set, const TileBins& bins, const CompositeOptions& options,
+    const std::vector<float>& depthScale, Frame& frame, std::vector<TileDeep>& deep, std::vector<std::uint64_t>& skipped)
 {
-    const float cutoff = float(settings.cutoff);
+    const int width = frame.beauty.width, height = frame.beauty.height;
     const int tiles = bins.tilesX * bins.tilesY;
-    const ExpTable table(float(settings.cutoffRadius * settings.cutoffRadius));
     tbb::parallel_for(tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& range) {
         std::vector<std::uint32_t> order;
         for (int t = range.begin(); t < range.end(); ++t) {
@@ -308,36 +424,112 @@ void compositeTiles(const SplatSet& set, const TileBins& bins, int width, int he
             });
             std::uint32_t maxSpan = 1;
             for (std::uint32_t i : order) maxSpan = std::max(maxSpan, set.splats[i].slabCount);
-            TileCompositor<C> tile(x0, y0, w, h, ringSizeFor(maxSpan), cutoff, settings.expEvaluation, &table);
+            TileCompositor<C> tile(x0, y0, w, h, ringSizeFor(maxSpan), options);
             std::size_t done = 0;
+            const std::size_t passFloats = std::size_t(set.passSourceCount) * 3;
             for (; done < order.size() && !tile.opaque(); ++done) {
                 const Splat& s = set.splats[order[done]];
-                tile.add(s, set.shares.data() + s.shareOffset);
+                tile.add(s, set.shares.data() + s.shareOffset,
+                    passFloats ? set.passSources.data() + order[done] * passFloats : nullptr);
             }
             skipped[std::size_t(t)] = order.size() - done;
-            tile.finish(image);
+            tile.finish(frame, depthScale, deep.empty() ? nullptr : &deep[std::size_t(t)]);
         }
     });
 }
 
+/// Camera depth per unit of distance along each pixel centre's ray: the cosine between the
+/// ray and the viewing axis (perspective), 1 (orthographic).
+std::vector<float> depthScales(const Camera& camera)
+{
+    const int width = camera.width(), height = camera.height();
+    std::vector<float> scale(std::size_t(width) * std::size_t(height), 1.0f);
+    if (camera.projection() != Projection::Perspective) return scale;
+    const double f = camera.focalPixels();
+    const Vec2d c = camera.principalPoint();
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            const double u = (x + 0.5 - c.x) / f, v = (y + 0.5 - c.y) / f;
+            scale[std::size_t(y) * std::size_t(width) + std::size_t(x)] = float(1.0 / std::sqrt(1.0 + u * u + v * v));
+        }
+    return scale;
+}
+
+/// Tiles' deep samples -> one DeepImage in pixel order, depths converted to camera depth.
+DeepImage assembleDeep(std::vector<TileDeep>& tiles, const TileBins& bins, int width, int height,
+    const std::vector<float>& depthScale)
+{
+    DeepImage deep;
+    deep.width = width;
+    deep.height = height;
+    deep.offsets.assign(std::size_t(width) * std::size_t(height) + 1, 0);
+    for (int t = 0; t < int(tiles.size()); ++t) {
+        const int x0 = (t % bins.tilesX) * kTileSize, y0 = (t / bins.tilesX) * kTileSize;
+        for (int p = 0; p < kTilePixels; ++p) {
+            const int x = x0 + p % kTileSize, y = y0 + p / kTileSize;
+            if (x < width && y < height) deep.offsets[std::size_t(y) * std::size_t(width) + std::size_t(x) + 1] = tiles[std::size_t(t)].counts[p];
+        }
+    }
+    for (std::size_t i = 1; i < deep.offsets.size(); ++i) deep.offsets[i] += deep.offsets[i - 1];
+    deep.samples.resize(deep.offsets.back());
+    tbb::parallel_for(tbb::blocked_range<int>(0, int(tiles.size())), [&](const tbb::blocked_range<int>& range) {
+        for (int t = range.begin(); t < range.end(); ++t) {
+            TileDeep& tile = tiles[std::size_t(t)];
+            const int x0 = (t % bins.tilesX) * kTileSize, y0 = (t / bins.tilesX) * kTileSize;
+            std::size_t next = 0;
+            for (int p = 0; p < kTilePixels; ++p) {
+                const int x = x0 + p % kTileSize, y = y0 + p / kTileSize;
+                const std::size_t i = std::size_t(y) * std::size_t(width) + std::size_t(x);
+                for (std::uint32_t k = 0; k < tile.counts[p]; ++k, ++next) {
+                    DeepSample d = tile.samples[next];
+                    d.z *= depthScale[i];
+                    d.zBack *= depthScale[i];
+                    deep.samples[deep.offsets[i] + k] = d;
+                }
+            }
+            tile.samples = {};
+        }
+    });
+    return deep;
+}
+
 } // namespace
 
-Image rasterizeSplats(const SplatSet& set, int width, int height, const RenderSettings& settings,
-    RasterStats& stats)
+Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSettings& settings,
+    const PassRequest& passes, RasterStats& stats)
 {
-    Image image(width, height);
+    const int width = camera.width(), height = camera.height();
+    const std::size_t pixels = std::size_t(width) * std::size_t(height);
+    Frame frame;
+    frame.beauty = Image(width, height);
+    if (passes.depth) frame.depth.assign(pixels, std::numeric_limits<float>::infinity());
+    if (passes.transmittance) frame.transmittance.assign(pixels * 3, 1.0f);
+    if (passes.shadow) frame.shadow.assign(pixels * 3, 0.0f);
+    if (passes.emission) frame.emission.assign(pixels * 3, 0.0f);
+
     const TileBins bins = binSplats(set.splats, width, height);
     stats.splatTilePairs = bins.indices.size();
     const int tiles = bins.tilesX * bins.tilesY;
     std::vector<std::uint64_t> skipped(std::size_t(tiles), 0);
-    if (allGrey(set.splats)) compositeTiles<1>(set, bins, width, height, settings, image, skipped);
-    else compositeTiles<3>(set, bins, width, height, settings, image, skipped);
+    const ExpTable table(float(settings.cutoffRadius * settings.cutoffRadius));
+    CompositeOptions options;
+    options.cutoff = float(settings.cutoff);
+    options.exp = settings.expEvaluation;
+    options.table = &table;
+    options.slabs = set.slabs;
+    options.passes = passes;
+    options.passSources = set.passSourceCount;
+    const std::vector<float> depthScale = (passes.depth || passes.deep) ? depthScales(camera) : std::vector<float>{};
+    std::vector<TileDeep> deep(passes.deep ? std::size_t(tiles) : 0);
+    if (allGrey(set)) compositeTiles<1>(set, bins, options, depthScale, frame, deep, skipped);
+    else compositeTiles<3>(set, bins, options, depthScale, frame, deep, skipped);
+    if (passes.deep) frame.deep = assembleDeep(deep, bins, width, height, depthScale);
     stats.tiles = std::uint64_t(tiles);
     for (std::uint64_t n : skipped) {
         stats.tilesOpaque += (n > 0);
         stats.pairsSkipped += n;
     }
-    return image;
+    return frame;
 }
 
 } // namespace detail

@@ -5,7 +5,7 @@
 
 #include "splat_projection.h"
 
-#include <vdb_ewa/image.h>
+#include <vdb_ewa/frame.h>
 
 namespace vdb_ewa {
 namespace detail {
@@ -20,11 +20,12 @@ struct RasterStats
     std::uint64_t pairsSkipped = 0; ///< pairs skipped in those tiles
 };
 
-/// Composite @a set into a width x height image (premultiplied RGB, A = 1 - mean T).
-/// Each tile is owned by one task and processes its splats in (first slab, kernel) order,
-/// so the result does not depend on the thread count.
-Image rasterizeSplats(const SplatSet& set, int width, int height, const RenderSettings& settings,
-    RasterStats& stats);
+/// Composite @a set into the camera's image (premultiplied RGB, A = 1 - mean T) and the
+/// requested passes (include/vdb_ewa/frame.h, docs/output.md). Each tile is owned by one task
+/// and processes its splats in (first slab, kernel) order, so the result does not depend on
+/// the thread count.
+Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSettings& settings,
+    const PassRequest& passes, RasterStats& stats);
 
 } // namespace detail
 } // namespace vdb_ewa

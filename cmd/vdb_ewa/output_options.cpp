@@ -1,0 +1,172 @@
+/// @file output_options.cpp
+#include "output_options.h"
+
+#include "option_values.h"
+
+#include <algorithm>
+#include <cctype>
+#include <sstream>
+
+namespace vdb_ewa::cli {
+namespace {
+
+const Choices<ExrPixelType> kExrTypes = {{"half", ExrPixelType::Half}, {"float", ExrPixelType::Float}};
+const Choices<ExrCompression> kCompressions = {{"none", ExrCompression::None}, {"rle", ExrCompression::Rle},
+    {"zip", ExrCompression::Zip}, {"zips", ExrCompression::Zips}, {"piz", ExrCompression::Piz},
+    {"dwaa", ExrCompression::Dwaa}, {"dwab", ExrCompression::Dwab}};
+
+bool endsWith(std::string text, const std::string& suffix)
+{
+    std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return text.size() >= suffix.size() && text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+PassRequest parseAovs(const std::string& list)
+{
+    PassRequest passes;
+    std::stringstream words(list);
+    std::string word;
+    while (std::getline(words, word, ',')) {
+        if (word == "transmittance") passes.transmittance = true;
+        else if (word == "shadow") passes.shadow = true;
+        else if (word == "emission") passes.emission = true;
+        else if (word != "none" && !word.empty()) {
+            throw ValueError("--aov: expected a comma-separated list of transmittance, shadow and emission, got '" + word + "'");
+        }
+    }
+    return passes;
+}
+
+} // namespace
+
+void OutputOptions::add(CLI::App* app)
+{
+    app->add_option("--ocio-config", mConfigPath,
+        "OpenColorIO config file (default: $OCIO, else vdb_ewa's shipped ACES config); an unusable config "
+        "is a warning and falls back to the next");
+    app->add_option("--working-space", mWorkingSpace,
+        "colour space the light, absorb, scatter and emission colours are given and rendered in (default: "
+        "the config's scene_linear role; ACEScg in the shipped config)");
+    app->add_option("--output-space", mOutputSpace, "colour space the EXR holds (default: the working space)");
+    app->add_option("--preview", mPreview, "also write an 8-bit display-referred PNG of the beauty over black");
+    app->add_option("--display", mDisplay, "display of --preview (default: the config's default display)");
+    app->add_option("--view", mView, "view of --preview (default: the display's default view)");
+    app->add_option("--exr-type", mExrType, "pixel type of the colour channels: half or float; Z is always float (default: half)");
+    app->add_option("--compression", mCompression,
+        "EXR compression: " + choiceList(kCompressions) + "; --deep files take none, rle or zips (default: zip, zips for --deep)");
+    app->add_option("--aov", mAov,
+        "extra passes as layer.R/G/B channels, comma-separated: transmittance, shadow, emission "
+        "(alpha and Z are always written; definitions in docs/output.md)");
+    app->add_flag("--deep", mDeep,
+        "write a deep scanline EXR: one sample per non-empty slab (R, G, B, A premultiplied, Z, ZBack; tidy)");
+}
+
+void OutputOptions::prepare(const std::string& output, std::vector<std::string>& warnings)
+{
+    if (!endsWith(output, ".exr")) throw ValueError(output + ": unsupported output format (expected a .exr file)");
+    mExr.colorType = mExrType.empty() ? ExrPixelType::Half : parseChoice("exr-type", mExrType, kExrTypes);
+    mExr.compression = !mCompression.empty() ? parseChoice("compression", mCompression, kCompressions)
+                                              : mDeep ? ExrCompression::Zips : ExrCompression::Zip;
+    mPasses = parseAovs(mAov);
+    if (mDeep) {
+        if (mPasses.transmittance || mPasses.shadow || mPasses.emission) {
+            throw ValueError("--aov passes are flat images; they cannot be written to a --deep file");
+        }
+        if (!validForDeep(mExr.compression)) {
+            throw ValueError("--compression " + mCompression + " is not valid for --deep files (use none, rle or zips)");
+        }
+        mPasses.deep = true;
+    } else {
+        mPasses.depth = true;
+    }
+
+    mConfig = ColorConfig::resolve(mConfigPath, warnings);
+    if (mWorkingSpace.empty()) {
+        mWorkingSpace = mConfig->roleSpace("scene_linear");
+        if (mWorkingSpace.empty()) throw ValueError(mConfig->origin() + ": the config has no scene_linear role; give --working-space");
+    }
+    mWorkingSpace = mConfig->colorSpace(mWorkingSpace);
+    mOutputSpace = mOutputSpace.empty() ? mWorkingSpace : mConfig->colorSpace(mOutputSpace);
+    for (const std::string* space : {&mWorkingSpace, &mOutputSpace}) {
+        if (mConfig->isData(*space)) throw ValueError("colour space '" + *space + "' is a data space; renders need a colour space");
+    }
+    ColorTransform::between(*mConfig, mWorkingSpace, mOutputSpace); // fails now, not after the render
+    std::string how;
+    mExr.chromaticities = chromaticitiesOf(*mConfig, mOutputSpace, &how);
+    if (!mExr.chromaticities) warnings.push_back("no chromaticities attribute written (" + how + ")");
+
+    if (!mPreview.empty()) {
+        if (!endsWith(mPreview, ".png")) throw ValueError(mPreview + ": --preview writes a .png file");
+        if (mDisplay.empty()) mDisplay = mConfig->defaultDisplay();
+        if (mView.empty()) mView = mConfig->defaultView(mDisplay);
+        mConfig->checkDisplayView(mDisplay, mView);
+        checkOutputWritable(mPreview);
+    } else if (!mDisplay.empty() || !mView.empty()) {
+        throw ValueError("--display and --view choose the --preview transform; give --preview OUT.png");
+    }
+    checkOutputWritable(output);
+}
+
+Attributes OutputOptions::resolved() const
+{
+    Attributes a{{"ocio-config", mConfig ? mConfig->origin() : std::string()}, {"working-space", mWorkingSpace},
+        {"output-space", mOutputSpace}, {"exr-type", choiceName(mExr.colorType, kExrTypes)},
+        {"compression", choiceName(mExr.compression, kCompressions)}};
+    std::string aov;
+    for (const auto& [on, name] : {std::pair{mPasses.transmittance, "transmittance"}, {mPasses.shadow, "shadow"}, {mPasses.emission, "emission"}}) {
+        if (on) aov += (aov.empty() ? "" : ",") + std::string(name);
+    }
+    a.emplace_back("aov", aov.empty() ? "none" : aov);
+    a.emplace_back("deep", mDeep ? "on" : "off");
+    if (!mPreview.empty()) {
+        a.emplace_back("display", mDisplay);
+        a.emplace_back("view", mView);
+    }
+    return a;
+}
+
+void OutputOptions::write(Frame& frame, const Camera& camera, const std::string& output, const Attributes& attributes) const
+{
+    // The preview reads the working-space beauty, so it is made before the conversion.
+    if (!mPreview.empty()) {
+        writePreviewPng(frame.beauty, ColorTransform::toDisplay(*mConfig, mWorkingSpace, mDisplay, mView), mPreview);
+    }
+    const ColorTransform toOutput = ColorTransform::between(*mConfig, mWorkingSpace, mOutputSpace);
+    ExrOptions exr = mExr;
+    exr.camera = &camera;
+    exr.attributes = attributes;
+    if (mPasses.deep) {
+        // Deep samples are premultiplied by their own alpha: convert each as a pixel.
+        std::vector<float> rgba(frame.deep.samples.size() * 4);
+        for (std::size_t i = 0; i < frame.deep.samples.size(); ++i) {
+            const DeepSample& d = frame.deep.samples[i];
+            const float v[4] = {d.r, d.g, d.b, d.a};
+            std::copy(v, v + 4, &rgba[4 * i]);
+        }
+        toOutput.applyPremultiplied(rgba.data(), frame.deep.samples.size());
+        for (std::size_t i = 0; i < frame.deep.samples.size(); ++i) {
+            DeepSample& d = frame.deep.samples[i];
+            d.r = rgba[4 * i];
+            d.g = rgba[4 * i + 1];
+            d.b = rgba[4 * i + 2];
+        }
+        writeDeepExr(frame.deep, output, exr);
+        return;
+    }
+    const std::size_t pixels = frame.beauty.rgba.size() / 4;
+    // Colour passes share the beauty's alpha; transmittance is a per-channel ratio, not a colour.
+    for (std::vector<float>* pass : {&frame.shadow, &frame.emission}) {
+        if (pass->empty()) continue;
+        std::vector<float> rgba(pixels * 4);
+        for (std::size_t i = 0; i < pixels; ++i) {
+            std::copy_n(&(*pass)[3 * i], 3, &rgba[4 * i]);
+            rgba[4 * i + 3] = frame.beauty.rgba[4 * i + 3];
+        }
+        toOutput.applyPremultiplied(rgba.data(), pixels);
+        for (std::size_t i = 0; i < pixels; ++i) std::copy_n(&rgba[4 * i], 3, &(*pass)[3 * i]);
+    }
+    toOutput.applyPremultiplied(frame.beauty.rgba.data(), pixels);
+    writeExr(frame, output, exr);
+}
+
+} // namespace vdb_ewa::cli
