@@ -11,6 +11,10 @@
   bench/bench.py targets --cache DIR [--scene smoke] [--res 1920x1080] [--repeat 5]
                                                          issue 3's targets: vdb_render's defaults and
                                                          the presets in interleaved rounds
+  bench/bench.py output [--scene smoke] [--res 1920x1080] [--repeat 3]
+                                                         issue 4's output stage: EXR pixel types,
+                                                         compressions, passes and deep files, with
+                                                         vdb_render's defaults in the same rounds
 
 Needs a Release build in build/ (scripts/setup.sh), vdb_render and the shared assets
 ($VDB_EWA_ASSETS, default ../shared/grids); the Pareto plot needs python3-matplotlib.
@@ -29,6 +33,9 @@ nan = float("nan")
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 EWA = os.path.join(ROOT, "build", "cmd", "vdb_ewa", "vdb_ewa")
+# The speed and accuracy verbs write float EXRs, vdb_render's file type, so that both pay the
+# same for the file and PSNR is not capped by half precision; `output` measures the file types.
+EWA_RENDER = [EWA, "render", "--exr-type", "float"]
 ASSETS = os.environ.get("VDB_EWA_ASSETS", os.path.join(ROOT, "..", "shared", "grids"))
 
 # (label, file, camera args in vdb_render syntax, which vdb_render can read)
@@ -94,7 +101,7 @@ def cmd_speed(args):
             ref_path = None  # no float twin on disk: vdb_render column is left empty
         ours, theirs, st = [], [], []
         for _ in range(args.repeat):
-            dt, out = run([EWA, "render", path, os.path.join(tmp, "ours.exr"), *res, *cam.split(), "-v"])
+            dt, out = run([*EWA_RENDER, path, os.path.join(tmp, "ours.exr"), *res, *cam.split(), "-v"])
             ours.append(dt)
             st.append(stages(out))
             if ref_path:
@@ -103,7 +110,7 @@ def cmd_speed(args):
         o = statistics.median(ours)
         t = statistics.median(theirs) if theirs else float("nan")
         s = {k: statistics.median(x[k] for x in st) for k in st[0]}
-        vox = re.search(r"(\d+) active voxels", run([EWA, "render", path, os.path.join(tmp, "o.exr"), "-res", "8x8", *cam.split(), "-v"])[1]).group(1)
+        vox = re.search(r"(\d+) active voxels", run([*EWA_RENDER, path, os.path.join(tmp, "o.exr"), "-res", "8x8", *cam.split(), "-v"])[1]).group(1)
         ratio = f"{t / o:.1f}x" if theirs else "n/a"
         tt = f"{t:.2f}" if theirs else "n/a (double grid)"
         print(f"| {label} | {vox} | {tt} | {o:.2f} | {ratio} | {s['load']:.3f} | {s['kernels']:.3f} | "
@@ -127,7 +134,7 @@ def cmd_sigma(args):
         run(["vdb_render", path, os.path.join(tmp, "def.exr"), *res, *cam.split()])
         row = [f"{diff(os.path.join(tmp, 'def.exr'), conv)[1]:.1f}"]
         for s in sigmas:
-            run([EWA, "render", path, os.path.join(tmp, "ours.exr"), *res, *cam.split(), "--kernel-sigma", str(s),
+            run([*EWA_RENDER, path, os.path.join(tmp, "ours.exr"), *res, *cam.split(), "--kernel-sigma", str(s),
                  "--shadowstep", "0.375"])
             row.append(f"{diff(os.path.join(tmp, 'ours.exr'), conv)[1]:.1f}")
         print(f"| {label} | " + " | ".join(row) + " |", flush=True)
@@ -188,12 +195,12 @@ def cmd_tradeoff(args):
             if peer and not os.path.exists(conv):
                 run(["vdb_render", path, conv, *common, "-step", "0.125", "-shadowstep", "0.375"])
             if not os.path.exists(ref):
-                run([EWA, "render", path, ref, *common, "--method", "raymarch", "--step", "0.25",
+                run([*EWA_RENDER, path, ref, *common, "--method", "raymarch", "--step", "0.25",
                      "--shadowstep", "0.375", "--shadow-res", "1", "--kernel-sigma", "0.55"])
             print(f"# {label} {res}: references {conv if peer else '(no vdb_render)'}, {ref}", flush=True)
             configs = [("vdb_render", l, ["vdb_render", path, os.path.join(tmp, "o.exr"), *common, *a])
                        for l, a in VDB_CONFIGS] if peer else []
-            configs += [("vdb_ewa", l, [EWA, "render", path, os.path.join(tmp, "o.exr"), *common, *a])
+            configs += [("vdb_ewa", l, [*EWA_RENDER, path, os.path.join(tmp, "o.exr"), *common, *a])
                         for l, a in EWA_CONFIGS]
             for renderer, name, cmd in configs:
                 t = timed(cmd, args.repeat)
@@ -232,7 +239,7 @@ def cmd_targets(args):
     if not (os.path.exists(conv) and os.path.exists(ref)):
         sys.exit(f"run `bench.py tradeoff --scenes {label} --res {args.res} --cache {args.cache}` first")
     configs = [("vdb_render defaults", ["vdb_render", path, os.path.join(tmp, "v.exr"), *common])]
-    configs += [(f"quality {q}", [EWA, "render", path, os.path.join(tmp, f"{q}.exr"), *common, "--quality", q])
+    configs += [(f"quality {q}", [*EWA_RENDER, path, os.path.join(tmp, f"{q}.exr"), *common, "--quality", q])
                 for q in ("draft", "default", "high")]
     times = {name: [] for name, _ in configs}
     for _ in range(args.repeat):
@@ -247,6 +254,47 @@ def cmd_targets(args):
         out = next(a for a in cmd if a.endswith(".exr"))
         print(f"| {name} | {t:.2f} | {', '.join(f'{x:.2f}' for x in times[name])} | {base / t:.1f}x | "
               f"{diff(out, ref)[1]:.1f} | {diff(out, conv)[1]:.1f} |", flush=True)
+
+
+def cmd_output(args):
+    """The output stage's cost: pixel types, compressions, passes, deep files and the preview,
+    interleaved with vdb_render's defaults; total time, the write stage (-v) and file size."""
+    tmp = tempfile.mkdtemp(prefix="vdb_ewa_output_")
+    label, path, cam = next(s for s in SCENES if s[0] == args.scene)
+    common = ["-res", args.res, *cam.split()]
+    out = os.path.join(tmp, "o.exr")
+    variants = [
+        ("default: half, zip", []), ("float, zip (vdb_render's file type)", ["--exr-type", "float"]),
+        ("half, none", ["--compression", "none"]), ("half, zips", ["--compression", "zips"]),
+        ("half, piz", ["--compression", "piz"]), ("half, dwaa", ["--compression", "dwaa"]),
+        ("half, zip, --aov transmittance,shadow,emission", ["--aov", "transmittance,shadow,emission"]),
+        ("half, zip, --preview", ["--preview", os.path.join(tmp, "p.png")]),
+        ("--output-space lin_rec709", ["--output-space", "lin_rec709"]),
+        ("--deep (half, zips)", ["--deep"]),
+        ("--quality draft, half, zip", ["--quality", "draft"]),
+        ("--quality draft, float, zip", ["--quality", "draft", "--exr-type", "float"]),
+    ]
+    configs = [("vdb_render defaults", ["vdb_render", path, os.path.join(tmp, "v.exr"), *common], None)]
+    configs += [(name, [EWA, "render", path, out, *common, *extra, "-v"], out) for name, extra in variants]
+    times = {name: [] for name, _, _ in configs}
+    writes = {name: [] for name, _, _ in configs}
+    sizes = {}
+    for _ in range(args.repeat):
+        for name, cmd, o in configs:
+            dt, stdout = run(cmd)
+            times[name].append(dt)
+            if o:
+                writes[name].append(float(re.search(r"write ([0-9.]+)", stdout).group(1)))
+                sizes[name] = os.path.getsize(o) / 1e6
+    base = statistics.median(times["vdb_render defaults"])
+    print(f"# {label} {args.res}, --quality default unless noted: median of {args.repeat} interleaved rounds, {os.cpu_count()} cores")
+    print("| output | total (s) | speed-up vs vdb_render defaults | write stage (s) | file (MB) |")
+    print("|---|---|---|---|---|")
+    for name, _, o in configs:
+        t = statistics.median(times[name])
+        w = f"{statistics.median(writes[name]):.3f}" if o else "-"
+        size = f"{sizes[name]:.1f}" if o else f"{os.path.getsize(os.path.join(tmp, 'v.exr')) / 1e6:.1f}"
+        print(f"| {name} | {t:.2f} | {base / t:.1f}x | {w} | {size} |", flush=True)
 
 
 def plot(rows, path):
@@ -308,12 +356,16 @@ def main():
     sx.add_argument("--res", default="1920x1080")
     sx.add_argument("--repeat", type=int, default=5)
     sx.add_argument("--cache", required=True, help="folder holding the tradeoff run's reference images")
+    so = sub.add_parser("output")
+    so.add_argument("--scene", default="smoke")
+    so.add_argument("--res", default="1920x1080")
+    so.add_argument("--repeat", type=int, default=3)
     sp2 = sub.add_parser("plot")
     sp2.add_argument("table", help="saved output of a tradeoff run")
     sp2.add_argument("--plot", required=True)
     a = ap.parse_args()
     {"speed": cmd_speed, "sigma": cmd_sigma, "tradeoff": cmd_tradeoff, "targets": cmd_targets,
-     "plot": cmd_plot}[a.cmd](a)
+     "output": cmd_output, "plot": cmd_plot}[a.cmd](a)
 
 
 if __name__ == "__main__":

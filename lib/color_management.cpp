@@ -5,6 +5,7 @@
 #include <vdb_ewa/error.h>
 
 #include <OpenColorIO/OpenColorIO.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cctype>
@@ -46,9 +47,19 @@ std::string joined(const std::vector<std::string>& names)
     return out;
 }
 
+/// validate() checks the config's structure; also build the scene_linear -> default display
+/// and view processor, which reads the files (LUTs) that a working config needs.
 OCIO::ConstConfigRcPtr validated(OCIO::ConstConfigRcPtr config)
 {
     config->validate();
+    const char* display = config->getDefaultDisplay();
+    if (config->hasRole(OCIO::ROLE_SCENE_LINEAR) && display && *display) {
+        OCIO::DisplayViewTransformRcPtr dvt = OCIO::DisplayViewTransform::Create();
+        dvt->setSrc(OCIO::ROLE_SCENE_LINEAR);
+        dvt->setDisplay(display);
+        dvt->setView(config->getDefaultView(display));
+        config->getProcessor(dvt)->getDefaultCPUProcessor();
+    }
     return config;
 }
 
@@ -223,9 +234,13 @@ Vec3d ColorTransform::apply(const Vec3d& rgb) const
 void ColorTransform::apply(float* rgb, std::size_t count, std::size_t stride) const
 {
     if (mImpl->noOp || count == 0) return;
+    // OCIO's CPU processors are thread-safe: blocks of pixels in parallel (in the caller's arena).
     const auto bytes = std::ptrdiff_t(stride * sizeof(float));
-    OCIO::PackedImageDesc desc(rgb, long(count), 1, 3, OCIO::BIT_DEPTH_F32, sizeof(float), bytes, bytes * long(count));
-    mImpl->cpu->apply(desc);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 16384), [&](const tbb::blocked_range<std::size_t>& r) {
+        const long n = long(r.size());
+        OCIO::PackedImageDesc desc(rgb + r.begin() * stride, n, 1, 3, OCIO::BIT_DEPTH_F32, sizeof(float), bytes, bytes * n);
+        mImpl->cpu->apply(desc);
+    });
 }
 
 void ColorTransform::applyPremultiplied(float* rgba, std::size_t count) const

@@ -156,6 +156,14 @@ TEST(ColorManagement, ConfigPrecedenceAndFallbacks)
     const std::string good = dir.file("studio.ocio"), other = dir.file("other.ocio"), broken = dir.file("broken.ocio");
     for (const std::string& p : {good, other}) std::ofstream(p) << shippedConfigText();
     std::ofstream(broken) << "ocio_profile_version: 2\nroles: {scene_linear: nowhere}\ncolorspaces: [\n";
+    // Valid YAML whose default view needs a LUT file that is not there.
+    const std::string missingLut = dir.file("missing_lut.ocio");
+    std::string text = shippedConfigText();
+    const std::string builtin = "!<BuiltinTransform> {style: DISPLAY - CIE-XYZ-D65_to_sRGB}";
+    ASSERT_NE(text.find(builtin), std::string::npos);
+    text.replace(text.find(builtin), builtin.size(), "!<FileTransform> {src: no_such_lut.spi3d, interpolation: tetrahedral}");
+    text.replace(text.find("search_path: \"\""), 15, "search_path: luts");
+    std::ofstream(missingLut) << text;
 
     std::vector<std::string> warnings;
     {
@@ -173,7 +181,7 @@ TEST(ColorManagement, ConfigPrecedenceAndFallbacks)
         EXPECT_EQ(ColorConfig::resolve("", warnings).origin(), ColorConfig::shipped().origin()) << "then the shipped config";
         EXPECT_TRUE(warnings.empty());
     }
-    for (const std::string& bad : {broken, dir.file("missing.ocio"), std::string("ocio://default")}) {
+    for (const std::string& bad : {broken, missingLut, dir.file("missing.ocio"), std::string("ocio://default")}) {
         warnings.clear();
         ScopedEnv env("OCIO", bad.c_str());
         EXPECT_EQ(ColorConfig::resolve("", warnings).origin(), ColorConfig::shipped().origin()) << bad;
