@@ -207,14 +207,14 @@ TEST_F(Cli, OcioConfigPrecedenceAndFallback)
     const std::string args = "render " + mGrid + " " + out + " --res 32x32 -translate 0,0,5 -v ";
     const CliRun shipped = runCli(mDir, args);
     ASSERT_EQ(shipped.code, 0) << shipped.err;
-    EXPECT_NE(shipped.out.find("--ocio-config 'vdb_ewa's shipped config' --working-space ACEScg"), std::string::npos) << shipped.out;
+    EXPECT_NE(shipped.out.find("--ocio-config \"vdb_ewa's shipped config\" --working-space ACEScg"), std::string::npos) << shipped.out;
     EXPECT_TRUE(shipped.err.empty()) << shipped.err;
 
     const std::string config = mDir.file("studio.ocio");
     std::filesystem::copy_file(std::string(VDB_EWA_SOURCE_DIR) + "/share/ocio/config.ocio", config);
     const CliRun env = runCli(mDir, args + "--working-space lin_rec709", config);
     ASSERT_EQ(env.code, 0) << env.err;
-    EXPECT_NE(env.out.find("--ocio-config " + config + " --working-space 'Linear Rec.709 (sRGB)'"), std::string::npos) << env.out;
+    EXPECT_NE(env.out.find("--ocio-config " + config + " --working-space \"Linear Rec.709 (sRGB)\""), std::string::npos) << env.out;
 
     for (const std::string& broken : {mDir.file("missing.ocio"), std::string("ocio://studio-config-latest")}) {
         const CliRun r = runCli(mDir, args, broken);

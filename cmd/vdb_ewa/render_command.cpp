@@ -237,7 +237,7 @@ private:
             std::cout << "vdb_ewa: " << titles[g];
             for (const auto& [key, value] : groups[g]) {
                 const bool spaces = value.find(' ') != std::string::npos;
-                std::cout << " --" << key << " " << (spaces ? "'" + value + "'" : value);
+                std::cout << " --" << key << " " << (spaces ? "\"" + value + "\"" : value);
             }
             std::cout << "\n";
         }

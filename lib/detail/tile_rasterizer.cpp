@@ -65,11 +65,6 @@ private:
     float mValues[kSize + 1];
 };
 
-/// The slab sweep of one screen tile: a ring of slab accumulators (optical depth and
-/// emission per channel and pixel), flushed front to back with the exact update.
-/// @tparam C colour channels carried: 3, or 1 when every splat is grey (tau and emission the
-///           same in R, G and B, as with vdb_render's default model): the same arithmetic per
-///           channel, so the image is bit-identical, at a third of the work.
 /// What every tile compositor of a frame shares.
 struct CompositeOptions
 {
@@ -88,6 +83,12 @@ struct TileDeep
     std::vector<DeepSample> samples;
 };
 
+/// The slab sweep of one screen tile: a ring of slab accumulators (optical depth, emission
+/// and the passes' source terms per channel and pixel), flushed front to back with the exact
+/// update; the flush also finds Z and emits deep samples when asked.
+/// @tparam C colour channels carried: 3, or 1 when every splat is grey (tau and emission the
+///           same in R, G and B, as with vdb_render's default model): the same arithmetic per
+///           channel, so the image is bit-identical, at a third of the work.
 template <int C>
 class TileCompositor
 {
@@ -214,8 +215,7 @@ public:
                 const std::size_t i = std::size_t(mY0 + ly) * std::size_t(width) + std::size_t(mX0 + lx);
                 float* px = frame.beauty.pixel(mX0 + lx, mY0 + ly);
                 for (int c = 0; c < 3; ++c) px[c] = mC[channel(c) * kTilePixels + p];
-                // The three-channel mean, with the same rounding whatever C is (bit for bit).
-                px[3] = 1.0f - (mT[p] + mT[channel(1) * kTilePixels + p] + mT[channel(2) * kTilePixels + p]) / 3.0f;
+                px[3] = 1.0f - meanT(p);
                 if (passes.depth) frame.depth[i] = mZ[p] * depthScale[i];
                 if (passes.transmittance) {
                     for (int c = 0; c < 3; ++c) frame.transmittance[3 * i + c] = mT[channel(c) * kTilePixels + p];
@@ -279,7 +279,8 @@ private:
         mPending.erase(mPending.begin(), mPending.begin() + std::ptrdiff_t(n));
     }
 
-    /// Mean transmittance over R, G, B of pixel p.
+    /// Mean transmittance over R, G, B of pixel p, with the same rounding whatever C is (so
+    /// alpha is bit-identical between the grey and the three-channel paths).
     float meanT(int p) const
     {
         return (mT[p] + mT[channel(1) * kTilePixels + p] + mT[channel(2) * kTilePixels + p]) / 3.0f;
