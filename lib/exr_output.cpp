@@ -20,6 +20,7 @@
 #include <Imath/half.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <deque>
 #include <thread>
@@ -42,6 +43,12 @@ Imf::Compression imfCompression(ExrCompression c)
 }
 
 Imf::PixelType imfType(ExrPixelType t) { return t == ExrPixelType::Half ? Imf::HALF : Imf::FLOAT; }
+
+/// float -> half, finite values beyond the half range clamped to +-65504 instead of becoming inf.
+half toHalf(float v)
+{
+    return half(std::isfinite(v) ? std::clamp(v, -float(HALF_MAX), float(HALF_MAX)) : v);
+}
 
 /// 4x4 matrix (column-vector convention, rows given) -> Imath's row-vector M44f (transpose).
 Imath::M44f rowVectorMatrix(const double m[4][4])
@@ -118,7 +125,8 @@ public:
         const std::size_t xStride = std::size_t(channels) * size, yStride = xStride * mWidth;
         char* base = reinterpret_cast<char*>(const_cast<float*>(data));
         if (type == Imf::HALF) {
-            std::vector<half>& h = mHalves.emplace_back(data, data + count);
+            std::vector<half>& h = mHalves.emplace_back(count);
+            std::transform(data, data + count, h.begin(), toHalf);
             base = reinterpret_cast<char*>(h.data());
         }
         for (std::size_t c = 0; c < names.size(); ++c) {
@@ -189,7 +197,7 @@ void writeDeepExr(const DeepImage& deep, const std::string& path, const ExrOptio
             for (std::size_t i = 0; i < deep.samples.size(); ++i) {
                 const DeepSample& d = deep.samples[i];
                 const float v[4] = {d.r, d.g, d.b, d.a};
-                std::copy(v, v + 4, &halves[4 * i]);
+                std::transform(v, v + 4, &halves[4 * i], toHalf);
             }
         }
         // One array of per-pixel pointers per channel, each at the pixel's first sample.

@@ -129,6 +129,20 @@ TEST(ExrOutput, EveryChannelAndAttributeReadsBack)
     }
 }
 
+TEST(ExrOutput, HalfClampsToItsRangeInsteadOfInfinity)
+{
+    Frame frame;
+    frame.beauty = Image(2, 1);
+    frame.beauty.rgba = {1e6f, -1e6f, 0.5f, 1.0f, 70000.0f, 1.0f, 2.0f, 1.0f};
+    TempDir dir;
+    writeExr(frame, dir.file("h.exr"), ExrOptions{});
+    const std::vector<float> r = readChannel(dir.file("h.exr"), "R"), g = readChannel(dir.file("h.exr"), "G");
+    EXPECT_EQ(r[0], 65504.0f);
+    EXPECT_EQ(g[0], -65504.0f);
+    EXPECT_EQ(r[1], 65504.0f);
+    EXPECT_EQ(g[1], 1.0f);
+}
+
 TEST(ExrOutput, CameraMatricesProjectLikeTheCamera)
 {
     for (const Projection projection : {Projection::Perspective, Projection::Orthographic}) {

@@ -127,10 +127,18 @@ Attributes OutputOptions::resolved() const
 
 void OutputOptions::write(Frame& frame, const Camera& camera, const std::string& output, const Attributes& attributes) const
 {
-    // The preview reads the working-space beauty, so it is made before the conversion.
+    // The preview reads the working-space beauty: keep a copy for it, and write the EXR, the
+    // main output, first.
+    const Image workingBeauty = mPreview.empty() ? Image() : frame.beauty;
+    writeExrInOutputSpace(frame, camera, output, attributes);
     if (!mPreview.empty()) {
-        writePreviewPng(frame.beauty, ColorTransform::toDisplay(*mConfig, mWorkingSpace, mDisplay, mView), mPreview);
+        writePreviewPng(workingBeauty, ColorTransform::toDisplay(*mConfig, mWorkingSpace, mDisplay, mView), mPreview);
     }
+}
+
+void OutputOptions::writeExrInOutputSpace(Frame& frame, const Camera& camera, const std::string& output,
+    const Attributes& attributes) const
+{
     const ColorTransform toOutput = ColorTransform::between(*mConfig, mWorkingSpace, mOutputSpace);
     ExrOptions exr = mExr;
     exr.camera = &camera;

@@ -39,6 +39,9 @@ public:
     void write(Frame& frame, const Camera& camera, const std::string& output, const Attributes& attributes) const;
 
 private:
+    void writeExrInOutputSpace(Frame& frame, const Camera& camera, const std::string& output,
+        const Attributes& attributes) const;
+
     std::string mConfigPath, mWorkingSpace, mOutputSpace, mDisplay, mView, mPreview, mExrType, mCompression, mAov;
     bool mDeep = false;
 
