@@ -196,3 +196,66 @@ TEST(EwaKernel, KernelBehindTheEyeIsInvalid)
     EXPECT_FALSE(projectKernel(Vec3d(0, 0, -1.0), Mat3d(1.0), p).valid);
     EXPECT_FALSE(projectKernel(Vec3d(0, 0, 0.0), Mat3d(1.0), p).valid);
 }
+
+TEST(EwaKernel, FlattenedVolumeKernelConvergesToTheSurfaceKernel)
+{
+    // Eq. 37: a volume kernel flattened along its normal by 1/s tends, as s grows, to the
+    // surface kernel of the same tangential variance: the same screen covariance, and a ray
+    // integral through the centre equal to the surface density divided by |cos| of the angle
+    // between the ray and the normal (a tilted sheet is crossed obliquely).
+    ProjectionParams p;
+    p.focalPixels = 800.0;
+    p.principalPoint = {320.0, 240.0};
+    p.lowpass = 1e-9; // compare the footprints themselves
+    const Vec3d t(0.6, -0.3, 5.0);
+    const Vec3d normal = glm::normalize(Vec3d(0.3, 0.5, -0.8));
+    const Vec3d tangent0 = glm::normalize(glm::cross(normal, Vec3d(1, 0, 0)));
+    const Vec3d tangent1 = glm::cross(normal, tangent0);
+    const double sigma = 0.05;
+    const Footprint surface = projectSurfaceKernel(t, tangent0, tangent1, sigma, p);
+    ASSERT_TRUE(surface.valid);
+    const double cosine = std::abs(glm::dot(normal, glm::normalize(t)));
+    double previous = 1e300;
+    for (const double s : {2.0, 8.0, 32.0, 128.0, 512.0}) {
+        const Mat3d cov = sigma * sigma * (glm::outerProduct(tangent0, tangent0) + glm::outerProduct(tangent1, tangent1)) +
+                          (sigma / s) * (sigma / s) * glm::outerProduct(normal, normal);
+        const Footprint volume = projectKernel(t, cov, p);
+        ASSERT_TRUE(volume.valid);
+        const double error = std::max({std::abs(volume.covariance.xx - surface.covariance.xx),
+                                 std::abs(volume.covariance.xy - surface.covariance.xy),
+                                 std::abs(volume.covariance.yy - surface.covariance.yy)}) /
+                             surface.covariance.xx;
+        EXPECT_LT(error, previous / 10.0) << "s = " << s << ": the error falls as 1/s^2";
+        previous = error;
+        if (s == 512.0) {
+            EXPECT_LT(error, 1e-5);
+            EXPECT_NEAR(volume.peak * cosine, surface.peak, 1e-3 * surface.peak);
+        }
+    }
+    // With the surface in the image plane the footprint is the tangent Gaussian scaled by f/z.
+    const Footprint facing = projectSurfaceKernel(Vec3d(0, 0, 5), Vec3d(1, 0, 0), Vec3d(0, 1, 0), sigma, p);
+    EXPECT_NEAR(facing.covariance.xx, std::pow(sigma * 800.0 / 5.0, 2), 1e-6);
+    EXPECT_NEAR(facing.covariance.xy, 0.0, 1e-9);
+    EXPECT_NEAR(facing.peak, 1.0 / (2.0 * 3.14159265358979 * sigma * sigma) / -std::expm1(-4.5), 1e-3);
+}
+
+TEST(EwaKernel, SurfaceFootprintMatchesFiniteDifferencesOfTheProjection)
+{
+    // The screen covariance sigma^2 M M^T against M from finite differences of the pinhole map.
+    ProjectionParams p;
+    p.focalPixels = 500.0;
+    p.principalPoint = {0.0, 0.0};
+    p.lowpass = 1e-9;
+    const Vec3d t(-1.2, 0.7, 4.0);
+    const Vec3d a = glm::normalize(Vec3d(1.0, 0.2, 0.4)), b = glm::normalize(glm::cross(a, Vec3d(0.1, 1.0, 0.3)));
+    auto raster = [&](const Vec3d& q) { return Vec2d(500.0 * q.x / q.z, 500.0 * q.y / q.z); };
+    const double h = 1e-5;
+    const Vec2d d0 = (raster(t + h * a) - raster(t - h * a)) / (2.0 * h);
+    const Vec2d d1 = (raster(t + h * b) - raster(t - h * b)) / (2.0 * h);
+    const double sigma = 0.1;
+    const Footprint fp = projectSurfaceKernel(t, a, b, sigma, p);
+    EXPECT_NEAR(fp.covariance.xx, sigma * sigma * (d0.x * d0.x + d1.x * d1.x), 1e-4);
+    EXPECT_NEAR(fp.covariance.xy, sigma * sigma * (d0.x * d0.y + d1.x * d1.y), 1e-4);
+    EXPECT_NEAR(fp.covariance.yy, sigma * sigma * (d0.y * d0.y + d1.y * d1.y), 1e-4);
+    EXPECT_NEAR(fp.centre.x, raster(t).x, 1e-9);
+}

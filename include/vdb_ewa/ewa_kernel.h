@@ -75,4 +75,13 @@ struct Footprint
 /// @a covCamera (world units^2) to its screen-space resampling filter (Eq. 31-33).
 Footprint projectKernel(const Vec3d& tCentre, const Mat3d& covCamera, const ProjectionParams& params);
 
+/// Project a surface kernel (Sec. 6.3, 6.4): a 2D Gaussian of std. deviation @a sigma (world)
+/// in the plane through @a tCentre spanned by the orthonormal camera-space tangents
+/// @a tangent0, @a tangent1, the limit of a volume kernel flattened along the normal (Eq. 37).
+/// Screen filter (Eq. 35): covariance sigma^2 M M^T + V^h with M = J S_k, J the screen
+/// Jacobian at the centre; peak |det M| / (2 pi sqrt(det Cov)) per unit surface area
+/// (1/world^2), so that rho = |det M| G_Cov. depthSd is 0.
+Footprint projectSurfaceKernel(const Vec3d& tCentre, const Vec3d& tangent0, const Vec3d& tangent1, double sigma,
+    const ProjectionParams& params);
+
 } // namespace vdb_ewa
