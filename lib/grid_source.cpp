@@ -67,11 +67,6 @@ GridSource makeSource(openvdb::GridBase::ConstPtr base, const std::string& path)
         throw InputError(where + ": grid '" + base->getName() + "' holds " + base->valueType() +
                          " values; vdb_ewa renders scalar float or double grids");
     }
-    if (impl->grid->getGridClass() == openvdb::GRID_LEVEL_SET) {
-        throw InputError(where + ": grid '" + base->getName() +
-                         "' is a level set; vdb_ewa renders fog volumes (level-set surfaces are not "
-                         "supported yet)");
-    }
     impl->name = base->getName();
     impl->path = path;
     impl->derive();

@@ -38,6 +38,8 @@ void RenderSettings::validate() const
     if (!(slab >= 0.05 && slab <= 1.0e4)) fail("--slab must be in [0.05, 10000] voxels");
     if (tileKernelSpacing < 1 || tileKernelSpacing > 64) fail("tile kernel spacing must be in [1, 64] voxels");
     if (!(lodPixels >= 0.0 && lodPixels <= 64.0)) fail("--lod must be in [0, 64] pixels");
+    if (!std::isfinite(isovalue)) fail("--isovalue must be finite");
+    if (!(surfaceTolerance > 0.0 && surfaceTolerance <= 100.0)) fail("surface depth tolerance must be in (0, 100] voxels");
     if (threads < 0) fail("--threads must be >= 0");
 }
 

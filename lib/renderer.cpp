@@ -2,11 +2,15 @@
 /// @brief The pipeline: kernels -> shadow transmittance -> splats -> tiles (docs/architecture.md).
 #include <vdb_ewa/renderer.h>
 
+#include <vdb_ewa/error.h>
+
 #include "detail/grid_source_impl.h"
 #include "detail/kernel_extraction.h"
 #include "detail/reference_integrator.h"
 #include "detail/shadow_transmittance.h"
 #include "detail/splat_projection.h"
+#include "detail/surface_extraction.h"
+#include "detail/surface_rasterizer.h"
 #include "detail/tile_rasterizer.h"
 
 #include <tbb/task_arena.h>
@@ -46,6 +50,33 @@ Renderer::Renderer(const RenderSettings& settings) : mSettings(settings)
     mSettings.validate();
 }
 
+void Renderer::renderLevelSet(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes,
+    Frame& frame, RenderStats& stats) const
+{
+    if (mSettings.method == Method::RayMarch) {
+        throw ValueError("--method raymarch renders fog volumes; level sets are rendered with surface splats");
+    }
+    if (passes.shadow || passes.emission || passes.deep) {
+        throw ValueError("level sets give the beauty, Z and transmittance (shadow, emission and deep passes are volume passes)");
+    }
+    StageTimer timer;
+    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(grid, mSettings.isovalue, mSettings.kernelSigma);
+    stats.kernelSeconds = timer.lap();
+    detail::SurfaceStats surfaceStats;
+    frame = detail::rasterizeSurfaces(surfaces, camera, mSettings, grid.voxelLength, passes, surfaceStats);
+    stats.rasterSeconds = timer.lap();
+    stats.activeVoxels = surfaces.activeVoxels;
+    stats.kernels = surfaces.kernels.size();
+    stats.kernelsCulled = surfaceStats.culled;
+    stats.splats = surfaceStats.splats;
+    stats.splatTilePairs = surfaceStats.splatTilePairs;
+    if (surfaces.kernels.empty()) {
+        std::ostringstream w;
+        w << "no voxel lies next to the iso-surface " << mSettings.isovalue << ": the image is empty";
+        stats.warnings.push_back(w.str());
+    }
+}
+
 Image Renderer::render(const GridSource& grid, const Camera& camera, RenderStats* statsOut) const
 {
     return renderFrame(grid, camera, PassRequest{}, statsOut).beauty;
@@ -58,6 +89,10 @@ Frame Renderer::renderFrame(const GridSource& grid, const Camera& camera, const 
     Frame frame;
     const GridSource::Impl& g = grid.impl();
     auto run = [&] {
+        if (grid.isLevelSet()) {
+            renderLevelSet(g, camera, passes, frame, stats);
+            return;
+        }
         if (mSettings.method == Method::RayMarch) {
             frame = detail::rayMarchReference(g, camera, mSettings, passes, stats);
             return;

@@ -34,6 +34,8 @@ const Choices<ExpEvaluation> kExpEvaluations = {
     {"incremental", ExpEvaluation::Incremental}, {"exact", ExpEvaluation::Exact}, {"table", ExpEvaluation::Table}};
 const Choices<bool> kOnOff = {{"on", true}, {"off", false}};
 const Choices<bool> kPrecisions = {{"double", true}, {"float", false}}; // doublePrecision
+const Choices<SurfaceShader> kShaders = {{"diffuse", SurfaceShader::Diffuse}, {"matte", SurfaceShader::Matte},
+    {"normal", SurfaceShader::Normal}, {"position", SurfaceShader::Position}};
 
 class RenderCommand : public Command
 {
@@ -92,6 +94,14 @@ public:
         mApp->add_option("--precision", mPrecision, "world-to-camera transform and covariances in double or float (default: double)");
         mApp->add_option("--tile-spacing", mTileSpacing, "largest kernel spacing in voxels for active tiles, 1 to voxelise them (default: 4)");
         mApp->add_option("--lod", mLod, "level of detail: blocks of 2, 4 or 8 voxels a side become one kernel where the block projects to at most this many pixels; 0 = off (default: " + fmt(rs.lodPixels) + ")");
+        // Level sets (vdb_render's level-set options).
+        mApp->add_option("--isovalue", mIsovalue, "level sets: iso-surface to render, in world units (default: " + fmt(rs.isovalue) + ")");
+        mApp->add_option("--shader", mShader,
+            "level sets: diffuse (|N.ray|, a light at the camera), matte (white), normal ((N+1)/2) or position "
+            "(world position in the active bounding box) (default: diffuse)");
+        mApp->add_option("--samples", mSamples,
+            "level sets: vdb_render's rays per pixel; accepted for compatibility, the EWA filter anti-aliases "
+            "without extra samples (default: 1)");
         mApp->add_option("--threads,--cpus", mThreads, "worker threads, 0 = all cores (default: 0)");
         mOutputOptions.add(mApp);
         mApp->add_flag("-v,--verbose", mVerbose, "print the resolved settings, counts and stage timings");
@@ -193,6 +203,9 @@ private:
         if (!mPrecision.empty()) rs.doublePrecision = parseChoice("precision", mPrecision, kPrecisions);
         if (mSlab) rs.slab = *mSlab;
         if (mLod) rs.lodPixels = *mLod;
+        if (mIsovalue) rs.isovalue = *mIsovalue;
+        if (!mShader.empty()) rs.shader = parseChoice("shader", mShader, kShaders);
+        if (mSamples && *mSamples < 1) throw ValueError("--samples must be >= 1");
         rs.threads = mThreads;
     }
 
@@ -217,6 +230,10 @@ private:
             {"shadowstep", fmt(rs.shadowStep)}, {"shadow-res", std::to_string(rs.shadowResolution)}};
         Attributes method{{"method", choiceName(rs.method, kMethods)}};
         if (rs.method == Method::RayMarch) method.emplace_back("step", fmt(rs.step));
+        if (grid.isLevelSet()) {
+            method.emplace_back("isovalue", fmt(rs.isovalue));
+            method.emplace_back("shader", choiceName(rs.shader, kShaders));
+        }
         for (const auto& [k, v] : Attributes{{"kernel-sigma", fmt(rs.kernelSigma)}, {"lowpass", fmt(rs.lowpass)},
                  {"aa", choiceName(rs.antiAliasing, kAntiAliasing)}, {"cutoff-radius", fmt(rs.cutoffRadius)},
                  {"renormalize", choiceName(rs.renormalize, kOnOff)}, {"exp", choiceName(rs.expEvaluation, kExpEvaluations)},
@@ -259,7 +276,9 @@ private:
     CLI::App* mApp = nullptr;
     std::string mInput, mOutput, mName, mRes, mTranslate, mRotate, mLookAt, mUp, mCamera;
     std::string mAbsorb, mScatter, mEmission, mLight, mAa, mMethod, mQuality, mExp, mRenormalize, mPrecision;
-    std::optional<int> mTileSpacing, mShadowRes;
+    std::optional<int> mTileSpacing, mShadowRes, mSamples;
+    std::optional<double> mIsovalue;
+    std::string mShader;
     std::optional<double> mFov, mFocal, mAperture, mFrame, mNear, mFar, mGain, mCutoff, mShadowStep, mStep, mLod;
     std::optional<double> mKernelSigma, mLowpass, mCutoffRadius, mSlab;
     int mThreads = 0;

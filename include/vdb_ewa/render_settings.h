@@ -28,6 +28,15 @@ enum class ExpEvaluation
 /// Quality presets: named bundles of the speed/accuracy knobs (docs/performance.md).
 enum class Quality { Draft, Default, High };
 
+/// Level-set shaders, vdb_render's (OpenVDB tools/RayTracer.h), white material.
+enum class SurfaceShader
+{
+    Diffuse,  ///< |N . ray direction|: a light at the camera
+    Matte,    ///< constant white
+    Normal,   ///< (N + 1) / 2, world-space normal
+    Position  ///< (P - bbox min) / bbox size, the active voxels' world bounding box
+};
+
 /// How the image is formed.
 enum class Method
 {
@@ -63,6 +72,11 @@ struct RenderSettings
     int tileKernelSpacing = 4;  ///< largest kernel spacing (voxels) used to model active tiles
     double lodPixels = 2.0;     ///< level of detail: merge blocks of 2^L voxels into one kernel where
                                 ///< the block spacing projects to at most this many pixels; 0 = off
+
+    // --- Surfaces (level-set grids; docs/equations.md#surface-kernels) ---
+    double isovalue = 0.0;      ///< iso-surface of a level set, world units (vdb_render -isovalue)
+    SurfaceShader shader = SurfaceShader::Diffuse;
+    double surfaceTolerance = 4.0; ///< z-buffer depth tolerance in voxel lengths (Sec. 7.2)
 
     // --- Execution ---
     int threads = 0;            ///< worker threads, 0 = all cores (a tbb::task_arena, never global)

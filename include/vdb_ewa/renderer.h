@@ -45,7 +45,8 @@ public:
 
     const RenderSettings& settings() const { return mSettings; }
 
-    /// Render @a grid through @a camera. Thread-safe: a Renderer holds no mutable state.
+    /// Render @a grid through @a camera: a fog volume with EWA volume splatting, a level set as
+    /// its iso-surface with surface splats (settings.isovalue, settings.shader). Thread-safe: a Renderer holds no mutable state.
     /// The result does not depend on the thread count (bit-identical).
     Image render(const GridSource& grid, const Camera& camera, RenderStats* stats = nullptr) const;
 
@@ -55,6 +56,10 @@ public:
         RenderStats* stats = nullptr) const;
 
 private:
+    /// Level sets: flattened surface kernels (Sec. 6.3, 6.4) and a z-buffer (Sec. 7.2).
+    void renderLevelSet(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes, Frame& frame,
+        RenderStats& stats) const;
+
     RenderSettings mSettings;
 };
 

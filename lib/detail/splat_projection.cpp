@@ -16,20 +16,6 @@ namespace {
 
 constexpr double kDepthTruncation = 3.0; // kernels end at +-3 sd along the ray (99.73 %)
 
-ProjectionParams projectionParams(const Camera& camera, const RenderSettings& settings)
-{
-    ProjectionParams p;
-    p.perspective = camera.projection() == Projection::Perspective;
-    p.focalPixels = camera.focalPixels();
-    p.principalPoint = camera.principalPoint();
-    p.maxTanX = 1.3 * 0.5 * camera.width() / camera.focalPixels();
-    p.maxTanY = 1.3 * 0.5 * camera.height() / camera.focalPixels();
-    p.antiAliasing = settings.antiAliasing;
-    p.lowpass = settings.lowpass;
-    p.cutoffRadius = settings.cutoffRadius;
-    p.renormalize = settings.renormalize;
-    return p;
-}
 
 /// --precision float: the world -> camera transform in single precision, as a float
 /// pipeline would do it (world positions and the eye rounded to float before subtracting).
@@ -47,6 +33,36 @@ struct DepthExtent
 };
 
 } // namespace
+
+ProjectionParams projectionParams(const Camera& camera, const RenderSettings& settings)
+{
+    ProjectionParams p;
+    p.perspective = camera.projection() == Projection::Perspective;
+    p.focalPixels = camera.focalPixels();
+    p.principalPoint = camera.principalPoint();
+    p.maxTanX = 1.3 * 0.5 * camera.width() / camera.focalPixels();
+    p.maxTanY = 1.3 * 0.5 * camera.height() / camera.focalPixels();
+    p.antiAliasing = settings.antiAliasing;
+    p.lowpass = settings.lowpass;
+    p.cutoffRadius = settings.cutoffRadius;
+    p.renormalize = settings.renormalize;
+    return p;
+}
+
+bool pixelBox(const Footprint& fp, int width, int height, int& x0, int& y0, int& x1, int& y1)
+{
+    // Pixels whose centre (i + 0.5) lies within the cut-off box.
+    const double bx0 = std::ceil(fp.centre.x - fp.halfExtent.x - 0.5);
+    const double bx1 = std::floor(fp.centre.x + fp.halfExtent.x - 0.5);
+    const double by0 = std::ceil(fp.centre.y - fp.halfExtent.y - 0.5);
+    const double by1 = std::floor(fp.centre.y + fp.halfExtent.y - 0.5);
+    if (bx1 < 0.0 || by1 < 0.0 || bx0 > width - 1 || by0 > height - 1 || bx0 > bx1 || by0 > by1) return false;
+    x0 = int(std::max(bx0, 0.0));
+    x1 = int(std::min(bx1, double(width - 1)));
+    y0 = int(std::max(by0, 0.0));
+    y1 = int(std::min(by1, double(height - 1)));
+    return true;
+}
 
 SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
     const std::vector<Rgb>& shadows, const Camera& camera, const RenderSettings& settings,
@@ -115,16 +131,7 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
                 flags[i] = std::uint8_t((fp.clampedNear ? 2 : 0) | (fp.clampedGrazing ? 4 : 0));
 
                 Splat& sp = splats[i];
-                // Pixels whose centre (i + 0.5) lies within the cut-off box.
-                const double bx0 = std::ceil(fp.centre.x - fp.halfExtent.x - 0.5);
-                const double bx1 = std::floor(fp.centre.x + fp.halfExtent.x - 0.5);
-                const double by0 = std::ceil(fp.centre.y - fp.halfExtent.y - 0.5);
-                const double by1 = std::floor(fp.centre.y + fp.halfExtent.y - 0.5);
-                if (bx1 < 0.0 || by1 < 0.0 || bx0 > width - 1 || by0 > height - 1 || bx0 > bx1 || by0 > by1) continue;
-                sp.x0 = int(std::max(bx0, 0.0));
-                sp.x1 = int(std::min(bx1, double(width - 1)));
-                sp.y0 = int(std::max(by0, 0.0));
-                sp.y1 = int(std::min(by1, double(height - 1)));
+                if (!pixelBox(fp, width, height, sp.x0, sp.y0, sp.x1, sp.y1)) continue;
 
                 // Near/far planes clip the kernel's depth integral (perspective: the plane depth
                 // converted to distance along the ray through the centre).

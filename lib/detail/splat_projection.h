@@ -6,6 +6,7 @@
 #include "shadow_transmittance.h"
 
 #include <vdb_ewa/camera.h>
+#include <vdb_ewa/ewa_kernel.h>
 #include <vdb_ewa/frame.h>
 #include <vdb_ewa/slab_share.h>
 
@@ -51,6 +52,13 @@ struct SplatSet
 constexpr int kMaxSlabSpan = 1024;
 /// The slab thickness is raised so that no kernel spans more than this many slabs.
 constexpr int kSlabSpanTarget = 256;
+
+/// The footprint parameters of @a camera and @a settings (the frustum-edge clamp at 1.3x).
+ProjectionParams projectionParams(const Camera& camera, const RenderSettings& settings);
+
+/// The inclusive box of pixels whose centres lie in @a fp's cut-off box, clipped to the image;
+/// false if empty.
+bool pixelBox(const Footprint& fp, int width, int height, int& x0, int& y0, int& x1, int& y1);
 
 /// Project every kernel through @a camera. One task per block of kernels.
 /// @a passes: the shadow and emission passes add their source terms to SplatSet::passSources.

@@ -1,6 +1,8 @@
 /// @file tile_rasterizer.cpp
 #include "tile_rasterizer.h"
 
+#include "tile_bins.h"
+
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -10,38 +12,6 @@
 namespace vdb_ewa {
 namespace detail {
 namespace {
-
-constexpr int kTilePixels = kTileSize * kTileSize;
-
-/// Screen tiles and the splats that overlap each (indices into SplatSet::splats).
-struct TileBins
-{
-    int tilesX = 0, tilesY = 0;
-    std::vector<std::uint64_t> offsets; ///< tilesX * tilesY + 1
-    std::vector<std::uint32_t> indices;
-};
-
-TileBins binSplats(const std::vector<Splat>& splats, int width, int height)
-{
-    TileBins bins;
-    bins.tilesX = (width + kTileSize - 1) / kTileSize;
-    bins.tilesY = (height + kTileSize - 1) / kTileSize;
-    const std::size_t tiles = std::size_t(bins.tilesX) * bins.tilesY;
-    bins.offsets.assign(tiles + 1, 0);
-    for (const Splat& s : splats) {
-        for (int ty = s.y0 / kTileSize; ty <= s.y1 / kTileSize; ++ty)
-            for (int tx = s.x0 / kTileSize; tx <= s.x1 / kTileSize; ++tx) ++bins.offsets[std::size_t(ty) * bins.tilesX + tx + 1];
-    }
-    for (std::size_t t = 0; t < tiles; ++t) bins.offsets[t + 1] += bins.offsets[t];
-    bins.indices.resize(bins.offsets.back());
-    std::vector<std::uint64_t> cursor(bins.offsets.begin(), bins.offsets.end() - 1);
-    for (std::uint32_t i = 0; i < splats.size(); ++i) {
-        const Splat& s = splats[i];
-        for (int ty = s.y0 / kTileSize; ty <= s.y1 / kTileSize; ++ty)
-            for (int tx = s.x0 / kTileSize; tx <= s.x1 / kTileSize; ++tx) bins.indices[cursor[std::size_t(ty) * bins.tilesX + tx]++] = i;
-    }
-    return bins;
-}
 
 /// exp(-r/2) for r in [0, rMax] in a 1D table, linearly interpolated (Sec. 7.1).
 class ExpTable

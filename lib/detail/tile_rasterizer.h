@@ -4,13 +4,12 @@
 #pragma once
 
 #include "splat_projection.h"
+#include "tile_bins.h"
 
 #include <vdb_ewa/frame.h>
 
 namespace vdb_ewa {
 namespace detail {
-
-constexpr int kTileSize = 16;
 
 struct RasterStats
 {

@@ -1,0 +1,39 @@
+/// @file surface_extraction.h
+/// @brief Level-set voxels next to the iso-surface -> flattened (surface) kernels
+///        (Zwicker et al. 2002, Sec. 6.3, 6.4; docs/equations.md#surface-kernels).
+#pragma once
+
+#include "grid_source_impl.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace vdb_ewa {
+namespace detail {
+
+/// A 2D Gaussian in the tangent plane of the iso-surface (the limit of Eq. 37).
+struct SurfaceKernel
+{
+    Vec3d pWorld;   ///< centre on the iso-surface (a Newton step from the voxel centre)
+    Vec3d normal;   ///< unit world normal, the gradient direction (outwards for level sets)
+    double area;    ///< surface area the kernel stands for, world^2 (its weight)
+};
+
+struct SurfaceSet
+{
+    std::vector<SurfaceKernel> kernels; ///< in tree order (deterministic)
+    double sigma = 0;                   ///< tangential std. deviation, world units
+    Vec3d boundsMin{0.0}, boundsMax{0.0}; ///< world box of the active voxels (position shader)
+    std::uint64_t activeVoxels = 0;
+};
+
+/// One kernel for every active voxel whose projection onto the surface value == @a isovalue
+/// (x - (f(x) - iso) grad / |grad|^2, central differences) lies within one voxel of its
+/// centre along each index axis; its area is the inverse of the kernels' density around it
+/// on the surface, so that the kernels sum to one over the surface; tangential sigma =
+/// @a kernelSigma voxel lengths. Anisotropic voxels use the voxel length cbrt|det A|. Values
+/// are taken as world distances (level sets); NaN values are skipped.
+SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, double isovalue, double kernelSigma);
+
+} // namespace detail
+} // namespace vdb_ewa
