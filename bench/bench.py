@@ -11,6 +11,8 @@
   bench/bench.py targets --cache DIR [--scene smoke] [--res 1920x1080] [--repeat 5]
                                                          issue 3's targets: vdb_render's defaults and
                                                          the presets in interleaved rounds
+  bench/bench.py surfaces [--res 1920x1080] [--shader diffuse] [--repeat 3]
+                                                         level sets: surface splats against vdb_render
   bench/bench.py output [--scene smoke] [--res 1920x1080] [--repeat 3]
                                                          issue 4's output stage: EXR pixel types,
                                                          compressions, passes and deep files, with
@@ -297,6 +299,33 @@ def cmd_output(args):
         print(f"| {name} | {t:.2f} | {base / t:.1f}x | {w} | {size} |", flush=True)
 
 
+LEVEL_SETS = [
+    ("cube_levelset", f"{ASSETS}/cube_levelset.vdb", "-translate 10,12,18 -lookat 0,0,0"),
+    ("bunny_levelset", f"{ASSETS}/bunny_levelset.vdb", "-translate 0,0,4.859 -lookat 0,0,0"),
+]
+
+
+def cmd_surfaces(args):
+    """Level sets: vdb_ewa's surface splats against vdb_render's ray tracer (same shader and
+    camera), interleaved; medians, ratios and vdb_ewa's stage timings."""
+    tmp = tempfile.mkdtemp(prefix="vdb_ewa_surfaces_")
+    print(f"# level sets, {args.res}, -shader {args.shader}: median of {args.repeat} interleaved rounds, {os.cpu_count()} cores")
+    print("| level set | vdb_render (s) | vdb_ewa (s) | speed-up | kernels (s) | rasterise (s) | write (s) |")
+    print("|---|---|---|---|---|---|---|")
+    for label, path, cam in LEVEL_SETS:
+        common = ["-res", args.res, "-shader", args.shader, *cam.split()]
+        vr, ours, stage = [], [], []
+        for _ in range(args.repeat):
+            vr.append(run(["vdb_render", path, os.path.join(tmp, "v.exr"), *common])[0])
+            dt, out = run([EWA, "render", path, os.path.join(tmp, "o.exr"), *common, "-v"])
+            ours.append(dt)
+            stage.append(stages(out))
+        a, b = statistics.median(vr), statistics.median(ours)
+        st = stage[ours.index(b)] if b in ours else stage[0]
+        print(f"| {label} | {a:.2f} | {b:.2f} | {a / b:.2f}x | {st.get('kernels', nan):.2f} | "
+              f"{st.get('rasterise', nan):.2f} | {st.get('write', nan):.2f} |", flush=True)
+
+
 def plot(rows, path):
     try:
         import matplotlib
@@ -360,12 +389,16 @@ def main():
     so.add_argument("--scene", default="smoke")
     so.add_argument("--res", default="1920x1080")
     so.add_argument("--repeat", type=int, default=3)
+    sv = sub.add_parser("surfaces")
+    sv.add_argument("--res", default="1920x1080")
+    sv.add_argument("--shader", default="diffuse")
+    sv.add_argument("--repeat", type=int, default=3)
     sp2 = sub.add_parser("plot")
     sp2.add_argument("table", help="saved output of a tradeoff run")
     sp2.add_argument("--plot", required=True)
     a = ap.parse_args()
     {"speed": cmd_speed, "sigma": cmd_sigma, "tradeoff": cmd_tradeoff, "targets": cmd_targets,
-     "output": cmd_output, "plot": cmd_plot}[a.cmd](a)
+     "output": cmd_output, "surfaces": cmd_surfaces, "plot": cmd_plot}[a.cmd](a)
 
 
 if __name__ == "__main__":

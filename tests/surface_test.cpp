@@ -150,7 +150,31 @@ TEST(Surface, SilhouettesMatchVdbRender)
         Image mask = readExr(theirs);
         for (std::size_t i = 0; i < mask.rgba.size(); i += 4) mask.rgba[i + 3] = mask.rgba[i];
         const double iou = alphaMaskIoU(readExr(ours), mask, 0.5f);
-        std::printf("silhouette IoU %s: %.4f\n", c.name.c_str(), iou);
         EXPECT_GE(iou, 0.98) << c.name;
+
+        // Normal shader away from silhouettes: pixels whose 5x5 neighbourhood is covered in both.
+        const std::string oursN = dir.file(c.name + "_ewa_n.exr"), theirsN = dir.file(c.name + "_vr_n.exr");
+        const std::string argsN = " -res 320x240 -shader normal " + c.camera;
+        ASSERT_EQ(std::system((std::string(VDB_EWA_CLI_PATH) + " render " + c.path + " " + oursN + argsN + " --exr-type float").c_str()), 0);
+        ASSERT_EQ(std::system((vdbRender + " " + c.path + " " + theirsN + argsN).c_str()), 0);
+        const Image a = readExr(oursN), b = readExr(theirsN), ma = readExr(ours);
+        std::vector<double> errors;
+        for (int y = 2; y < 238; ++y)
+            for (int x = 2; x < 318; ++x) {
+                bool inside = true;
+                for (int dy = -2; dy <= 2 && inside; ++dy)
+                    for (int dx = -2; dx <= 2 && inside; ++dx) {
+                        inside = ma.pixel(x + dx, y + dy)[3] > 0.999f && mask.pixel(x + dx, y + dy)[3] > 0.5f;
+                    }
+                if (!inside) continue;
+                for (int ch = 0; ch < 3; ++ch) errors.push_back(std::abs(a.pixel(x, y)[ch] - b.pixel(x, y)[ch]));
+            }
+        ASSERT_GT(errors.size(), 1000u) << c.name;
+        std::sort(errors.begin(), errors.end());
+        const double median = errors[errors.size() / 2], p95 = errors[errors.size() * 95 / 100];
+        std::printf("%s: silhouette IoU %.4f; normal shader |difference| median %.4f, 95th percentile %.4f\n",
+            c.name.c_str(), iou, median, p95);
+        EXPECT_LT(median, 0.02) << c.name;
+        EXPECT_LT(p95, 0.08) << c.name;
     }
 }
