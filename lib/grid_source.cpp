@@ -95,30 +95,38 @@ void GridSource::Impl::derive()
     }
 }
 
-GridSource GridSource::open(const std::string& path, const std::string& gridName)
+namespace {
+
+/// Check that @a path is a readable file. @throw IoError
+void checkReadable(const std::string& path)
 {
-    initializeOpenVDB();
     std::error_code ec;
     if (!std::filesystem::exists(path, ec)) throw IoError(path + ": no such file");
     if (std::filesystem::is_directory(path, ec)) throw IoError(path + ": is a directory, not a .vdb file");
     if (!std::ifstream(path, std::ios::binary)) throw IoError(path + ": cannot be read (permission denied?)");
+}
 
-    openvdb::GridBase::Ptr base;
+/// Read grid @a name of @a path, or when @a name is empty the first grid whose value type
+/// @a accepts (@a what names those for the error). @throw IoError, InputError
+openvdb::GridBase::Ptr readGrid(const std::string& path, std::string name, bool (*accepts)(const std::string&),
+    const std::string& what)
+{
+    initializeOpenVDB();
+    checkReadable(path);
     try {
         openvdb::io::File file(path);
         file.open(/*delayLoad=*/false); // read everything now, so truncation is caught here
-        std::string name = gridName;
         if (name.empty()) {
             const openvdb::GridPtrVecPtr metas = file.readAllGridMetadata();
             for (const auto& meta : *metas) {
-                if (isScalarFloatType(meta->valueType())) {
+                if (accepts(meta->valueType())) {
                     name = meta->getName();
                     break;
                 }
             }
             if (name.empty()) {
                 file.close();
-                throw InputError(path + ": no scalar floating-point grid in the file");
+                throw InputError(path + ": no " + what + " grid in the file");
             }
         } else if (!file.hasGrid(name)) {
             std::string names;
@@ -129,14 +137,47 @@ GridSource GridSource::open(const std::string& path, const std::string& gridName
             throw InputError(path + ": no grid named '" + name + "' (grids: " +
                              (names.empty() ? "none" : names) + ")");
         }
-        base = file.readGrid(name);
+        openvdb::GridBase::Ptr base = file.readGrid(name);
         file.close();
+        return base;
     } catch (const Error&) {
         throw;
     } catch (const std::exception& e) {
         throw IoError(path + ": cannot read VDB file (" + std::string(e.what()) + ")");
     }
-    return makeSource(base, path);
+}
+
+GridSource attachColor(const GridSource::Impl& impl, const openvdb::GridBase::ConstPtr& grid, const std::string& where)
+{
+    if (!grid) throw InputError(where + ": null colour grid");
+    auto color = openvdb::GridBase::constGrid<openvdb::Vec3SGrid>(grid);
+    if (!color) {
+        throw InputError(where + ": colour grid '" + grid->getName() + "' holds " + grid->valueType() +
+                         " values; --color needs a vec3s grid");
+    }
+    auto copy = std::make_shared<GridSource::Impl>(impl);
+    copy->color = color;
+    return GridSource(copy);
+}
+
+} // namespace
+
+GridSource GridSource::open(const std::string& path, const std::string& gridName)
+{
+    return makeSource(readGrid(path, gridName, isScalarFloatType, "scalar floating-point"), path);
+}
+
+GridSource GridSource::withColorGrid(const std::string& colorName) const
+{
+    if (mImpl->path.empty()) throw InputError("host grid: withColorGrid needs a file; use vdb_ewa::withColorGrid with the host's grid");
+    return attachColor(*mImpl, readGrid(mImpl->path, colorName, [](const std::string&) { return false; }, "colour"), mImpl->path);
+}
+
+bool GridSource::hasColorGrid() const { return bool(mImpl->color); }
+
+GridSource withColorGrid(const GridSource& source, openvdb::GridBase::ConstPtr colorGrid)
+{
+    return attachColor(source.impl(), colorGrid, "host grid");
 }
 
 GridSource gridSourceFromOpenVDB(openvdb::GridBase::ConstPtr grid)

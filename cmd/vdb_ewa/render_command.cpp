@@ -99,6 +99,7 @@ public:
         mApp->add_option("--shader", mShader,
             "level sets: diffuse (|N.ray|, a light at the camera), matte (white), normal ((N+1)/2) or position "
             "(world position in the active bounding box) (default: diffuse)");
+        mApp->add_option("--color", mColor, "level sets: name of a vec3s grid in the input file with material colours, multiplied into the shader");
         mApp->add_option("--samples", mSamples,
             "level sets: vdb_render's rays per pixel; accepted for compatibility, the EWA filter anti-aliases "
             "without extra samples (default: 1)");
@@ -155,7 +156,13 @@ private:
         return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
     }
 
-    GridSource openInput() const { return GridSource::open(mInput, mName); }
+    GridSource openInput() const
+    {
+        GridSource grid = GridSource::open(mInput, mName);
+        if (mColor.empty()) return grid;
+        if (!grid.isLevelSet()) throw ValueError("--color colours level-set surfaces; '" + grid.name() + "' is a fog volume");
+        return grid.withColorGrid(mColor);
+    }
 
     void resolve(CameraSettings& cam, RenderSettings& rs) const
     {
@@ -233,6 +240,7 @@ private:
         if (grid.isLevelSet()) {
             method.emplace_back("isovalue", fmt(rs.isovalue));
             method.emplace_back("shader", choiceName(rs.shader, kShaders));
+            if (grid.hasColorGrid()) method.emplace_back("color", mColor);
         }
         for (const auto& [k, v] : Attributes{{"kernel-sigma", fmt(rs.kernelSigma)}, {"lowpass", fmt(rs.lowpass)},
                  {"aa", choiceName(rs.antiAliasing, kAntiAliasing)}, {"cutoff-radius", fmt(rs.cutoffRadius)},
@@ -278,7 +286,7 @@ private:
     std::string mAbsorb, mScatter, mEmission, mLight, mAa, mMethod, mQuality, mExp, mRenormalize, mPrecision;
     std::optional<int> mTileSpacing, mShadowRes, mSamples;
     std::optional<double> mIsovalue;
-    std::string mShader;
+    std::string mShader, mColor;
     std::optional<double> mFov, mFocal, mAperture, mFrame, mNear, mFar, mGain, mCutoff, mShadowStep, mStep, mLod;
     std::optional<double> mKernelSigma, mLowpass, mCutoffRadius, mSlab;
     int mThreads = 0;

@@ -21,6 +21,13 @@ public:
     /// @throw InputError no such grid, or a grid that is not a scalar float/double grid
     static GridSource open(const std::string& path, const std::string& gridName = "");
 
+    /// The same grid with material colours from the vec3s grid @a colorName of its file
+    /// (vdb_render's -color): the level-set shaders multiply by it, sampled trilinearly at
+    /// each surface kernel. @throw IoError, InputError (no such grid, not a vec3s grid, or a
+    /// host grid without a file: use withColorGrid in openvdb_grid.h).
+    GridSource withColorGrid(const std::string& colorName) const;
+    bool hasColorGrid() const;
+
     const std::string& name() const;
     /// File the grid came from, empty for a host grid.
     const std::string& path() const;

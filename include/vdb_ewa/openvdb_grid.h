@@ -14,4 +14,8 @@ namespace vdb_ewa {
 /// float). @throw InputError for a null grid or another value type.
 VDB_EWA_API GridSource gridSourceFromOpenVDB(openvdb::GridBase::ConstPtr grid);
 
+/// @a source with material colours from a host's vec3s grid (see GridSource::withColorGrid).
+/// @throw InputError for a null grid or another value type.
+VDB_EWA_API GridSource withColorGrid(const GridSource& source, openvdb::GridBase::ConstPtr colorGrid);
+
 } // namespace vdb_ewa

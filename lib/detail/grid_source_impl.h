@@ -22,6 +22,8 @@ struct GridSource::Impl
     std::uint64_t activeVoxels = 0;  ///< active voxels in leaf nodes
     std::uint64_t activeTiles = 0;
     Vec3d worldCentre{0.0};
+    /// Material colours for level-set shaders (vdb_render -color), or null.
+    openvdb::Vec3SGrid::ConstPtr color;
 
     /// Fill the derived fields from @a grid.
     void derive();

@@ -17,6 +17,7 @@ struct SurfaceKernel
     Vec3d pWorld;   ///< centre on the iso-surface (a Newton step from the voxel centre)
     Vec3d normal;   ///< unit world normal, the gradient direction (outwards for level sets)
     double area;    ///< surface area the kernel stands for, world^2 (its weight)
+    Vec3d albedo{1.0}; ///< material colour: the colour grid at pWorld (trilinear), else white
 };
 
 struct SurfaceSet

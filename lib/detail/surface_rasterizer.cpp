@@ -35,7 +35,7 @@ struct SurfaceSplat
     int x0, y0, x1, y1;
 };
 
-/// vdb_render's shaders (RayTracer.h) with a white material.
+/// vdb_render's shaders (RayTracer.h) with a white material (multiplied by the kernel's albedo).
 Vec3d shade(SurfaceShader shader, const Vec3d& normal, const Vec3d& rayDir, const Vec3d& p, const SurfaceSet& set)
 {
     switch (shader) {
@@ -89,7 +89,7 @@ std::vector<SurfaceSplat> projectSurfaceSplats(const SurfaceSet& set, const Came
             s.cutoff = float(params.cutoffRadius * params.cutoffRadius);
             s.weight = float(k.area * fp.peak);
             const Vec3d rayDir = perspective ? glm::normalize(k.pWorld - camera.eye()) : forward;
-            const Vec3d c = shade(settings.shader, k.normal, rayDir, k.pWorld, set);
+            const Vec3d c = k.albedo * shade(settings.shader, k.normal, rayDir, k.pWorld, set);
             for (int ch = 0; ch < 3; ++ch) s.colour[ch] = float(c[ch]);
             s.centre = t;
             s.planeNormal = normal;
