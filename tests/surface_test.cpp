@@ -244,3 +244,35 @@ TEST(Surface, CheckerPlaneAtAGrazingAngleShowsNoMoire)
         writeExr(aliased, std::string(keep) + "/checker_none.exr");
     }
 }
+
+TEST(Surface, ExtremesGiveFiniteImages)
+{
+    // NaN values in the band, the camera inside the sphere, on its surface, a one-voxel level
+    // set, voxels of 2e-5 and 1e4: finite images, no crash.
+    auto sphere = sphereLevelSet(1.0, 0.05);
+    sphere->tree().setValueOn(openvdb::Coord(20, 0, 0), std::numeric_limits<float>::quiet_NaN());
+    const GridSource withNaN = gridSourceFromOpenVDB(sphere);
+    CameraSettings c;
+    c.width = 64;
+    c.height = 48;
+    for (const Vec3d& eye : {Vec3d(0.0, 0.0, 4.0), Vec3d(0.0), Vec3d(0.0, 0.0, 1.0), Vec3d(0.0, 0.0, 1.0001)}) {
+        c.translate = eye;
+        c.lookAt = eye + Vec3d(0.3, 0.1, -1.0);
+        const Image img = Renderer(RenderSettings{}).render(withNaN, Camera(c, Vec3d(0.0)));
+        EXPECT_TRUE(img.allFinite()) << eye.z;
+    }
+    auto single = openvdb::FloatGrid::create(1.0f);
+    single->setGridClass(openvdb::GRID_LEVEL_SET);
+    single->tree().setValueOn(openvdb::Coord(0), -0.5f);
+    c.translate = Vec3d(0.0, 0.0, 5.0);
+    c.lookAt = Vec3d(0.0);
+    EXPECT_TRUE(Renderer(RenderSettings{}).render(gridSourceFromOpenVDB(single), Camera(c, Vec3d(0.0))).allFinite());
+    for (const double h : {2e-5, 1e4}) { // OpenVDB refuses maps with abs(det) < 3e-15
+        auto s = sphereLevelSet(20.0 * h, h);
+        c.translate = Vec3d(0.0, 0.0, 80.0 * h);
+        c.near = 1e-3 * h;
+        const Image img = Renderer(RenderSettings{}).render(gridSourceFromOpenVDB(s), Camera(c, Vec3d(0.0)));
+        EXPECT_TRUE(img.allFinite()) << h;
+        EXPECT_GT(alphaSum(img), 50.0) << h;
+    }
+}
