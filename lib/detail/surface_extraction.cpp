@@ -2,7 +2,6 @@
 #include "surface_extraction.h"
 
 #include <openvdb/tools/Interpolation.h>
-#include <openvdb/tree/LeafManager.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
