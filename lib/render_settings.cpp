@@ -39,6 +39,8 @@ void RenderSettings::validate() const
     if (tileKernelSpacing < 1 || tileKernelSpacing > 64) fail("tile kernel spacing must be in [1, 64] voxels");
     if (!(lodPixels >= 0.0 && lodPixels <= 64.0)) fail("--lod must be in [0, 64] pixels");
     if (!std::isfinite(isovalue)) fail("--isovalue must be finite");
+    if (std::isinf(iso)) fail("--iso must be finite");
+    if (!(isoOpacity >= 0.0 && isoOpacity <= 1.0)) fail("--iso-opacity must be in [0, 1]");
     if (!(surfaceTolerance > 0.0 && surfaceTolerance <= 100.0)) fail("surface depth tolerance must be in (0, 100] voxels");
     if (threads < 0) fail("--threads must be >= 0");
 }

@@ -77,6 +77,25 @@ void Renderer::renderLevelSet(const GridSource::Impl& grid, const Camera& camera
     }
 }
 
+void Renderer::addIsoSurface(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes,
+    detail::SplatSet& splats) const
+{
+    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(grid, mSettings.iso, mSettings.kernelSigma, true);
+    // Shadow transmittance at the surface kernels: the volume's shadow rays from their centres.
+    detail::KernelSet points;
+    const Mat3d indexFromWorld = glm::inverse(grid.indexToWorldLinear);
+    points.kernels.reserve(surfaces.kernels.size());
+    for (const detail::SurfaceKernel& k : surfaces.kernels) {
+        const Vec3d pIndex = grid.linear ? indexFromWorld * (k.pWorld - grid.indexToWorldOffset) : [&] {
+            const openvdb::Vec3d p = grid.grid->transform().worldToIndex(openvdb::Vec3d(k.pWorld.x, k.pWorld.y, k.pWorld.z));
+            return Vec3d(p.x(), p.y(), p.z());
+        }();
+        points.kernels.push_back(detail::Kernel{pIndex, 1.0f, 1.0f});
+    }
+    const std::vector<detail::Rgb> shadows = detail::shadowTransmittance(grid, points, mSettings);
+    detail::appendSurfaceSplats(splats, surfaces, shadows, camera, mSettings, grid.voxelLength, passes);
+}
+
 Image Renderer::render(const GridSource& grid, const Camera& camera, RenderStats* statsOut) const
 {
     return renderFrame(grid, camera, PassRequest{}, statsOut).beauty;
@@ -103,7 +122,8 @@ Frame Renderer::renderFrame(const GridSource& grid, const Camera& camera, const 
         stats.kernelSeconds = timer.lap();
         const std::vector<detail::Rgb> shadows = detail::shadowTransmittance(g, kernels, mSettings);
         stats.shadowSeconds = timer.lap();
-        const detail::SplatSet splats = detail::projectSplats(g, kernels, shadows, camera, mSettings, passes);
+        detail::SplatSet splats = detail::projectSplats(g, kernels, shadows, camera, mSettings, passes);
+        if (!std::isnan(mSettings.iso)) addIsoSurface(g, camera, passes, splats);
         stats.projectSeconds = timer.lap();
         detail::RasterStats raster;
         frame = detail::rasterizeSplats(splats, camera, mSettings, passes, raster);

@@ -140,6 +140,7 @@ TEST_F(Cli, ArgumentAndOutputErrors)
     expectFailure("render " + mGrid + " " + out + " --shader phong", 2, "--shader");
     expectFailure("render " + mGrid + " " + out + " --samples 0", 2, "--samples");
     expectFailure("render " + mGrid + " " + out + " --color Cd", 2, "--color colours level-set surfaces");
+    expectFailure("render " + mGrid + " " + out + " --iso 0.1 --iso-opacity 2", 2, "--iso-opacity");
     expectFailure("render " + mGrid + " " + out + " --bogus 3", 2, "bogus");
     expectFailure("render " + mGrid + " " + mDir.file("out.png"), 2, "unsupported output format");
     expectFailure("render " + mGrid + " " + mDir.file("no/such/dir/out.exr"), 3, "does not exist");
@@ -171,7 +172,7 @@ TEST_F(Cli, HelpDocumentsEveryOptionWithItsDefault)
              "--quality", "--exp", "--renormalize", "--precision", "--tile-spacing", "--shadow-res", "--method",
              "--lod", "--threads", "--verbose", "--emission", "--ocio-config", "--working-space", "--output-space",
              "--preview", "--display", "--view", "--exr-type", "--compression", "--aov", "--deep", "--isovalue",
-             "--shader", "--samples", "--color"}) {
+             "--shader", "--samples", "--color", "--iso", "--iso-opacity"}) {
         EXPECT_NE(r.out.find(opt), std::string::npos) << opt;
     }
     EXPECT_NE(r.out.find("default: 1920x1080"), std::string::npos);

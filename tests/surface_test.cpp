@@ -276,3 +276,71 @@ TEST(Surface, ExtremesGiveFiniteImages)
         EXPECT_GT(alphaSum(img), 50.0) << h;
     }
 }
+
+TEST(Surface, IsoSurfaceInsideAFogVolumeIsOccludingAndTinted)
+{
+    // A fog ball (density 1, radius 1) with --iso 0.5, lit from +x; in front of it (towards the
+    // camera on +z) a plate of density 0.4 (below the iso-value: it stays volume) with coloured
+    // extinction, which the light's shadow rays do not cross; behind it an emitting blob. The
+    // surface must hide the blob, and through the plate its colour must be the plate's
+    // per-channel transmittance times its colour alone, plus the plate's own glow.
+    const double h = 0.05;
+    auto makeScene = [&](bool plate, bool blob) {
+        auto g = openvdb::FloatGrid::create(0.0f);
+        g->setTransform(openvdb::math::Transform::createLinearTransform(h));
+        g->setName("density");
+        auto acc = g->getAccessor();
+        for (int i = -22; i <= 22; ++i)
+            for (int j = -22; j <= 22; ++j)
+                for (int k = -22; k <= 22; ++k) {
+                    if (glm::length(Vec3d(i, j, k) * h) <= 1.0) acc.setValueOn(openvdb::Coord(i, j, k), 1.0f);
+                }
+        if (plate) {
+            for (int i = -30; i <= 30; ++i)
+                for (int j = -30; j <= 30; ++j)
+                    for (int k = 30; k <= 33; ++k) acc.setValueOn(openvdb::Coord(i, j, k), 0.4f); // below --iso
+        }
+        if (blob) {
+            for (int i = -6; i <= 6; ++i)
+                for (int j = -6; j <= 6; ++j)
+                    for (int k = -40; k <= -30; ++k) acc.setValueOn(openvdb::Coord(i, j, k), 1.0f);
+        }
+        return gridSourceFromOpenVDB(g);
+    };
+    const Camera camera(orthoDownZ(0.0, 0.0, 5.0, 3.0, 90), Vec3d(0.0));
+    RenderSettings s;
+    s.absorb = Vec3d(0.3, 0.1, 0.02); // the plate's tint (scatter 0: a pure absorber)
+    s.scatter = Vec3d(0.0);
+    s.emission = Vec3d(0.5, 0.5, 0.5); // makes the blob (and the ball's inside) glow
+    s.lightDir = Vec3d(1.0, 0.0, 0.0);
+    s.lightColor = Vec3d(1.0);
+    s.cutoff = 0.0;
+    s.iso = 0.5;
+    const int x = 60, y = 45; // surface point (0.5, 0, 0.87): lit at 60 degrees
+    const Image alone = Renderer(s).render(makeScene(false, false), camera);
+    const Image withBlob = Renderer(s).render(makeScene(false, true), camera);
+    const Image withPlate = Renderer(s).render(makeScene(true, false), camera);
+    EXPECT_NEAR(alone.pixel(x, y)[3], 1.0, 1e-3) << "the surface is opaque";
+    EXPECT_GT(alone.pixel(x, y)[0], 0.05f) << "and lit";
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(withBlob.pixel(45, 45)[c], alone.pixel(45, 45)[c], 1e-4) << "the blob is hidden";
+    // The plate alone: its per-channel transmittance (the transmittance pass) and its own glow.
+    RenderSettings plateOnly = s;
+    plateOnly.iso = std::numeric_limits<double>::quiet_NaN();
+    auto plateGrid = openvdb::FloatGrid::create(0.0f);
+    plateGrid->setTransform(openvdb::math::Transform::createLinearTransform(h));
+    {
+        auto acc = plateGrid->getAccessor();
+        for (int i = -30; i <= 30; ++i)
+            for (int j = -30; j <= 30; ++j)
+                for (int k = 30; k <= 33; ++k) acc.setValueOn(openvdb::Coord(i, j, k), 0.4f);
+    }
+    PassRequest transmittance;
+    transmittance.transmittance = true;
+    const Frame plate = Renderer(plateOnly).renderFrame(gridSourceFromOpenVDB(plateGrid), camera, transmittance);
+    const std::size_t i = std::size_t(y) * 90 + std::size_t(x);
+    for (int c = 0; c < 3; ++c) {
+        const double expected = plate.transmittance[3 * i + c] * alone.pixel(x, y)[c] + plate.beauty.pixel(x, y)[c];
+        EXPECT_NEAR(withPlate.pixel(x, y)[c], expected, 0.02 * expected + 1e-4) << "channel " << c;
+    }
+    EXPECT_LT(plate.transmittance[3 * i], 0.8 * plate.transmittance[3 * i + 2]) << "the plate tints: red is absorbed most";
+}

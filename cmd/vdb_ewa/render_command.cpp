@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cctype>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <iomanip>
 #include <iostream>
@@ -94,6 +95,11 @@ public:
         mApp->add_option("--precision", mPrecision, "world-to-camera transform and covariances in double or float (default: double)");
         mApp->add_option("--tile-spacing", mTileSpacing, "largest kernel spacing in voxels for active tiles, 1 to voxelise them (default: 4)");
         mApp->add_option("--lod", mLod, "level of detail: blocks of 2, 4 or 8 voxels a side become one kernel where the block projects to at most this many pixels; 0 = off (default: " + fmt(rs.lodPixels) + ")");
+        // Fog volumes with an iso-surface.
+        mApp->add_option("--iso", mIso,
+            "fog volumes: also render the iso-surface density = VALUE with flattened surface kernels, lit by "
+            "--light and composited with the volume (default: off)");
+        mApp->add_option("--iso-opacity", mIsoOpacity, "opacity of the --iso surface, 0..1 (default: 1)");
         // Level sets (vdb_render's level-set options).
         mApp->add_option("--isovalue", mIsovalue, "level sets: iso-surface to render, in world units (default: " + fmt(rs.isovalue) + ")");
         mApp->add_option("--shader", mShader,
@@ -211,6 +217,8 @@ private:
         if (mSlab) rs.slab = *mSlab;
         if (mLod) rs.lodPixels = *mLod;
         if (mIsovalue) rs.isovalue = *mIsovalue;
+        if (mIso) rs.iso = *mIso;
+        if (mIsoOpacity) rs.isoOpacity = *mIsoOpacity;
         if (!mShader.empty()) rs.shader = parseChoice("shader", mShader, kShaders);
         if (mSamples && *mSamples < 1) throw ValueError("--samples must be >= 1");
         rs.threads = mThreads;
@@ -237,6 +245,10 @@ private:
             {"shadowstep", fmt(rs.shadowStep)}, {"shadow-res", std::to_string(rs.shadowResolution)}};
         Attributes method{{"method", choiceName(rs.method, kMethods)}};
         if (rs.method == Method::RayMarch) method.emplace_back("step", fmt(rs.step));
+        if (!grid.isLevelSet() && !std::isnan(rs.iso)) {
+            method.emplace_back("iso", fmt(rs.iso));
+            method.emplace_back("iso-opacity", fmt(rs.isoOpacity));
+        }
         if (grid.isLevelSet()) {
             method.emplace_back("isovalue", fmt(rs.isovalue));
             method.emplace_back("shader", choiceName(rs.shader, kShaders));
@@ -285,7 +297,7 @@ private:
     std::string mInput, mOutput, mName, mRes, mTranslate, mRotate, mLookAt, mUp, mCamera;
     std::string mAbsorb, mScatter, mEmission, mLight, mAa, mMethod, mQuality, mExp, mRenormalize, mPrecision;
     std::optional<int> mTileSpacing, mShadowRes, mSamples;
-    std::optional<double> mIsovalue;
+    std::optional<double> mIsovalue, mIso, mIsoOpacity;
     std::string mShader, mColor;
     std::optional<double> mFov, mFocal, mAperture, mFrame, mNear, mFar, mGain, mCutoff, mShadowStep, mStep, mLod;
     std::optional<double> mKernelSigma, mLowpass, mCutoffRadius, mSlab;

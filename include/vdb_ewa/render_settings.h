@@ -7,6 +7,8 @@
 
 #include "types.h"
 
+#include <limits>
+
 namespace vdb_ewa {
 
 /// Screen-space anti-aliasing of the footprints (Zwicker et al. 2002, Sec. 5, Eq. 33).
@@ -77,6 +79,10 @@ struct RenderSettings
     double isovalue = 0.0;      ///< iso-surface of a level set, world units (vdb_render -isovalue)
     SurfaceShader shader = SurfaceShader::Diffuse;
     double surfaceTolerance = 4.0; ///< z-buffer depth tolerance in voxel lengths (Sec. 7.2)
+    /// Fog volumes: also render the iso-surface density == iso with flattened surface kernels
+    /// composited with the volume's (Sec. 6.4); NaN = off.
+    double iso = std::numeric_limits<double>::quiet_NaN();
+    double isoOpacity = 1.0;    ///< opacity of that surface, in [0, 1]
 
     // --- Execution ---
     int threads = 0;            ///< worker threads, 0 = all cores (a tbb::task_arena, never global)

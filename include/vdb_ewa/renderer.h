@@ -14,6 +14,9 @@
 #include "render_settings.h"
 
 namespace vdb_ewa {
+namespace detail {
+struct SplatSet;
+} // namespace detail
 
 /// What a render read, culled and splatted, and how long each stage took (seconds).
 struct RenderStats
@@ -59,6 +62,10 @@ private:
     /// Level sets: flattened surface kernels (Sec. 6.3, 6.4) and a z-buffer (Sec. 7.2).
     void renderLevelSet(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes, Frame& frame,
         RenderStats& stats) const;
+
+    /// Fog volumes with settings.iso: the iso-surface's kernels join the volume's splats.
+    void addIsoSurface(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes,
+        detail::SplatSet& splats) const;
 
     RenderSettings mSettings;
 };

@@ -1,6 +1,8 @@
 /// @file splat_projection.cpp
 #include "splat_projection.h"
 
+#include "surface_extraction.h"
+
 #include "grid_source_impl.h"
 
 #include <vdb_ewa/ewa_kernel.h>
@@ -216,6 +218,63 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
     }
     out.culled = n - out.splats.size();
     return out;
+}
+
+} // namespace detail
+} // namespace vdb_ewa
+
+namespace vdb_ewa {
+namespace detail {
+
+void appendSurfaceSplats(SplatSet& set, const SurfaceSet& surfaces, const std::vector<Rgb>& shadows,
+    const Camera& camera, const RenderSettings& settings, double voxelLength, const PassRequest& passes)
+{
+    const ProjectionParams params = projectionParams(camera, settings);
+    const bool perspective = params.perspective;
+    const Mat3d R = camera.cameraFromWorld();
+    const Vec3d toLight = glm::normalize(settings.lightDir);
+    const double tauSurface = std::min(20.0, -std::log1p(-std::min(settings.isoOpacity, 1.0)));
+    const double sd = 0.25 * voxelLength; // a flattened kernel: about one slab deep
+    for (std::size_t i = 0; i < surfaces.kernels.size(); ++i) {
+        const SurfaceKernel& k = surfaces.kernels[i];
+        const Vec3d t = camera.cameraFromWorldPoint(k.pWorld);
+        if (perspective && !(t.z > camera.near())) continue;
+        const Vec3d normal = R * k.normal;
+        if (glm::dot(normal, perspective ? t : Vec3d(0, 0, 1)) > 0.0) continue; // back face
+        const Vec3d helper = std::abs(normal.x) < 0.6 ? Vec3d(1, 0, 0) : Vec3d(0, 1, 0);
+        const Vec3d t0 = glm::normalize(glm::cross(normal, helper)), t1 = glm::cross(normal, t0);
+        const Footprint fp = projectSurfaceKernel(t, t0, t1, surfaces.sigma, params);
+        if (!fp.valid) continue;
+        Splat sp{};
+        if (!pixelBox(fp, camera.width(), camera.height(), sp.x0, sp.y0, sp.x1, sp.y1)) continue;
+        const double toRay = perspective ? glm::length(t) / t.z : 1.0;
+        const DepthExtent e{fp.depth, sd, camera.near() * toRay, camera.far() * toRay};
+        std::int64_t first = 0;
+        const std::int64_t span = std::min<std::int64_t>(slabSpan(set.slabs, e.mu, e.sd, kDepthTruncation, e.clipNear, e.clipFar, first), kMaxSlabSpan);
+        if (span <= 0) continue;
+        sp.cx = float(fp.centre.x);
+        sp.cy = float(fp.centre.y);
+        sp.qa = float(fp.conic.xx);
+        sp.qb = float(fp.conic.xy);
+        sp.qc = float(fp.conic.yy);
+        sp.cutoff = float(params.cutoffRadius * params.cutoffRadius);
+        const double tau = tauSurface * k.area * fp.peak;
+        const double lambert = std::max(0.0, glm::dot(k.normal, toLight));
+        for (int c = 0; c < 3; ++c) {
+            sp.tau[c] = float(tau);
+            sp.emission[c] = float(tau * settings.lightColor[c] * lambert * double(shadows[i][c]));
+        }
+        sp.firstSlab = first;
+        sp.slabCount = std::uint32_t(span);
+        sp.shareOffset = set.shares.size();
+        set.shares.resize(set.shares.size() + std::size_t(span));
+        slabShares(set.slabs, e.mu, e.sd, kDepthTruncation, e.clipNear, e.clipFar, first, set.shares.data() + sp.shareOffset, int(span));
+        set.splats.push_back(sp);
+        if (passes.shadow) {
+            for (int c = 0; c < 3; ++c) set.passSources.push_back(float(tau * double(shadows[i][c])));
+        }
+        if (passes.emission) set.passSources.insert(set.passSources.end(), 3, 0.0f);
+    }
 }
 
 } // namespace detail

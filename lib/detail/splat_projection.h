@@ -61,10 +61,19 @@ ProjectionParams projectionParams(const Camera& camera, const RenderSettings& se
 bool pixelBox(const Footprint& fp, int width, int height, int& x0, int& y0, int& x1, int& y1);
 
 /// Project every kernel through @a camera. One task per block of kernels.
+struct SurfaceSet;
+
 /// @a passes: the shadow and emission passes add their source terms to SplatSet::passSources.
 SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
     const std::vector<Rgb>& shadows, const Camera& camera, const RenderSettings& settings,
     const PassRequest& passes = {});
+
+/// Fog volumes with an iso-surface (Sec. 6.4): append @a surfaces to @a set as thin splats of
+/// the slab compositor. Each covers its pixels with optical depth -ln(1 - settings.isoOpacity)
+/// (capped at 20) x area x footprint (the kernels sum to one over the surface), shaded
+/// Lambert from the light, times @a shadows (one per surface kernel); back faces are culled.
+void appendSurfaceSplats(SplatSet& set, const SurfaceSet& surfaces, const std::vector<Rgb>& shadows,
+    const Camera& camera, const RenderSettings& settings, double voxelLength, const PassRequest& passes);
 
 } // namespace detail
 } // namespace vdb_ewa

@@ -58,7 +58,7 @@ void normalizeAreas(std::vector<SurfaceKernel>& kernels, const std::vector<openv
 
 } // namespace
 
-SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, double isovalue, double kernelSigma)
+SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, double isovalue, double kernelSigma, bool outwardDecreasing)
 {
     SurfaceSet out;
     const openvdb::FloatTree& tree = grid.grid->tree();
@@ -76,7 +76,7 @@ SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, double isovalue, 
     tree.getNodes(leaves);
     std::vector<std::vector<SurfaceKernel>> perLeaf(leaves.size());
     std::vector<std::vector<openvdb::Coord>> perLeafVoxels(leaves.size());
-    const double reject = 2.0 * grid.voxelLength; // |f - iso| beyond this cannot land in the cell
+    const double reject = 2.0 * grid.voxelLength; // |f - iso| / |grad| beyond this cannot land in reach
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size()), [&](const tbb::blocked_range<std::size_t>& r) {
         openvdb::tree::ValueAccessor<const openvdb::FloatTree> acc(tree);
         std::optional<openvdb::Vec3SGrid::ConstAccessor> colorAcc;
@@ -84,30 +84,35 @@ SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, double isovalue, 
         for (std::size_t l = r.begin(); l < r.end(); ++l) {
             for (auto it = leaves[l]->cbeginValueOn(); it; ++it) {
                 const double d = double(*it) - isovalue;
-                if (!(std::abs(d) < reject)) continue; // also skips NaN
+                if (!std::isfinite(d)) continue;
                 const openvdb::Coord ijk = it.getCoord();
                 // Index-space gradient by central differences (the band's sign is kept by the
                 // background value outside it).
                 Vec3d g;
+                bool crosses = d == 0.0; // the surface passes between this voxel and a neighbour
                 for (int a = 0; a < 3; ++a) {
                     openvdb::Coord lo = ijk, hi = ijk;
                     lo[a] -= 1;
                     hi[a] += 1;
-                    g[a] = 0.5 * (double(acc.getValue(hi)) - double(acc.getValue(lo)));
+                    const double vLo = acc.getValue(lo), vHi = acc.getValue(hi);
+                    g[a] = 0.5 * (vHi - vLo);
+                    crosses = crosses || (vLo - isovalue) * d <= 0.0 || (vHi - isovalue) * d <= 0.0;
                 }
+                if (!crosses) continue;
                 const openvdb::Vec3d c(ijk.x(), ijk.y(), ijk.z());
                 const Mat3d A = grid.linear ? grid.indexToWorldLinear : indexToWorldJacobian(xform, c);
                 const Mat3d Ainv = glm::inverse(A);
                 const Vec3d gWorld = glm::transpose(Ainv) * g; // df/dworld = A^-T df/dindex
                 const double g2 = glm::dot(gWorld, gWorld);
-                if (!(g2 > 1e-12) || !std::isfinite(g2)) continue;
+                if (!(g2 > 1e-24) || !std::isfinite(g2)) continue;
+                if (!(std::abs(d) < reject * std::sqrt(g2))) continue; // the distance estimate |d| / |g|
                 // Newton step onto the iso-surface, in world and in index units.
                 const Vec3d stepWorld = -d * gWorld / g2;
                 const Vec3d stepIndex = Ainv * stepWorld;
                 if (std::max({std::abs(stepIndex.x), std::abs(stepIndex.y), std::abs(stepIndex.z)}) > kReach) continue;
                 const openvdb::Vec3d w = xform.indexToWorld(c);
                 SurfaceKernel k;
-                k.normal = gWorld / std::sqrt(g2);
+                k.normal = (outwardDecreasing ? -1.0 : 1.0) * gWorld / std::sqrt(g2);
                 k.pWorld = Vec3d(w.x(), w.y(), w.z()) + stepWorld;
                 k.area = 0.0; // normalizeAreas
                 if (colorAcc) {

@@ -28,13 +28,18 @@ struct SurfaceSet
     std::uint64_t activeVoxels = 0;
 };
 
-/// One kernel for every active voxel whose projection onto the surface value == @a isovalue
+/// One kernel for every active voxel whose 6-neighbourhood crosses @a isovalue and whose
+/// projection onto the surface value == @a isovalue
 /// (x - (f(x) - iso) grad / |grad|^2, central differences) lies within one voxel of its
 /// centre along each index axis; its area is the inverse of the kernels' density around it
 /// on the surface, so that the kernels sum to one over the surface; tangential sigma =
-/// @a kernelSigma voxel lengths. Anisotropic voxels use the voxel length cbrt|det A|. Values
-/// are taken as world distances (level sets); NaN values are skipped.
-SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, double isovalue, double kernelSigma);
+/// @a kernelSigma voxel lengths. Anisotropic voxels use the voxel length cbrt|det A|. Voxels
+/// farther than 2 voxels from the surface by the estimate |f - iso| / |grad f| are skipped, as
+/// are NaN values.
+/// @a outwardDecreasing: the surface's outside is where values fall (fog volumes: the normal
+/// is minus the gradient); level sets grow outwards (the normal is the gradient).
+SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, double isovalue, double kernelSigma,
+    bool outwardDecreasing = false);
 
 } // namespace detail
 } // namespace vdb_ewa
