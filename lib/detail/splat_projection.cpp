@@ -145,12 +145,7 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
                 }
                 extents[i] = extent;
 
-                sp.cx = float(fp.centre.x);
-                sp.cy = float(fp.centre.y);
-                sp.qa = float(fp.conic.xx);
-                sp.qb = float(fp.conic.xy);
-                sp.qc = float(fp.conic.yy);
-                sp.cutoff = float(params.cutoffRadius * params.cutoffRadius);
+                setFootprint(sp, fp, params.cutoffRadius);
                 // Weight w_k = density x voxel volume / voxel length (Eq. 8 with extinction
                 // per voxel length), times the footprint peak (Eq. 32, 33).
                 const double weight = double(k.density) * volume * s * s * s / ell * fp.peak;
@@ -226,25 +221,32 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
 namespace vdb_ewa {
 namespace detail {
 
+bool projectSurface(const SurfaceKernel& kernel, double sigma, const Camera& camera, const ProjectionParams& params,
+    Vec3d& t, Vec3d& normal, Footprint& fp)
+{
+    t = camera.cameraFromWorldPoint(kernel.pWorld);
+    if (!(t.z > camera.near()) || !(t.z < camera.far())) return false;
+    normal = camera.cameraFromWorld() * kernel.normal;
+    if (glm::dot(normal, params.perspective ? t : Vec3d(0, 0, 1)) > 0.0) return false;
+    const Vec3d helper = std::abs(normal.x) < 0.6 ? Vec3d(1, 0, 0) : Vec3d(0, 1, 0);
+    const Vec3d t0 = glm::normalize(glm::cross(normal, helper)), t1 = glm::cross(normal, t0);
+    fp = projectSurfaceKernel(t, t0, t1, sigma, params);
+    return fp.valid;
+}
+
 void appendSurfaceSplats(SplatSet& set, const SurfaceSet& surfaces, const std::vector<Rgb>& shadows,
     const Camera& camera, const RenderSettings& settings, double voxelLength, const PassRequest& passes)
 {
     const ProjectionParams params = projectionParams(camera, settings);
     const bool perspective = params.perspective;
-    const Mat3d R = camera.cameraFromWorld();
     const Vec3d toLight = glm::normalize(settings.lightDir);
     const double tauSurface = std::min(20.0, -std::log1p(-std::min(settings.isoOpacity, 1.0)));
     const double sd = 0.25 * voxelLength; // a flattened kernel: about one slab deep
     for (std::size_t i = 0; i < surfaces.kernels.size(); ++i) {
         const SurfaceKernel& k = surfaces.kernels[i];
-        const Vec3d t = camera.cameraFromWorldPoint(k.pWorld);
-        if (perspective && !(t.z > camera.near())) continue;
-        const Vec3d normal = R * k.normal;
-        if (glm::dot(normal, perspective ? t : Vec3d(0, 0, 1)) > 0.0) continue; // back face
-        const Vec3d helper = std::abs(normal.x) < 0.6 ? Vec3d(1, 0, 0) : Vec3d(0, 1, 0);
-        const Vec3d t0 = glm::normalize(glm::cross(normal, helper)), t1 = glm::cross(normal, t0);
-        const Footprint fp = projectSurfaceKernel(t, t0, t1, surfaces.sigma, params);
-        if (!fp.valid) continue;
+        Vec3d t, normal;
+        Footprint fp;
+        if (!projectSurface(k, surfaces.sigma, camera, params, t, normal, fp)) continue;
         Splat sp{};
         if (!pixelBox(fp, camera.width(), camera.height(), sp.x0, sp.y0, sp.x1, sp.y1)) continue;
         const double toRay = perspective ? glm::length(t) / t.z : 1.0;
@@ -252,12 +254,7 @@ void appendSurfaceSplats(SplatSet& set, const SurfaceSet& surfaces, const std::v
         std::int64_t first = 0;
         const std::int64_t span = std::min<std::int64_t>(slabSpan(set.slabs, e.mu, e.sd, kDepthTruncation, e.clipNear, e.clipFar, first), kMaxSlabSpan);
         if (span <= 0) continue;
-        sp.cx = float(fp.centre.x);
-        sp.cy = float(fp.centre.y);
-        sp.qa = float(fp.conic.xx);
-        sp.qb = float(fp.conic.xy);
-        sp.qc = float(fp.conic.yy);
-        sp.cutoff = float(params.cutoffRadius * params.cutoffRadius);
+        setFootprint(sp, fp, params.cutoffRadius);
         const double tau = tauSurface * k.area * fp.peak;
         const double lambert = std::max(0.0, glm::dot(k.normal, toLight));
         for (int c = 0; c < 3; ++c) {

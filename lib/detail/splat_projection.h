@@ -62,6 +62,26 @@ bool pixelBox(const Footprint& fp, int width, int height, int& x0, int& y0, int&
 
 /// Project every kernel through @a camera. One task per block of kernels.
 struct SurfaceSet;
+struct SurfaceKernel;
+
+/// Copy @a fp's centre and conic, and the cut-off radius^2, into a splat (Splat, SurfaceSplat).
+template <typename S>
+void setFootprint(S& s, const Footprint& fp, double cutoffRadius)
+{
+    s.cx = float(fp.centre.x);
+    s.cy = float(fp.centre.y);
+    s.qa = float(fp.conic.xx);
+    s.qb = float(fp.conic.xy);
+    s.qc = float(fp.conic.yy);
+    s.cutoff = float(cutoffRadius * cutoffRadius);
+}
+
+/// A surface kernel seen through @a camera: its camera-space centre @a t and normal, and its
+/// footprint (Eq. 35). False if it lies before the near plane or beyond the far plane, faces
+/// away from the eye (back faces are hidden by the front of the same surface), or does not
+/// project.
+bool projectSurface(const SurfaceKernel& kernel, double sigma, const Camera& camera, const ProjectionParams& params,
+    Vec3d& t, Vec3d& normal, Footprint& fp);
 
 /// @a passes: the shadow and emission passes add their source terms to SplatSet::passSources.
 SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,

@@ -51,18 +51,10 @@ Vec3d shade(SurfaceShader shader, const Vec3d& normal, const Vec3d& rayDir, cons
     return Vec3d(1.0);
 }
 
-/// A unit vector orthogonal to @a n.
-Vec3d orthogonal(const Vec3d& n)
-{
-    const Vec3d helper = std::abs(n.x) < 0.6 ? Vec3d(1, 0, 0) : Vec3d(0, 1, 0);
-    return glm::normalize(glm::cross(n, helper));
-}
-
 std::vector<SurfaceSplat> projectSurfaceSplats(const SurfaceSet& set, const Camera& camera, const RenderSettings& settings)
 {
     const ProjectionParams params = projectionParams(camera, settings);
-    const Mat3d R = camera.cameraFromWorld();
-    const Vec3d forward = glm::transpose(R)[2];
+    const Vec3d forward = glm::transpose(camera.cameraFromWorld())[2];
     const bool perspective = params.perspective;
     const std::size_t n = set.kernels.size();
     std::vector<SurfaceSplat> splats(n);
@@ -70,23 +62,13 @@ std::vector<SurfaceSplat> projectSurfaceSplats(const SurfaceSet& set, const Came
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
             const SurfaceKernel& k = set.kernels[i];
-            const Vec3d t = camera.cameraFromWorldPoint(k.pWorld);
-            if (!(t.z > camera.near()) || !(t.z < camera.far())) continue;
-            const Vec3d normal = R * k.normal;
-            // Back faces (the normal, the gradient, points away from the eye) are hidden by the
-            // front of the same surface: culling them keeps thin parts from mixing both sides.
-            if (glm::dot(normal, perspective ? t : Vec3d(0, 0, 1)) > 0.0) continue;
-            const Vec3d t0 = orthogonal(normal), t1 = glm::cross(normal, t0);
-            const Footprint fp = projectSurfaceKernel(t, t0, t1, set.sigma, params);
-            if (!fp.valid) continue;
+            // Back faces are culled: that keeps thin parts from mixing both sides.
+            Vec3d t, normal;
+            Footprint fp;
+            if (!projectSurface(k, set.sigma, camera, params, t, normal, fp)) continue;
             SurfaceSplat& s = splats[i];
             if (!pixelBox(fp, camera.width(), camera.height(), s.x0, s.y0, s.x1, s.y1)) continue;
-            s.cx = float(fp.centre.x);
-            s.cy = float(fp.centre.y);
-            s.qa = float(fp.conic.xx);
-            s.qb = float(fp.conic.xy);
-            s.qc = float(fp.conic.yy);
-            s.cutoff = float(params.cutoffRadius * params.cutoffRadius);
+            setFootprint(s, fp, params.cutoffRadius);
             s.weight = float(k.area * fp.peak);
             const Vec3d rayDir = perspective ? glm::normalize(k.pWorld - camera.eye()) : forward;
             const Vec3d c = k.albedo * shade(settings.shader, k.normal, rayDir, k.pWorld, set);
