@@ -16,6 +16,7 @@
 #include <tbb/task_arena.h>
 
 #include <chrono>
+#include <cmath>
 #include <sstream>
 
 namespace vdb_ewa {
@@ -59,6 +60,7 @@ void Renderer::renderLevelSet(const GridSource::Impl& grid, const Camera& camera
     if (passes.shadow || passes.emission || passes.deep) {
         throw ValueError("level sets give the beauty, Z and transmittance (shadow, emission and deep passes are volume passes)");
     }
+    if (!std::isnan(mSettings.iso)) throw ValueError("--iso is for fog volumes; a level set's surface is chosen with --isovalue");
     StageTimer timer;
     const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(grid, mSettings.isovalue, mSettings.kernelSigma);
     stats.kernelSeconds = timer.lap();

@@ -78,6 +78,9 @@ TEST(Surface, SphereHasTheRightRadiusAndNormals)
         EXPECT_NEAR(f.depth[std::size_t(y) * 150 + std::size_t(x)], 5.0 - n.z, 0.02) << x << "," << y;
     }
     EXPECT_TRUE(std::isinf(f.depth[0])) << "background";
+    RenderSettings fogOption = shaded(SurfaceShader::Normal);
+    fogOption.iso = 0.5;
+    EXPECT_THROW(Renderer(fogOption).render(sphere, camera), ValueError) << "--iso is for fog volumes";
 }
 
 TEST(Surface, GrazingPlaneHasNoHolesAndNoNaN)
