@@ -1,6 +1,7 @@
 /// @file reference_integrator.cpp
 #include "reference_integrator.h"
 
+#include "blank_frame.h"
 #include "empty_space.h"
 #include "grid_source_impl.h"
 #include "shadow_transmittance.h"
@@ -147,11 +148,7 @@ Frame rayMarchReference(const GridSource::Impl& grid, const Camera& camera, cons
     const Vec3d boxLo = Vec3d(box.min().x(), box.min().y(), box.min().z()) - pad;
     const Vec3d boxHi = Vec3d(box.max().x(), box.max().y(), box.max().z()) + pad;
     const int width = camera.width(), height = camera.height();
-    Frame frame;
-    frame.beauty = Image(width, height);
-    const std::size_t pixels = std::size_t(width) * std::size_t(height);
-    if (passes.depth) frame.depth.assign(pixels, std::numeric_limits<float>::infinity());
-    if (passes.transmittance) frame.transmittance.assign(pixels * 3, 1.0f);
+    Frame frame = blankFrame(width, height, passes);
     if (box.empty()) return frame;
     const Vec3d forward = glm::transpose(camera.cameraFromWorld())[2];
 

@@ -1,6 +1,7 @@
 /// @file surface_rasterizer.cpp
 #include "surface_rasterizer.h"
 
+#include "blank_frame.h"
 #include "splat_projection.h"
 #include "tile_bins.h"
 
@@ -95,11 +96,7 @@ Frame rasterizeSurfaces(const SurfaceSet& set, const Camera& camera, const Rende
     double voxelLength, const PassRequest& passes, SurfaceStats& stats)
 {
     const int width = camera.width(), height = camera.height();
-    Frame frame;
-    frame.beauty = Image(width, height);
-    const std::size_t pixels = std::size_t(width) * std::size_t(height);
-    if (passes.depth) frame.depth.assign(pixels, std::numeric_limits<float>::infinity());
-    if (passes.transmittance) frame.transmittance.assign(pixels * 3, 1.0f);
+    Frame frame = blankFrame(width, height, passes);
 
     const std::vector<SurfaceSplat> splats = projectSurfaceSplats(set, camera, settings);
     stats.splats = splats.size();

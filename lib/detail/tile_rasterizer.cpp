@@ -1,6 +1,7 @@
 /// @file tile_rasterizer.cpp
 #include "tile_rasterizer.h"
 
+#include "blank_frame.h"
 #include "tile_bins.h"
 
 #include <tbb/parallel_for.h>
@@ -470,13 +471,7 @@ Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSet
     const PassRequest& passes, RasterStats& stats)
 {
     const int width = camera.width(), height = camera.height();
-    const std::size_t pixels = std::size_t(width) * std::size_t(height);
-    Frame frame;
-    frame.beauty = Image(width, height);
-    if (passes.depth) frame.depth.assign(pixels, std::numeric_limits<float>::infinity());
-    if (passes.transmittance) frame.transmittance.assign(pixels * 3, 1.0f);
-    if (passes.shadow) frame.shadow.assign(pixels * 3, 0.0f);
-    if (passes.emission) frame.emission.assign(pixels * 3, 0.0f);
+    Frame frame = blankFrame(width, height, passes);
 
     const TileBins bins = binSplats(set.splats, width, height);
     stats.splatTilePairs = bins.indices.size();
