@@ -36,6 +36,14 @@ struct SurfaceSplat
     int x0, y0, x1, y1;
 };
 
+/// A (splat, tile pixel) pair inside the splat's cut-off: its conic distance and plane depth.
+struct Pair
+{
+    std::uint32_t splat;
+    int pixel;
+    double r, z;
+};
+
 /// vdb_render's shaders (RayTracer.h) with a white material (multiplied by the kernel's albedo).
 Vec3d shade(SurfaceShader shader, const Vec3d& normal, const Vec3d& rayDir, const Vec3d& p, const SurfaceSet& set)
 {
@@ -125,54 +133,53 @@ Frame rasterizeSurfaces(const SurfaceSet& set, const Camera& camera, const Rende
     };
     tbb::parallel_for(tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& range) {
         std::vector<std::uint32_t> order;
+        std::vector<Pair> pairs;
         for (int t = range.begin(); t < range.end(); ++t) {
             const int x0 = (t % bins.tilesX) * kTileSize, y0 = (t / bins.tilesX) * kTileSize;
             const int w = std::min(kTileSize, width - x0), h = std::min(kTileSize, height - y0);
             order.assign(bins.indices.begin() + std::ptrdiff_t(bins.offsets[t]),
                 bins.indices.begin() + std::ptrdiff_t(bins.offsets[t + 1]));
-            // Visit (pixel, splat) pairs inside the footprint's cut-off; f(p, splat, r, q, onDisc).
-            auto forEachPair = [&](auto&& visit) {
-                for (std::uint32_t index : order) {
-                    const SurfaceSplat& s = splats[index];
-                    const int lx0 = std::max(s.x0 - x0, 0), lx1 = std::min(s.x1 - x0, w - 1);
-                    const int ly0 = std::max(s.y0 - y0, 0), ly1 = std::min(s.y1 - y0, h - 1);
-                    for (int ly = ly0; ly <= ly1; ++ly)
-                        for (int lx = lx0; lx <= lx1; ++lx) {
-                            const double px = x0 + lx + 0.5, py = y0 + ly + 0.5;
-                            const double dx = px - s.cx, dy = py - s.cy;
-                            const double r = s.qa * dx * dx + 2.0 * s.qb * dx * dy + s.qc * dy * dy;
-                            if (!(r < s.cutoff)) continue;
-                            Vec3d q;
-                            const bool hit = planePoint(s, px, py, q);
-                            // The ray meets the kernel's own disc (3 sigma), not just its filtered tail.
-                            const bool onDisc = hit && glm::length(q - s.centre) <= s.depthRange;
-                            const double z = hit ? std::clamp(q.z, s.depth - s.depthRange, s.depth + s.depthRange) : s.depth;
-                            visit(ly * kTileSize + lx, s, r, z, onDisc);
-                        }
-                }
-            };
-            // Pass 1: the front surface per pixel, from the discs its ray meets (else from the
-            // nearest filtered tail, at silhouettes).
+            // Pass 1: every (pixel, splat) pair inside a footprint's cut-off, with its plane depth,
+            // and the front surface per pixel: the nearest depth at which its ray meets a kernel's
+            // disc (3 sigma), else (silhouettes) the nearest filtered tail.
             double zDisc[kTilePixels], zTail[kTilePixels];
             std::fill(std::begin(zDisc), std::end(zDisc), std::numeric_limits<double>::infinity());
             std::fill(std::begin(zTail), std::end(zTail), std::numeric_limits<double>::infinity());
-            forEachPair([&](int p, const SurfaceSplat&, double, double z, bool onDisc) {
-                if (onDisc) zDisc[p] = std::min(zDisc[p], z);
-                zTail[p] = std::min(zTail[p], z);
-            });
-            // Pass 2: accumulate the splats within the tolerance of that surface (Sec. 7.2).
+            pairs.clear();
+            for (std::uint32_t index : order) {
+                const SurfaceSplat& s = splats[index];
+                const int lx0 = std::max(s.x0 - x0, 0), lx1 = std::min(s.x1 - x0, w - 1);
+                const int ly0 = std::max(s.y0 - y0, 0), ly1 = std::min(s.y1 - y0, h - 1);
+                for (int ly = ly0; ly <= ly1; ++ly)
+                    for (int lx = lx0; lx <= lx1; ++lx) {
+                        const double px = x0 + lx + 0.5, py = y0 + ly + 0.5;
+                        const double dx = px - s.cx, dy = py - s.cy;
+                        const double r = s.qa * dx * dx + 2.0 * s.qb * dx * dy + s.qc * dy * dy;
+                        if (!(r < s.cutoff)) continue;
+                        Vec3d q;
+                        const bool hit = planePoint(s, px, py, q);
+                        const double z = hit ? std::clamp(q.z, s.depth - s.depthRange, s.depth + s.depthRange) : s.depth;
+                        const int p = ly * kTileSize + lx;
+                        if (hit && glm::length(q - s.centre) <= s.depthRange) zDisc[p] = std::min(zDisc[p], z);
+                        zTail[p] = std::min(zTail[p], z);
+                        pairs.push_back({index, p, r, z});
+                    }
+            }
+            // Pass 2: accumulate the pairs within the tolerance of that surface (Sec. 7.2).
             double zSum[kTilePixels], weight[kTilePixels], colour[kTilePixels][3];
             std::fill(std::begin(zSum), std::end(zSum), 0.0);
             std::fill(std::begin(weight), std::end(weight), 0.0);
             std::fill(&colour[0][0], &colour[0][0] + 3 * kTilePixels, 0.0);
-            forEachPair([&](int p, const SurfaceSplat& s, double r, double z, bool) {
+            for (const Pair& pair : pairs) {
+                const int p = pair.pixel;
                 const double front = std::isinf(zDisc[p]) ? zTail[p] : zDisc[p];
-                if (z > front + tolerance) return; // hidden behind the front surface
-                const double wt = s.weight * std::exp(-0.5 * r);
+                if (pair.z > front + tolerance) continue; // hidden behind the front surface
+                const SurfaceSplat& s = splats[pair.splat];
+                const double wt = s.weight * std::exp(-0.5 * pair.r);
                 weight[p] += wt;
-                zSum[p] += wt * z;
+                zSum[p] += wt * pair.z;
                 for (int c = 0; c < 3; ++c) colour[p][c] += wt * s.colour[c];
-            });
+            }
             for (int ly = 0; ly < h; ++ly)
                 for (int lx = 0; lx < w; ++lx) {
                     const int p = ly * kTileSize + lx;
