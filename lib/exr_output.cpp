@@ -210,13 +210,16 @@ void writeDeepExr(const DeepImage& deep, const std::string& path, const ExrOptio
         };
         char* samples = reinterpret_cast<char*>(const_cast<DeepSample*>(deep.samples.data()));
         char* rgba = reinterpret_cast<char*>(halves.data());
-        const std::vector<Channel> channels = {
-            {"Z", Imf::FLOAT, samples + offsetof(DeepSample, z), sizeof(DeepSample)},
-            {"ZBack", Imf::FLOAT, samples + offsetof(DeepSample, zBack), sizeof(DeepSample)},
-            colour == Imf::HALF ? Channel{"R", colour, rgba, 4 * sizeof(half)} : Channel{"R", colour, samples + offsetof(DeepSample, r), sizeof(DeepSample)},
-            colour == Imf::HALF ? Channel{"G", colour, rgba + sizeof(half), 4 * sizeof(half)} : Channel{"G", colour, samples + offsetof(DeepSample, g), sizeof(DeepSample)},
-            colour == Imf::HALF ? Channel{"B", colour, rgba + 2 * sizeof(half), 4 * sizeof(half)} : Channel{"B", colour, samples + offsetof(DeepSample, b), sizeof(DeepSample)},
-            colour == Imf::HALF ? Channel{"A", colour, rgba + 3 * sizeof(half), 4 * sizeof(half)} : Channel{"A", colour, samples + offsetof(DeepSample, a), sizeof(DeepSample)}};
+        std::vector<Channel> channels = {{"Z", Imf::FLOAT, samples + offsetof(DeepSample, z), sizeof(DeepSample)},
+            {"ZBack", Imf::FLOAT, samples + offsetof(DeepSample, zBack), sizeof(DeepSample)}};
+        // R, G, B, A: the half copy (4 per sample), or DeepSample's consecutive floats r, g, b, a.
+        static_assert(offsetof(DeepSample, a) == offsetof(DeepSample, r) + 3 * sizeof(float));
+        const char* colourNames[4] = {"R", "G", "B", "A"};
+        for (std::size_t c = 0; c < 4; ++c) {
+            channels.push_back(colour == Imf::HALF
+                    ? Channel{colourNames[c], colour, rgba + c * sizeof(half), 4 * sizeof(half)}
+                    : Channel{colourNames[c], colour, samples + offsetof(DeepSample, r) + c * sizeof(float), sizeof(DeepSample)});
+        }
         std::vector<std::vector<char*>> pointers;
         for (const Channel& c : channels) {
             header.channels().insert(c.name, Imf::Channel(c.type));

@@ -1,9 +1,8 @@
 /// @file splat_projection.cpp
 #include "splat_projection.h"
 
-#include "surface_extraction.h"
-
 #include "grid_source_impl.h"
+#include "surface_extraction.h"
 
 #include <vdb_ewa/ewa_kernel.h>
 
@@ -17,7 +16,6 @@ namespace detail {
 namespace {
 
 constexpr double kDepthTruncation = 3.0; // kernels end at +-3 sd along the ray (99.73 %)
-
 
 /// --precision float: the world -> camera transform in single precision, as a float
 /// pipeline would do it (world positions and the eye rounded to float before subtracting).
@@ -214,12 +212,6 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
     out.culled = n - out.splats.size();
     return out;
 }
-
-} // namespace detail
-} // namespace vdb_ewa
-
-namespace vdb_ewa {
-namespace detail {
 
 bool projectSurface(const SurfaceKernel& kernel, double sigma, const Camera& camera, const ProjectionParams& params,
     Vec3d& t, Vec3d& normal, Footprint& fp)
