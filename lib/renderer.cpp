@@ -6,6 +6,7 @@
 
 #include "detail/grid_source_impl.h"
 #include "detail/kernel_extraction.h"
+#include "detail/material_color.h"
 #include "detail/reference_integrator.h"
 #include "detail/shadow_transmittance.h"
 #include "detail/splat_projection.h"
@@ -124,7 +125,8 @@ Frame Renderer::renderFrame(const GridSource& grid, const Camera& camera, const 
         stats.kernelSeconds = timer.lap();
         const std::vector<detail::Rgb> shadows = detail::shadowTransmittance(g, kernels, mSettings);
         stats.shadowSeconds = timer.lap();
-        detail::SplatSet splats = detail::projectSplats(g, kernels, shadows, camera, mSettings, passes);
+        const std::vector<detail::Rgb> colors = detail::kernelColors(g, kernels);
+        detail::SplatSet splats = detail::projectSplats(g, kernels, shadows, colors, camera, mSettings, passes);
         if (!std::isnan(mSettings.iso)) addIsoSurface(g, camera, passes, splats);
         stats.projectSeconds = timer.lap();
         detail::RasterStats raster;

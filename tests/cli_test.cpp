@@ -110,6 +110,29 @@ TEST_F(Cli, InputErrors)
     expectFailure("render " + ints + " " + out + " --name labels", 3, "holds int32 values");
 }
 
+TEST_F(Cli, ColorGridTintsAFogVolume)
+{
+    // A box of fog with a red colour grid in the same file: the scattered light is red only.
+    const std::string file = mDir.file("tinted.vdb"), out = mDir.file("out.exr");
+    auto density = makeBoxGrid(openvdb::Coord(-8), openvdb::Coord(7), 1.0f, 0.1);
+    auto color = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+    color->setTransform(density->transform().copy());
+    color->setName("Cd");
+    color->tree().topologyUnion(density->tree());
+    for (auto it = color->beginValueOn(); it; ++it) it.setValue(openvdb::Vec3s(1.0f, 0.0f, 0.0f));
+    openvdb::io::File(file).write({density, color});
+    const CliRun r = runCli(mDir, "render " + file + " " + out + " --res 32x32 -translate 0,0,4 --color Cd --emission 0 -v");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("--shadow-res 2 --color Cd\n"), std::string::npos) << r.out;
+    const Image img = readExr(out);
+    const float* p = img.pixel(16, 16);
+    EXPECT_GT(p[0], 0.05f);
+    EXPECT_EQ(p[1], 0.0f);
+    EXPECT_EQ(p[2], 0.0f);
+    std::filesystem::remove(out);
+    expectFailure("render " + file + " " + out + " --color density", 3, "density");
+}
+
 TEST_F(Cli, VerbosePrintsThePresetResolvedWithOverrides)
 {
     const std::string out = mDir.file("out.exr");
@@ -139,7 +162,7 @@ TEST_F(Cli, ArgumentAndOutputErrors)
     expectFailure("render " + mGrid + " " + out + " --quality fast", 2, "--quality");
     expectFailure("render " + mGrid + " " + out + " --shader phong", 2, "--shader");
     expectFailure("render " + mGrid + " " + out + " --samples 0", 2, "--samples");
-    expectFailure("render " + mGrid + " " + out + " --color Cd", 2, "--color colours level-set surfaces");
+    expectFailure("render " + mGrid + " " + out + " --color Cd", 3, "Cd");
     expectFailure("render " + mGrid + " " + out + " --iso 0.1 --iso-opacity 2", 2, "--iso-opacity");
     expectFailure("render " + mGrid + " " + out + " --bogus 3", 2, "bogus");
     expectFailure("render " + mGrid + " " + mDir.file("out.png"), 2, "unsupported output format");

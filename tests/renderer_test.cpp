@@ -96,6 +96,52 @@ TEST(Renderer, UniformSlabSingleScatteringMatchesTheClosedForm)
     }
 }
 
+TEST(Renderer, ColorGridTintsTheScatteredLightPerVoxel)
+{
+    // The slab of the closed-form test with a colour grid: red for x < 0, (0.2, 0.5, 1) for
+    // x >= 0 (voxel index). Far from the split each side is the closed form times its colour;
+    // alpha does not change, and the emission term is not tinted.
+    const double sigma = 0.15, rho = 0.5, h = 0.1;
+    const int depth = 12;
+    auto density = slab(depth, float(rho), h);
+    auto color = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+    color->setTransform(density->transform().copy());
+    for (auto it = density->cbeginValueOn(); it; ++it) {
+        const openvdb::Coord ijk = it.getCoord();
+        color->tree().setValueOn(ijk, ijk.x() < 0 ? openvdb::Vec3s(1, 0, 0) : openvdb::Vec3s(0.2f, 0.5f, 1.0f));
+    }
+    const GridSource source = withColorGrid(gridSourceFromOpenVDB(density), color);
+    RenderSettings s;
+    s.absorb = Vec3d(0.0);
+    s.scatter = Vec3d(sigma);
+    s.lightDir = Vec3d(0, 0, 1);
+    s.lightColor = Vec3d(1.0);
+    s.gain = 0.0;
+    s.cutoff = 0.0;
+    s.shadowStep = 0.1;
+    s.step = 0.25;
+    s.emission = Vec3d(0.0, 0.05, 0.0);
+    const double tau = sigma * rho * depth;
+    const double scattered = 0.5 * (1.0 - std::exp(-2.0 * tau));
+    const double emitted = 0.05 / sigma * (1.0 - std::exp(-tau)); // E / extinction x alpha
+    const Camera camera(orthoDownZ(-0.05, -0.05, 10.0, 1.0, 16), source.worldCentre());
+    for (const Method method : {Method::Splat, Method::RayMarch}) {
+        s.method = method;
+        const Image img = Renderer(s).render(source, camera);
+        for (int j = 0; j < 16; ++j)
+            for (const int i : {0, 1, 2, 3, 4, 12, 13, 14, 15}) { // x < -0.3 or x > 0.2 (kernels reach 0.17)
+                const double tint[2][3] = {{1, 0, 0}, {0.2, 0.5, 1.0}};
+                const double* c = tint[i < 8 ? 0 : 1];
+                const float* p = img.pixel(i, j);
+                for (int k = 0; k < 3; ++k) {
+                    const double expected = c[k] * scattered + (k == 1 ? emitted : 0.0);
+                    ASSERT_NEAR(p[k], expected, 0.02 * scattered) << i << "," << j << " channel " << k << " method " << int(method);
+                }
+                ASSERT_NEAR(p[3], 1.0 - std::exp(-tau), 0.005);
+            }
+    }
+}
+
 TEST(Renderer, SingleVoxelImageIntegral)
 {
     // Sum over pixels of the optical depth = sigma rho |det A| / l * |det J| f^2 (Eq. 32, 33):

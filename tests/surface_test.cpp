@@ -182,39 +182,56 @@ TEST(Surface, SilhouettesMatchVdbRender)
     }
 }
 
-TEST(Surface, CheckerPlaneAtAGrazingAngleShowsNoMoire)
+namespace {
+
+/// The paper's Fig. 15 scene: a plane y = 0 with a checker colour grid (squares of 2 voxels,
+/// h = 0.05), seen from 0.5 units above it; towards the horizon the squares shrink far below
+/// a pixel.
+struct CheckerPlane
 {
-    // A plane y = 0 with a checker colour grid (squares of 2 voxels), seen from 0.5 units above
-    // it: towards the horizon the squares shrink far below a pixel. The EWA filter (Eq. 35 plus
-    // the low-pass) averages them to the mean grey; point-sampled footprints (--aa none) alias
-    // into moire. Texture contrast must survive where the squares are resolvable.
-    const double h = 0.05;
-    auto plane = makeLevelSet([](const Vec3d& p) { return p.y; }, openvdb::Coord(-160, -4, -400), openvdb::Coord(160, 4, 40), h);
-    auto checker = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
-    checker->setTransform(plane->transform().copy());
-    checker->setName("checker");
+    static constexpr double h = 0.05;
+    static constexpr int kLo = -400, kHi = 40, iHalf = 160;
+
+    static openvdb::Vec3SGrid::Ptr colors(const openvdb::math::Transform& xform)
     {
+        auto checker = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+        checker->setTransform(xform.copy());
+        checker->setName("checker");
         auto acc = checker->getAccessor();
-        for (int i = -160; i <= 160; ++i)
+        for (int i = -iHalf; i <= iHalf; ++i)
             for (int j = -3; j <= 3; ++j)
-                for (int k = -400; k <= 40; ++k) {
-                    const float v = float(((i >> 1) + (k >> 1)) & 1);
-                    acc.setValueOn(openvdb::Coord(i, j, k), openvdb::Vec3s(v));
-                }
+                for (int k = kLo; k <= kHi; ++k) acc.setValueOn(openvdb::Coord(i, j, k), openvdb::Vec3s(float(((i >> 1) + (k >> 1)) & 1)));
+        return checker;
     }
-    const GridSource source = withColorGrid(gridSourceFromOpenVDB(plane), checker);
-    CameraSettings c;
-    c.width = 320;
-    c.height = 240;
-    c.translate = Vec3d(0.0, 0.5, 2.0);
-    c.lookAt = Vec3d(0.0, 0.0, -6.0);
-    const Camera camera(c, Vec3d(0.0));
-    RenderSettings ewa = shaded(SurfaceShader::Matte), point = ewa;
-    point.antiAliasing = AntiAliasing::None;
-    const Image filtered = Renderer(ewa).render(source, camera), aliased = Renderer(point).render(source, camera);
-    ASSERT_TRUE(filtered.allFinite());
-    // Rows by the distance they see: the plane at depth d is at row y = cy + f * 0.5 / d (about).
-    auto rowStats = [&](const Image& img, int y0, int y1) {
+
+    /// As a level set (surface kernels).
+    static GridSource surface()
+    {
+        auto plane = makeLevelSet([](const Vec3d& p) { return p.y; }, openvdb::Coord(-iHalf, -4, kLo), openvdb::Coord(iHalf, 4, kHi), h);
+        return withColorGrid(gridSourceFromOpenVDB(plane), colors(plane->transform()));
+    }
+
+    /// As a fog sheet two voxels thick, y in [-h, 0] (volume kernels), optical depth 3 per voxel
+    /// length at extinction 1: opaque at the angles the camera sees it.
+    static GridSource volume()
+    {
+        auto sheet = makeBoxGrid(openvdb::Coord(-iHalf, -1, kLo), openvdb::Coord(iHalf, 0, kHi), 3.0f, h);
+        return withColorGrid(gridSourceFromOpenVDB(sheet), colors(sheet->transform()));
+    }
+
+    static Camera camera()
+    {
+        CameraSettings c;
+        c.width = 320;
+        c.height = 240;
+        c.translate = Vec3d(0.0, 0.5, 2.0);
+        c.lookAt = Vec3d(0.0, 0.0, -6.0);
+        return Camera(c, Vec3d(0.0));
+    }
+
+    /// Mean and standard deviation of colour / alpha over the opaque pixels of rows [y0, y1).
+    static std::pair<double, double> rowStats(const Image& img, int y0, int y1)
+    {
         double s = 0, s2 = 0;
         int n = 0;
         for (int y = y0; y < y1; ++y)
@@ -227,15 +244,37 @@ TEST(Surface, CheckerPlaneAtAGrazingAngleShowsNoMoire)
                 ++n;
             }
         const double mean = s / n;
-        return std::pair{mean, std::sqrt(std::max(0.0, s2 / n - mean * mean))};
-    };
-    // Find the horizon: the first row from the top that is covered.
-    int horizon = 0;
-    while (horizon < 240 && filtered.pixel(160, horizon)[3] < 0.99f) ++horizon;
+        return {mean, std::sqrt(std::max(0.0, s2 / n - mean * mean))};
+    }
+
+    /// The first row from the top that is covered.
+    static int horizon(const Image& img)
+    {
+        int y = 0;
+        while (y < img.height && img.pixel(160, y)[3] < 0.99f) ++y;
+        return y;
+    }
+};
+
+} // namespace
+
+TEST(Surface, CheckerPlaneAtAGrazingAngleShowsNoMoire)
+{
+    // The EWA filter (Eq. 35 plus the low-pass) averages the far squares to the mean grey;
+    // point-sampled footprints (--aa none) alias into moire. Texture contrast must survive
+    // where the squares are resolvable.
+    const GridSource source = CheckerPlane::surface();
+    const Camera camera = CheckerPlane::camera();
+    RenderSettings ewa = shaded(SurfaceShader::Matte), point = ewa;
+    point.antiAliasing = AntiAliasing::None;
+    const Image filtered = Renderer(ewa).render(source, camera), aliased = Renderer(point).render(source, camera);
+    ASSERT_TRUE(filtered.allFinite());
+    // Rows by the distance they see: the plane at depth d is at row y = cy + f * 0.5 / d (about).
+    const int horizon = CheckerPlane::horizon(filtered);
     ASSERT_LT(horizon, 200);
-    const auto [farMean, farSd] = rowStats(filtered, horizon + 2, horizon + 12);
-    const auto [aliasMean, aliasSd] = rowStats(aliased, horizon + 2, horizon + 12);
-    const auto [nearMean, nearSd] = rowStats(filtered, 200, 240);
+    const auto [farMean, farSd] = CheckerPlane::rowStats(filtered, horizon + 2, horizon + 12);
+    const auto [aliasMean, aliasSd] = CheckerPlane::rowStats(aliased, horizon + 2, horizon + 12);
+    const auto [nearMean, nearSd] = CheckerPlane::rowStats(filtered, 200, 240);
     std::printf("checker: far rows EWA mean %.3f sd %.3f, --aa none sd %.3f; near rows EWA sd %.3f\n", farMean, farSd,
         aliasSd, nearSd);
     EXPECT_NEAR(farMean, 0.5, 0.05);
@@ -246,6 +285,36 @@ TEST(Surface, CheckerPlaneAtAGrazingAngleShowsNoMoire)
         writeExr(filtered, std::string(keep) + "/checker_ewa.exr");
         writeExr(aliased, std::string(keep) + "/checker_none.exr");
     }
+}
+
+TEST(Surface, CheckerSheetWithVolumeKernelsFiltersButBlursTheTexture)
+{
+    // The paper's Fig. 15 comparison: the same texture on a fog sheet two voxels thick,
+    // rendered with volume kernels (colour grid x scattering albedo). EWA volume splats also
+    // converge to the mean far away, but a kernel's depth extent smears it across the screen at
+    // a grazing angle: near the camera the surface kernels keep more contrast.
+    const Camera camera = CheckerPlane::camera();
+    RenderSettings volume;
+    volume.lightDir = Vec3d(0, 1, 0);
+    volume.lightColor = Vec3d(1.0);
+    volume.absorb = Vec3d(0.0);
+    volume.scatter = Vec3d(1.0);
+    volume.shadowStep = 0.25;
+    const Image sheet = Renderer(volume).render(CheckerPlane::volume(), camera);
+    const Image plane = Renderer(shaded(SurfaceShader::Matte)).render(CheckerPlane::surface(), camera);
+    ASSERT_TRUE(sheet.allFinite());
+    const int horizon = CheckerPlane::horizon(sheet);
+    ASSERT_LT(horizon, 200);
+    const auto [farMean, farSd] = CheckerPlane::rowStats(sheet, horizon + 2, horizon + 12);
+    const auto [nearMean, nearSd] = CheckerPlane::rowStats(sheet, 200, 240);
+    const auto [surfaceNearMean, surfaceNearSd] = CheckerPlane::rowStats(plane, 200, 240);
+    std::printf("checker sheet, volume kernels: far rows mean %.3f sd %.3f; near rows mean %.3f sd %.3f "
+                "(surface kernels: mean %.3f sd %.3f)\n",
+        farMean, farSd, nearMean, nearSd, surfaceNearMean, surfaceNearSd);
+    EXPECT_LT(farSd, 0.12 * farMean) << "far rows converge to the mean";
+    EXPECT_GT(nearSd, 0.08 * nearMean) << "the checker is still visible near the camera";
+    EXPECT_LT(nearSd / nearMean, surfaceNearSd / surfaceNearMean) << "volume kernels blur more than surface kernels";
+    if (const char* keep = std::getenv("VDB_EWA_KEEP")) writeExr(sheet, std::string(keep) + "/checker_volume.exr");
 }
 
 TEST(Surface, ExtremesGiveFiniteImages)

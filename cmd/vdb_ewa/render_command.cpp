@@ -105,7 +105,9 @@ public:
         mApp->add_option("--shader", mShader,
             "level sets: diffuse (|N.ray|, a light at the camera), matte (white), normal ((N+1)/2) or position "
             "(world position in the active bounding box) (default: diffuse)");
-        mApp->add_option("--color", mColor, "level sets: name of a vec3s grid in the input file with material colours, multiplied into the shader");
+        mApp->add_option("--color", mColor,
+            "name of a vec3s grid in the input file with material colours, sampled trilinearly: level sets multiply "
+            "the shader by it, fog volumes the scattering albedo (and the --iso surface's colour) (default: white)");
         mApp->add_option("--samples", mSamples,
             "level sets: vdb_render's rays per pixel; accepted for compatibility, the EWA filter anti-aliases "
             "without extra samples (default: 1)");
@@ -164,10 +166,8 @@ private:
 
     GridSource openInput() const
     {
-        GridSource grid = GridSource::open(mInput, mName);
-        if (mColor.empty()) return grid;
-        if (!grid.isLevelSet()) throw ValueError("--color colours level-set surfaces; '" + grid.name() + "' is a fog volume");
-        return grid.withColorGrid(mColor);
+        const GridSource grid = GridSource::open(mInput, mName);
+        return mColor.empty() ? grid : grid.withColorGrid(mColor);
     }
 
     void resolve(CameraSettings& cam, RenderSettings& rs) const
@@ -240,9 +240,10 @@ private:
         for (const auto& [k, v] : Attributes{{"focal", fmt(c.focal)}, {"aperture", fmt(c.aperture)}, {"fov", fmt(c.fieldOfView())},
                  {"frame", fmt(c.frame)}, {"near", fmt(c.near)}, {"far", fmt(c.far)}})
             cameraGroup.emplace_back(k, v);
-        const Attributes model{{"absorb", fmt3(rs.absorb)}, {"scatter", fmt3(rs.scatter)}, {"emission", fmt3(rs.emission)},
+        Attributes model{{"absorb", fmt3(rs.absorb)}, {"scatter", fmt3(rs.scatter)}, {"emission", fmt3(rs.emission)},
             {"light", fmt3(rs.lightDir) + "," + fmt3(rs.lightColor)}, {"gain", fmt(rs.gain)}, {"cutoff", fmt(rs.cutoff)},
             {"shadowstep", fmt(rs.shadowStep)}, {"shadow-res", std::to_string(rs.shadowResolution)}};
+        if (grid.hasColorGrid()) model.emplace_back("color", mColor);
         Attributes method{{"method", choiceName(rs.method, kMethods)}};
         if (rs.method == Method::RayMarch) method.emplace_back("step", fmt(rs.step));
         if (!grid.isLevelSet() && !std::isnan(rs.iso)) {
@@ -252,7 +253,6 @@ private:
         if (grid.isLevelSet()) {
             method.emplace_back("isovalue", fmt(rs.isovalue));
             method.emplace_back("shader", choiceName(rs.shader, kShaders));
-            if (grid.hasColorGrid()) method.emplace_back("color", mColor);
         }
         for (const auto& [k, v] : Attributes{{"kernel-sigma", fmt(rs.kernelSigma)}, {"lowpass", fmt(rs.lowpass)},
                  {"aa", choiceName(rs.antiAliasing, kAntiAliasing)}, {"cutoff-radius", fmt(rs.cutoffRadius)},

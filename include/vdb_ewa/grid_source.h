@@ -22,8 +22,9 @@ public:
     static GridSource open(const std::string& path, const std::string& gridName = "");
 
     /// The same grid with material colours from the vec3s grid @a colorName of its file
-    /// (vdb_render's -color): the level-set shaders multiply by it, sampled trilinearly at
-    /// each surface kernel. @throw IoError, InputError (no such grid, not a vec3s grid, or a
+    /// (vdb_render's -color), sampled trilinearly: the level-set shaders multiply by it at each
+    /// surface kernel; fog volumes multiply the scattering albedo by it at each kernel (and
+    /// the --iso surface's colour). Non-finite and negative components read as 0. @throw IoError, InputError (no such grid, not a vec3s grid, or a
     /// host grid without a file: use withColorGrid in openvdb_grid.h).
     GridSource withColorGrid(const std::string& colorName) const;
     bool hasColorGrid() const;

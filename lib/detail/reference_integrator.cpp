@@ -4,6 +4,7 @@
 #include "blank_frame.h"
 #include "empty_space.h"
 #include "grid_source_impl.h"
+#include "material_color.h"
 #include "shadow_transmittance.h"
 
 #include <vdb_ewa/error.h>
@@ -22,7 +23,8 @@ namespace {
 using Vec3fGrid = openvdb::Vec3SGrid;
 
 /// The reconstruction's inputs per voxel: density (sanitised as for kernels) and density x
-/// source colour (albedo x light x shadow transmittance + emission / extinction), on the
+/// source colour (albedo x material colour x light x shadow transmittance + emission /
+/// extinction), on the
 /// same topology.
 struct ReferenceVolume
 {
@@ -46,6 +48,7 @@ ReferenceVolume buildVolume(const GridSource::Impl& grid, const RenderSettings& 
     stats.kernelsSkipped = kernels.belowCutoff + kernels.notANumber;
     const double t1 = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const std::vector<Rgb> shadows = shadowTransmittance(*impl, kernels, settings);
+    const std::vector<Rgb> colors = kernelColors(*impl, kernels);
     stats.kernelSeconds = t1;
     stats.shadowSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() - t1;
 
@@ -67,7 +70,10 @@ ReferenceVolume buildVolume(const GridSource::Impl& grid, const RenderSettings& 
         const openvdb::Coord ijk(int(std::lround(k.pIndex.x)), int(std::lround(k.pIndex.y)), int(std::lround(k.pIndex.z)));
         dAcc.setValueOn(ijk, k.density);
         openvdb::Vec3s source;
-        for (int c = 0; c < 3; ++c) source[c] = float(k.density * (albedo[c] * shadows[i][c] + emitted[c]));
+        for (int c = 0; c < 3; ++c) {
+            const double color = colors.empty() ? 1.0 : double(colors[i][c]);
+            source[c] = float(k.density * (albedo[c] * color * shadows[i][c] + emitted[c]));
+        }
         eAcc.setValueOn(ijk, source);
     }
     return v;

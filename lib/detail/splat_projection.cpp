@@ -65,8 +65,8 @@ bool pixelBox(const Footprint& fp, int width, int height, int& x0, int& y0, int&
 }
 
 SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
-    const std::vector<Rgb>& shadows, const Camera& camera, const RenderSettings& settings,
-    const PassRequest& passes)
+    const std::vector<Rgb>& shadows, const std::vector<Rgb>& colors, const Camera& camera,
+    const RenderSettings& settings, const PassRequest& passes)
 {
     SplatSet out;
     const ProjectionParams params = projectionParams(camera, settings);
@@ -154,7 +154,8 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
                     const double tau = extinction[c] * weight;
                     const double emitted = settings.emission[c] * weight;
                     sp.tau[c] = float(tau);
-                    sp.emission[c] = float(tau * albedo[c] * double(shadows[i][c]) + emitted);
+                    const double color = colors.empty() ? 1.0 : double(colors[i][c]);
+                    sp.emission[c] = float(tau * albedo[c] * color * double(shadows[i][c]) + emitted);
                     int j = 0;
                     if (passes.shadow) pass[3 * j++ + c] = float(tau * double(shadows[i][c]));
                     if (passes.emission) pass[3 * j++ + c] = float(emitted);
@@ -251,7 +252,7 @@ void appendSurfaceSplats(SplatSet& set, const SurfaceSet& surfaces, const std::v
         const double lambert = std::max(0.0, glm::dot(k.normal, toLight));
         for (int c = 0; c < 3; ++c) {
             sp.tau[c] = float(tau);
-            sp.emission[c] = float(tau * settings.lightColor[c] * lambert * double(shadows[i][c]));
+            sp.emission[c] = float(tau * settings.lightColor[c] * k.albedo[c] * lambert * double(shadows[i][c]));
         }
         sp.firstSlab = first;
         sp.slabCount = std::uint32_t(span);

@@ -83,15 +83,18 @@ void setFootprint(S& s, const Footprint& fp, double cutoffRadius)
 bool projectSurface(const SurfaceKernel& kernel, double sigma, const Camera& camera, const ProjectionParams& params,
     Vec3d& t, Vec3d& normal, Footprint& fp);
 
-/// @a passes: the shadow and emission passes add their source terms to SplatSet::passSources.
+/// @a shadows: the light's transmittance at each kernel; @a colors: each kernel's material
+/// colour, multiplied into the scattering albedo (empty: white). @a passes: the shadow and
+/// emission passes add their source terms to SplatSet::passSources.
 SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
-    const std::vector<Rgb>& shadows, const Camera& camera, const RenderSettings& settings,
-    const PassRequest& passes = {});
+    const std::vector<Rgb>& shadows, const std::vector<Rgb>& colors, const Camera& camera,
+    const RenderSettings& settings, const PassRequest& passes = {});
 
 /// Fog volumes with an iso-surface (Sec. 6.4): append @a surfaces to @a set as thin splats of
 /// the slab compositor. Each covers its pixels with optical depth -ln(1 - settings.isoOpacity)
 /// (capped at 20) x area x footprint (the kernels sum to one over the surface), shaded
-/// Lambert from the light, times @a shadows (one per surface kernel); back faces are culled.
+/// Lambert from the light, times @a shadows (one per surface kernel) and the kernel's material
+/// colour; back faces are culled.
 void appendSurfaceSplats(SplatSet& set, const SurfaceSet& surfaces, const std::vector<Rgb>& shadows,
     const Camera& camera, const RenderSettings& settings, double voxelLength, const PassRequest& passes);
 

@@ -1,12 +1,12 @@
 /// @file surface_extraction.cpp
 #include "surface_extraction.h"
 
-#include <openvdb/tools/Interpolation.h>
+#include "material_color.h"
+
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
-#include <optional>
 
 namespace vdb_ewa {
 namespace detail {
@@ -79,8 +79,7 @@ SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, double isovalue, 
     const double reject = 2.0 * grid.voxelLength; // |f - iso| / |grad| beyond this cannot land in reach
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size()), [&](const tbb::blocked_range<std::size_t>& r) {
         openvdb::tree::ValueAccessor<const openvdb::FloatTree> acc(tree);
-        std::optional<openvdb::Vec3SGrid::ConstAccessor> colorAcc;
-        if (grid.color) colorAcc.emplace(grid.color->getConstAccessor());
+        MaterialColor color(grid);
         for (std::size_t l = r.begin(); l < r.end(); ++l) {
             for (auto it = leaves[l]->cbeginValueOn(); it; ++it) {
                 const double d = double(*it) - isovalue;
@@ -115,11 +114,7 @@ SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, double isovalue, 
                 k.normal = (outwardDecreasing ? -1.0 : 1.0) * gWorld / std::sqrt(g2);
                 k.pWorld = Vec3d(w.x(), w.y(), w.z()) + stepWorld;
                 k.area = 0.0; // normalizeAreas
-                if (colorAcc) {
-                    const openvdb::Vec3s c = openvdb::tools::BoxSampler::sample(*colorAcc, grid.color->transform().worldToIndex(
-                        openvdb::Vec3d(k.pWorld.x, k.pWorld.y, k.pWorld.z)));
-                    k.albedo = Vec3d(c.x(), c.y(), c.z());
-                }
+                k.albedo = color.at(k.pWorld);
                 perLeaf[l].push_back(k);
                 perLeafVoxels[l].push_back(ijk);
             }
