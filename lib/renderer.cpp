@@ -7,6 +7,7 @@
 #include "detail/grid_source_impl.h"
 #include "detail/kernel_extraction.h"
 #include "detail/material_color.h"
+#include "detail/progress.h"
 #include "detail/reference_integrator.h"
 #include "detail/shadow_transmittance.h"
 #include "detail/splat_projection.h"
@@ -53,7 +54,7 @@ Renderer::Renderer(const RenderSettings& settings) : mSettings(settings)
 }
 
 void Renderer::renderLevelSet(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes,
-    Frame& frame, RenderStats& stats) const
+    Frame& frame, RenderStats& stats, detail::Progress& progress) const
 {
     if (mSettings.method == Method::RayMarch) {
         throw ValueError("--method raymarch renders fog volumes; level sets are rendered with surface splats");
@@ -63,10 +64,12 @@ void Renderer::renderLevelSet(const GridSource::Impl& grid, const Camera& camera
     }
     if (!std::isnan(mSettings.iso)) throw ValueError("--iso is for fog volumes; a level set's surface is chosen with --isovalue");
     StageTimer timer;
-    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(grid, mSettings.isovalue, mSettings.kernelSigma);
+    progress.stage(0, 60);
+    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(grid, mSettings.isovalue, mSettings.kernelSigma, false, &progress);
     stats.kernelSeconds = timer.lap();
+    progress.stage(60, 100);
     detail::SurfaceStats surfaceStats;
-    frame = detail::rasterizeSurfaces(surfaces, camera, mSettings, grid.voxelLength, passes, surfaceStats);
+    frame = detail::rasterizeSurfaces(surfaces, camera, mSettings, grid.voxelLength, passes, surfaceStats, &progress);
     stats.rasterSeconds = timer.lap();
     stats.activeVoxels = surfaces.activeVoxels;
     stats.kernels = surfaces.kernels.size();
@@ -81,9 +84,9 @@ void Renderer::renderLevelSet(const GridSource::Impl& grid, const Camera& camera
 }
 
 void Renderer::addIsoSurface(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes,
-    detail::SplatSet& splats) const
+    detail::SplatSet& splats, detail::Progress& progress) const
 {
-    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(grid, mSettings.iso, mSettings.kernelSigma, true);
+    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(grid, mSettings.iso, mSettings.kernelSigma, true, &progress);
     // Shadow transmittance at the surface kernels: the volume's shadow rays from their centres.
     detail::KernelSet points;
     const Mat3d indexFromWorld = glm::inverse(grid.indexToWorldLinear);
@@ -95,69 +98,92 @@ void Renderer::addIsoSurface(const GridSource::Impl& grid, const Camera& camera,
         }();
         points.kernels.push_back(detail::Kernel{pIndex, 1.0f, 1.0f});
     }
-    const std::vector<detail::Rgb> shadows = detail::shadowTransmittance(grid, points, mSettings);
+    const std::vector<detail::Rgb> shadows = detail::shadowTransmittance(grid, points, mSettings, &progress);
     detail::appendSurfaceSplats(splats, surfaces, shadows, camera, mSettings, grid.voxelLength, passes);
 }
 
-Image Renderer::render(const GridSource& grid, const Camera& camera, RenderStats* statsOut) const
+void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, const PassRequest& passes,
+    Frame& frame, RenderStats& stats, detail::Progress& progress) const
 {
-    return renderFrame(grid, camera, PassRequest{}, statsOut).beauty;
+    // Progress: the stages' typical shares of a frame (docs/performance.md).
+    StageTimer timer;
+    progress.stage(0, 10);
+    const detail::LevelOfDetail lod(g, camera, mSettings.lodPixels);
+    const detail::KernelSet kernels = detail::extractKernels(g, mSettings, &lod, &progress);
+    stats.kernelSeconds = timer.lap();
+    progress.stage(10, 35);
+    const std::vector<detail::Rgb> shadows = detail::shadowTransmittance(g, kernels, mSettings, &progress);
+    stats.shadowSeconds = timer.lap();
+    progress.stage(35, 45);
+    const std::vector<detail::Rgb> colors = detail::kernelColors(g, kernels);
+    detail::SplatSet splats = detail::projectSplats(g, kernels, shadows, colors, camera, mSettings, passes, &progress);
+    if (!std::isnan(mSettings.iso)) addIsoSurface(g, camera, passes, splats, progress);
+    stats.projectSeconds = timer.lap();
+    progress.stage(45, 100);
+    detail::RasterStats raster;
+    frame = detail::rasterizeSplats(splats, camera, mSettings, passes, raster, &progress);
+    stats.rasterSeconds = timer.lap();
+
+    stats.activeVoxels = kernels.activeVoxels;
+    stats.activeTiles = kernels.activeTiles;
+    stats.kernels = kernels.kernels.size();
+    stats.kernelsSkipped = kernels.belowCutoff + kernels.notANumber;
+    stats.voxelsMerged = kernels.mergedVoxels;
+    stats.mergedKernels = kernels.mergedKernels;
+    stats.kernelsCulled = splats.culled;
+    stats.splats = splats.splats.size();
+    stats.splatTilePairs = raster.splatTilePairs;
+    stats.screenTiles = raster.tiles;
+    stats.screenTilesOpaque = raster.tilesOpaque;
+    stats.splatTilePairsSkipped = raster.pairsSkipped;
+    if (kernels.activeVoxels == 0 && kernels.activeTiles == 0) stats.warnings.push_back("the grid has no active values: the image is empty");
+    if (kernels.notANumber) stats.warnings.push_back(countLine(kernels.notANumber, "NaN voxel values skipped"));
+    if (kernels.clamped) stats.warnings.push_back(countLine(kernels.clamped, "voxel values above 1e6 (or +Inf) clamped to 1e6"));
+    if (splats.beforeNear) stats.warnings.push_back(countLine(splats.beforeNear, "kernels with their centre before the near plane skipped"));
+    if (splats.clampedNear) stats.warnings.push_back(countLine(splats.clampedNear, "kernels within 3 sigma of the eye projected as if 3 sigma away (clamped Jacobian)"));
+    if (splats.clampedGrazing) stats.warnings.push_back(countLine(splats.clampedGrazing, "kernels beyond 1.3x the frustum edge projected with the edge's Jacobian"));
+    if (splats.requestedThickness > 0.0) {
+        std::ostringstream w;
+        w << "slab thickness raised from " << splats.requestedThickness << " to " << splats.slabs.thickness
+          << " world units so that no kernel spans more than " << detail::kSlabSpanTarget << " slabs";
+        stats.warnings.push_back(w.str());
+    }
+    if (splats.clippedSpan) stats.warnings.push_back(countLine(splats.clippedSpan, "kernels spanned more than 1024 slabs and were truncated in depth (raise --slab)"));
+}
+
+Image Renderer::render(const GridSource& grid, const Camera& camera, RenderStats* statsOut, Interrupter* interrupter) const
+{
+    return renderFrame(grid, camera, PassRequest{}, statsOut, interrupter).beauty;
 }
 
 Frame Renderer::renderFrame(const GridSource& grid, const Camera& camera, const PassRequest& passes,
-    RenderStats* statsOut) const
+    RenderStats* statsOut, Interrupter* interrupter) const
 {
+    // The interrupter's start() and end() bracket the render, also when it throws.
+    struct Bracket
+    {
+        Interrupter* interrupter;
+        Bracket(Interrupter* i, const std::string& name) : interrupter(i)
+        {
+            if (interrupter) interrupter->start(name.c_str());
+        }
+        ~Bracket()
+        {
+            if (interrupter) interrupter->end();
+        }
+    } bracket(interrupter, grid.name());
+    detail::Progress progress(interrupter);
     RenderStats stats;
     Frame frame;
     const GridSource::Impl& g = grid.impl();
     auto run = [&] {
         if (grid.isLevelSet()) {
-            renderLevelSet(g, camera, passes, frame, stats);
-            return;
+            renderLevelSet(g, camera, passes, frame, stats, progress);
+        } else if (mSettings.method == Method::RayMarch) {
+            frame = detail::rayMarchReference(g, camera, mSettings, passes, stats, &progress);
+        } else {
+            renderFogVolume(g, camera, passes, frame, stats, progress);
         }
-        if (mSettings.method == Method::RayMarch) {
-            frame = detail::rayMarchReference(g, camera, mSettings, passes, stats);
-            return;
-        }
-        StageTimer timer;
-        const detail::LevelOfDetail lod(g, camera, mSettings.lodPixels);
-        const detail::KernelSet kernels = detail::extractKernels(g, mSettings, &lod);
-        stats.kernelSeconds = timer.lap();
-        const std::vector<detail::Rgb> shadows = detail::shadowTransmittance(g, kernels, mSettings);
-        stats.shadowSeconds = timer.lap();
-        const std::vector<detail::Rgb> colors = detail::kernelColors(g, kernels);
-        detail::SplatSet splats = detail::projectSplats(g, kernels, shadows, colors, camera, mSettings, passes);
-        if (!std::isnan(mSettings.iso)) addIsoSurface(g, camera, passes, splats);
-        stats.projectSeconds = timer.lap();
-        detail::RasterStats raster;
-        frame = detail::rasterizeSplats(splats, camera, mSettings, passes, raster);
-        stats.rasterSeconds = timer.lap();
-
-        stats.activeVoxels = kernels.activeVoxels;
-        stats.activeTiles = kernels.activeTiles;
-        stats.kernels = kernels.kernels.size();
-        stats.kernelsSkipped = kernels.belowCutoff + kernels.notANumber;
-        stats.voxelsMerged = kernels.mergedVoxels;
-        stats.mergedKernels = kernels.mergedKernels;
-        stats.kernelsCulled = splats.culled;
-        stats.splats = splats.splats.size();
-        stats.splatTilePairs = raster.splatTilePairs;
-        stats.screenTiles = raster.tiles;
-        stats.screenTilesOpaque = raster.tilesOpaque;
-        stats.splatTilePairsSkipped = raster.pairsSkipped;
-        if (kernels.activeVoxels == 0 && kernels.activeTiles == 0) stats.warnings.push_back("the grid has no active values: the image is empty");
-        if (kernels.notANumber) stats.warnings.push_back(countLine(kernels.notANumber, "NaN voxel values skipped"));
-        if (kernels.clamped) stats.warnings.push_back(countLine(kernels.clamped, "voxel values above 1e6 (or +Inf) clamped to 1e6"));
-        if (splats.beforeNear) stats.warnings.push_back(countLine(splats.beforeNear, "kernels with their centre before the near plane skipped"));
-        if (splats.clampedNear) stats.warnings.push_back(countLine(splats.clampedNear, "kernels within 3 sigma of the eye projected as if 3 sigma away (clamped Jacobian)"));
-        if (splats.clampedGrazing) stats.warnings.push_back(countLine(splats.clampedGrazing, "kernels beyond 1.3x the frustum edge projected with the edge's Jacobian"));
-        if (splats.requestedThickness > 0.0) {
-            std::ostringstream w;
-            w << "slab thickness raised from " << splats.requestedThickness << " to " << splats.slabs.thickness
-              << " world units so that no kernel spans more than " << detail::kSlabSpanTarget << " slabs";
-            stats.warnings.push_back(w.str());
-        }
-        if (splats.clippedSpan) stats.warnings.push_back(countLine(splats.clippedSpan, "kernels spanned more than 1024 slabs and were truncated in depth (raise --slab)"));
     };
     if (mSettings.threads > 0) {
         tbb::task_arena arena(mSettings.threads);
@@ -165,6 +191,7 @@ Frame Renderer::renderFrame(const GridSource& grid, const Camera& camera, const 
     } else {
         run();
     }
+    progress.finish();
     if (statsOut) *statsOut = std::move(stats);
     return frame;
 }

@@ -11,11 +11,13 @@
 #include "frame.h"
 #include "grid_source.h"
 #include "image.h"
+#include "interrupter.h"
 #include "render_settings.h"
 
 namespace vdb_ewa {
 namespace detail {
 struct SplatSet;
+class Progress;
 } // namespace detail
 
 /// What a render read, culled and splatted, and how long each stage took (seconds).
@@ -49,23 +51,33 @@ public:
     const RenderSettings& settings() const { return mSettings; }
 
     /// Render @a grid through @a camera: a fog volume with EWA volume splatting, a level set as
-    /// its iso-surface with surface splats (settings.isovalue, settings.shader). Thread-safe: a Renderer holds no mutable state.
-    /// The result does not depend on the thread count (bit-identical).
-    Image render(const GridSource& grid, const Camera& camera, RenderStats* stats = nullptr) const;
+    /// its iso-surface with surface splats (settings.isovalue, settings.shader).
+    /// Thread-safe: a Renderer holds no mutable state, so one Renderer (or several) may render
+    /// on several threads at once; each render runs in its own tbb::task_arena of
+    /// settings.threads threads (0: the caller's arena). The result does not depend on the
+    /// thread count (bit-identical).
+    /// @param interrupter receives progress and may cancel (optional; see interrupter.h).
+    /// @throw Cancelled if @a interrupter cancelled the render.
+    Image render(const GridSource& grid, const Camera& camera, RenderStats* stats = nullptr,
+        Interrupter* interrupter = nullptr) const;
 
     /// Render the beauty and the passes in @a passes (docs/output.md); the beauty is the same
-    /// image render() returns. @throw ValueError for passes --method raymarch cannot make.
+    /// image render() returns. @throw ValueError for passes --method raymarch cannot make;
+    /// Cancelled as render().
     Frame renderFrame(const GridSource& grid, const Camera& camera, const PassRequest& passes,
-        RenderStats* stats = nullptr) const;
+        RenderStats* stats = nullptr, Interrupter* interrupter = nullptr) const;
 
 private:
     /// Level sets: flattened surface kernels (Sec. 6.3, 6.4) and a z-buffer (Sec. 7.2).
     void renderLevelSet(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes, Frame& frame,
-        RenderStats& stats) const;
+        RenderStats& stats, detail::Progress& progress) const;
+    /// Fog volumes: kernels, shadows, splats (Eq. 29-33), slab compositing.
+    void renderFogVolume(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes, Frame& frame,
+        RenderStats& stats, detail::Progress& progress) const;
 
     /// Fog volumes with settings.iso: the iso-surface's kernels join the volume's splats.
     void addIsoSurface(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes,
-        detail::SplatSet& splats) const;
+        detail::SplatSet& splats, detail::Progress& progress) const;
 
     RenderSettings mSettings;
 };

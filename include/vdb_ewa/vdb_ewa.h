@@ -14,6 +14,7 @@
 #include "output_file.h"
 #include "preview_output.h"
 #include "render_settings.h"
+#include "interrupter.h"
 #include "renderer.h"
 #include "slab_share.h"
 #include "types.h"

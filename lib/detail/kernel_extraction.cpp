@@ -36,7 +36,8 @@ int tileLatticeSpacing(int tileDim, int maxSpacing)
     return s;
 }
 
-KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& settings, const LevelOfDetail* lod)
+KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& settings, const LevelOfDetail* lod,
+    Progress* progress)
 {
     using LeafT = openvdb::FloatTree::LeafNodeType;
     const openvdb::FloatTree& tree = grid.grid->tree();
@@ -54,6 +55,7 @@ KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& set
     set.activeVoxels = offsets.back();
     std::vector<Kernel> voxels(offsets.back(), Kernel{Vec3d(0.0), 0.0f, 1.0f});
     std::vector<std::uint64_t> counts(leaves.size() * 5, 0); // below cutoff, NaN, clamped, merged voxels, merged kernels
+    setUnits(progress, leaves.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size()),
         [&](const tbb::blocked_range<std::size_t>& range) {
             for (std::size_t i = range.begin(); i < range.end(); ++i) {
@@ -92,6 +94,7 @@ KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& set
                             ++count[4];
                         }
             }
+            advance(progress, range.size());
         });
     for (std::size_t i = 0; i < leaves.size(); ++i) {
         set.belowCutoff += counts[5 * i];

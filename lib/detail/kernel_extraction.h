@@ -6,6 +6,7 @@
 #include <vdb_ewa/render_settings.h>
 
 #include "level_of_detail.h"
+#include "progress.h"
 
 #include <cstdint>
 #include <vector>
@@ -46,8 +47,9 @@ int tileLatticeSpacing(int tileDim, int maxSpacing);
 /// Build the kernels of every active voxel and tile, one TBB task per leaf node. With @a lod,
 /// a leaf node whose voxels project small enough becomes blocks of merged kernels (the
 /// block's mean density at the block's centre, spacing = block size: mass is kept).
+/// @a progress: one unit per leaf node; throws Cancelled.
 KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& settings,
-    const LevelOfDetail* lod = nullptr);
+    const LevelOfDetail* lod = nullptr, Progress* progress = nullptr);
 
 } // namespace detail
 } // namespace vdb_ewa

@@ -32,7 +32,8 @@ struct ReferenceVolume
     Vec3fGrid::Ptr emission;
 };
 
-ReferenceVolume buildVolume(const GridSource::Impl& grid, const RenderSettings& settings, RenderStats& stats)
+ReferenceVolume buildVolume(const GridSource::Impl& grid, const RenderSettings& settings, RenderStats& stats,
+    Progress* progress)
 {
     auto t0 = std::chrono::steady_clock::now();
     // Unit-spaced kernels everywhere: voxelise the tiles of a copy.
@@ -47,7 +48,7 @@ ReferenceVolume buildVolume(const GridSource::Impl& grid, const RenderSettings& 
     stats.kernels = kernels.kernels.size();
     stats.kernelsSkipped = kernels.belowCutoff + kernels.notANumber;
     const double t1 = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    const std::vector<Rgb> shadows = shadowTransmittance(*impl, kernels, settings);
+    const std::vector<Rgb> shadows = shadowTransmittance(*impl, kernels, settings, progress);
     const std::vector<Rgb> colors = kernelColors(*impl, kernels);
     stats.kernelSeconds = t1;
     stats.shadowSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() - t1;
@@ -134,13 +135,14 @@ private:
 } // namespace
 
 Frame rayMarchReference(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings,
-    const PassRequest& passes, RenderStats& stats)
+    const PassRequest& passes, RenderStats& stats, Progress* progress)
 {
     if (!grid.linear) throw ValueError("--method raymarch needs an affine grid transform (this grid has a frustum map)");
     if (passes.shadow || passes.emission || passes.deep) {
         throw ValueError("--method raymarch renders the beauty, Z and transmittance only (shadow, emission and deep passes need --method splat)");
     }
-    const ReferenceVolume volume = buildVolume(grid, settings, stats);
+    if (progress) progress->stage(0, 15); // kernels and shadows, then the rays
+    const ReferenceVolume volume = buildVolume(grid, settings, stats, progress);
     const auto t0 = std::chrono::steady_clock::now();
 
     const Mat3d indexFromWorld = glm::inverse(grid.indexToWorldLinear);
@@ -158,10 +160,13 @@ Frame rayMarchReference(const GridSource::Impl& grid, const Camera& camera, cons
     if (box.empty()) return frame;
     const Vec3d forward = glm::transpose(camera.cameraFromWorld())[2];
 
+    if (progress) progress->stage(15, 100);
+    setUnits(progress, std::uint64_t(height));
     tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
         KernelSum sum(volume, settings.kernelSigma);
         EmptySpaceSkipper skipper(*volume.density, sum.radius());
-        for (int y = rows.begin(); y < rows.end(); ++y)
+        for (int y = rows.begin(); y < rows.end(); ++y) {
+            advance(progress); // per row: a cancel stops within one row's time
             for (int x = 0; x < width; ++x) {
                 Vec3d origin, dir;
                 camera.worldRay(x + 0.5, y + 0.5, origin, dir);
@@ -210,6 +215,7 @@ Frame rayMarchReference(const GridSource::Impl& grid, const Camera& camera, cons
                 if (passes.depth) frame.depth[i] = z;
                 if (passes.transmittance) std::copy(T, T + 3, &frame.transmittance[3 * i]);
             }
+        }
     });
     stats.rasterSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return frame;

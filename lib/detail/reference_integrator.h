@@ -5,6 +5,7 @@
 #pragma once
 
 #include "kernel_extraction.h"
+#include "progress.h"
 
 #include <vdb_ewa/camera.h>
 #include <vdb_ewa/frame.h>
@@ -21,8 +22,9 @@ constexpr double kReferenceTruncation = 4.0;
 /// each step with the exact homogeneous update. Active tiles are voxelised (their kernels are
 /// unit-spaced here). Passes: Z (the crossing found within a step as in the splatter) and
 /// transmittance. @throw ValueError for non-affine grids and for the other passes.
+/// @a progress: 0-15 % kernels and shadows, 15-100 % one unit per row; throws Cancelled.
 Frame rayMarchReference(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings,
-    const PassRequest& passes, RenderStats& stats);
+    const PassRequest& passes, RenderStats& stats, Progress* progress = nullptr);
 
 } // namespace detail
 } // namespace vdb_ewa

@@ -104,13 +104,16 @@ private:
 namespace {
 
 /// March from every point of a list, one task per block.
-std::vector<Rgb> marchAll(const GridSource::Impl& grid, const std::vector<Vec3d>& points, const RenderSettings& settings)
+std::vector<Rgb> marchAll(const GridSource::Impl& grid, const std::vector<Vec3d>& points, const RenderSettings& settings,
+    Progress* progress)
 {
     std::vector<Rgb> out(points.size());
+    setUnits(progress, points.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.size(), 1024),
         [&](const tbb::blocked_range<std::size_t>& range) {
             ShadowMarcher marcher(grid, settings);
             for (std::size_t i = range.begin(); i < range.end(); ++i) out[i] = marcher.march(points[i]);
+            advance(progress, range.size());
         });
     return out;
 }
@@ -119,7 +122,8 @@ std::vector<Rgb> marchAll(const GridSource::Impl& grid, const std::vector<Vec3d>
 /// interpolated at each kernel centre: about N^3 times fewer marches. The lattice points are
 /// the corners of the lattice cells that hold a kernel, stored in a sparse grid of point
 /// indices (lattice coordinates).
-std::vector<Rgb> latticeShadows(const GridSource::Impl& grid, const KernelSet& kernels, const RenderSettings& settings)
+std::vector<Rgb> latticeShadows(const GridSource::Impl& grid, const KernelSet& kernels, const RenderSettings& settings,
+    Progress* progress)
 {
     const double n = double(settings.shadowResolution);
     openvdb::Int32Grid::Ptr slots = openvdb::Int32Grid::create(-1);
@@ -137,7 +141,7 @@ std::vector<Rgb> latticeShadows(const GridSource::Impl& grid, const KernelSet& k
         const openvdb::Coord c = it.getCoord();
         points.emplace_back(n * c.x(), n * c.y(), n * c.z());
     }
-    const std::vector<Rgb> lattice = marchAll(grid, points, settings);
+    const std::vector<Rgb> lattice = marchAll(grid, points, settings, progress);
 
     std::vector<Rgb> out(kernels.kernels.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.size(), 4096),
@@ -163,17 +167,17 @@ std::vector<Rgb> latticeShadows(const GridSource::Impl& grid, const KernelSet& k
 } // namespace
 
 std::vector<Rgb> shadowTransmittance(const GridSource::Impl& grid, const KernelSet& kernels,
-    const RenderSettings& settings)
+    const RenderSettings& settings, Progress* progress)
 {
     // No scattering or no light: nothing is lit, so the transmittance is never used.
     const Vec3d lit = settings.scatter * settings.lightColor;
     if (lit.x == 0.0 && lit.y == 0.0 && lit.z == 0.0) {
         return std::vector<Rgb>(kernels.kernels.size(), Rgb{1.0f, 1.0f, 1.0f});
     }
-    if (settings.shadowResolution > 1 && grid.linear) return latticeShadows(grid, kernels, settings);
+    if (settings.shadowResolution > 1 && grid.linear) return latticeShadows(grid, kernels, settings, progress);
     std::vector<Vec3d> centres(kernels.kernels.size());
     for (std::size_t i = 0; i < centres.size(); ++i) centres[i] = kernels.kernels[i].pIndex;
-    return marchAll(grid, centres, settings);
+    return marchAll(grid, centres, settings, progress);
 }
 
 Rgb shadowTransmittanceAt(const GridSource::Impl& grid, const Vec3d& pIndex, const RenderSettings& settings)

@@ -16,8 +16,9 @@ using Rgb = std::array<float, 3>;
 /// March from each kernel centre towards the light: samples at s = k * shadowStep voxel
 /// lengths (k >= 1), trilinear density d, T *= exp(-sigma_t d shadowStep / (1 + gain s)),
 /// stop where |T|^2 < cutoff; empty tree nodes are skipped. One task per block of kernels.
+/// @a progress: one unit per march; throws Cancelled.
 std::vector<Rgb> shadowTransmittance(const GridSource::Impl& grid, const KernelSet& kernels,
-    const RenderSettings& settings);
+    const RenderSettings& settings, Progress* progress = nullptr);
 
 /// The same march for one world-space point (used by tests and reference integrators).
 Rgb shadowTransmittanceAt(const GridSource::Impl& grid, const Vec3d& pIndex, const RenderSettings& settings);

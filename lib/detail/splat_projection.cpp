@@ -66,7 +66,7 @@ bool pixelBox(const Footprint& fp, int width, int height, int& x0, int& y0, int&
 
 SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
     const std::vector<Rgb>& shadows, const std::vector<Rgb>& colors, const Camera& camera,
-    const RenderSettings& settings, const PassRequest& passes)
+    const RenderSettings& settings, const PassRequest& passes, Progress* progress)
 {
     SplatSet out;
     const ProjectionParams params = projectionParams(camera, settings);
@@ -99,6 +99,7 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
     std::vector<std::uint8_t> flags(n, 0); // 1: before near, 2: clamped near, 4: clamped grazing
 
     // Pass 1: footprints, culling and depth extents.
+    setUnits(progress, n);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096),
         [&](const tbb::blocked_range<std::size_t>& range) {
             for (std::size_t i = range.begin(); i < range.end(); ++i) {
@@ -162,6 +163,7 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
                 }
                 visible[i] = 1;
             }
+            advance(progress, range.size());
         });
 
     // Slab thickness: --slab voxel lengths, raised where a kernel is so long along the ray

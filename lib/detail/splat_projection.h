@@ -85,10 +85,11 @@ bool projectSurface(const SurfaceKernel& kernel, double sigma, const Camera& cam
 
 /// @a shadows: the light's transmittance at each kernel; @a colors: each kernel's material
 /// colour, multiplied into the scattering albedo (empty: white). @a passes: the shadow and
-/// emission passes add their source terms to SplatSet::passSources.
+/// emission passes add their source terms to SplatSet::passSources. @a progress: one unit per
+/// kernel; throws Cancelled.
 SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
     const std::vector<Rgb>& shadows, const std::vector<Rgb>& colors, const Camera& camera,
-    const RenderSettings& settings, const PassRequest& passes = {});
+    const RenderSettings& settings, const PassRequest& passes = {}, Progress* progress = nullptr);
 
 /// Fog volumes with an iso-surface (Sec. 6.4): append @a surfaces to @a set as thin splats of
 /// the slab compositor. Each covers its pixels with optical depth -ln(1 - settings.isoOpacity)

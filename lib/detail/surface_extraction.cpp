@@ -58,7 +58,8 @@ void normalizeAreas(std::vector<SurfaceKernel>& kernels, const std::vector<openv
 
 } // namespace
 
-SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, double isovalue, double kernelSigma, bool outwardDecreasing)
+SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, double isovalue, double kernelSigma, bool outwardDecreasing,
+    Progress* progress)
 {
     SurfaceSet out;
     const openvdb::FloatTree& tree = grid.grid->tree();
@@ -77,6 +78,7 @@ SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, double isovalue, 
     std::vector<std::vector<SurfaceKernel>> perLeaf(leaves.size());
     std::vector<std::vector<openvdb::Coord>> perLeafVoxels(leaves.size());
     const double reject = 2.0 * grid.voxelLength; // |f - iso| / |grad| beyond this cannot land in reach
+    setUnits(progress, leaves.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size()), [&](const tbb::blocked_range<std::size_t>& r) {
         openvdb::tree::ValueAccessor<const openvdb::FloatTree> acc(tree);
         MaterialColor color(grid);
@@ -118,6 +120,7 @@ SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, double isovalue, 
                 perLeaf[l].push_back(k);
                 perLeafVoxels[l].push_back(ijk);
             }
+        advance(progress, r.size());
         }
     });
     std::size_t total = 0;

@@ -4,6 +4,7 @@
 #pragma once
 
 #include "grid_source_impl.h"
+#include "progress.h"
 
 #include <cstdint>
 #include <vector>
@@ -38,8 +39,9 @@ struct SurfaceSet
 /// are NaN values.
 /// @a outwardDecreasing: the surface's outside is where values fall (fog volumes: the normal
 /// is minus the gradient); level sets grow outwards (the normal is the gradient).
+/// @a progress: one unit per leaf node; throws Cancelled.
 SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, double isovalue, double kernelSigma,
-    bool outwardDecreasing = false);
+    bool outwardDecreasing = false, Progress* progress = nullptr);
 
 } // namespace detail
 } // namespace vdb_ewa

@@ -101,7 +101,7 @@ std::vector<SurfaceSplat> projectSurfaceSplats(const SurfaceSet& set, const Came
 } // namespace
 
 Frame rasterizeSurfaces(const SurfaceSet& set, const Camera& camera, const RenderSettings& settings,
-    double voxelLength, const PassRequest& passes, SurfaceStats& stats)
+    double voxelLength, const PassRequest& passes, SurfaceStats& stats, Progress* progress)
 {
     const int width = camera.width(), height = camera.height();
     Frame frame = blankFrame(width, height, passes);
@@ -131,6 +131,7 @@ Frame rasterizeSurfaces(const SurfaceSet& set, const Camera& camera, const Rende
         }
         return std::isfinite(q.z);
     };
+    setUnits(progress, std::uint64_t(tiles));
     tbb::parallel_for(tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& range) {
         std::vector<std::uint32_t> order;
         std::vector<Pair> pairs;
@@ -191,6 +192,7 @@ Frame rasterizeSurfaces(const SurfaceSet& set, const Camera& camera, const Rende
                     if (passes.depth && alpha >= 0.5) frame.depth[i] = float(zSum[p] / weight[p]);
                     if (passes.transmittance) std::fill_n(&frame.transmittance[3 * i], 3, float(1.0 - alpha));
                 }
+            advance(progress);
         }
     });
     return frame;

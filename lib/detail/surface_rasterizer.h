@@ -30,8 +30,9 @@ struct SurfaceStats
 /// per cent). Z, where alpha >= 0.5: the weighted mean of the splats' tangent-plane depths
 /// along the pixel's ray. Passes: depth and transmittance (1 - alpha); the others are volume
 /// passes.
+/// @a progress: one unit per screen tile; throws Cancelled.
 Frame rasterizeSurfaces(const SurfaceSet& surfaces, const Camera& camera, const RenderSettings& settings,
-    double voxelLength, const PassRequest& passes, SurfaceStats& stats);
+    double voxelLength, const PassRequest& passes, SurfaceStats& stats, Progress* progress = nullptr);
 
 } // namespace detail
 } // namespace vdb_ewa

@@ -378,7 +378,8 @@ bool allGrey(const SplatSet& set)
 /// Composite every tile with a C-channel compositor.
 template <int C>
 void compositeTiles(const SplatSet& set, const TileBins& bins, const CompositeOptions& options,
-    const std::vector<float>& depthScale, Frame& frame, std::vector<TileDeep>& deep, std::vector<std::uint64_t>& skipped)
+    const std::vector<float>& depthScale, Frame& frame, std::vector<TileDeep>& deep, std::vector<std::uint64_t>& skipped,
+    Progress* progress)
 {
     const int width = frame.beauty.width, height = frame.beauty.height;
     const int tiles = bins.tilesX * bins.tilesY;
@@ -406,6 +407,7 @@ void compositeTiles(const SplatSet& set, const TileBins& bins, const CompositeOp
             }
             skipped[std::size_t(t)] = order.size() - done;
             tile.finish(frame, depthScale, deep.empty() ? nullptr : &deep[std::size_t(t)]);
+            advance(progress);
         }
     });
 }
@@ -468,7 +470,7 @@ DeepImage assembleDeep(std::vector<TileDeep>& tiles, const TileBins& bins, int w
 } // namespace
 
 Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSettings& settings,
-    const PassRequest& passes, RasterStats& stats)
+    const PassRequest& passes, RasterStats& stats, Progress* progress)
 {
     const int width = camera.width(), height = camera.height();
     Frame frame = blankFrame(width, height, passes);
@@ -487,8 +489,9 @@ Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSet
     options.passSources = set.passSourceCount;
     const std::vector<float> depthScale = (passes.depth || passes.deep) ? depthScales(camera) : std::vector<float>{};
     std::vector<TileDeep> deep(passes.deep ? std::size_t(tiles) : 0);
-    if (allGrey(set)) compositeTiles<1>(set, bins, options, depthScale, frame, deep, skipped);
-    else compositeTiles<3>(set, bins, options, depthScale, frame, deep, skipped);
+    setUnits(progress, std::uint64_t(bins.tilesX) * std::uint64_t(bins.tilesY));
+    if (allGrey(set)) compositeTiles<1>(set, bins, options, depthScale, frame, deep, skipped, progress);
+    else compositeTiles<3>(set, bins, options, depthScale, frame, deep, skipped, progress);
     if (passes.deep) frame.deep = assembleDeep(deep, bins, width, height, depthScale);
     stats.tiles = std::uint64_t(tiles);
     for (std::uint64_t n : skipped) {

@@ -23,8 +23,9 @@ struct RasterStats
 /// requested passes (include/vdb_ewa/frame.h, docs/output.md). Each tile is owned by one task
 /// and processes its splats in (first slab, kernel) order, so the result does not depend on
 /// the thread count.
+/// @a progress: one unit per screen tile; throws Cancelled.
 Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSettings& settings,
-    const PassRequest& passes, RasterStats& stats);
+    const PassRequest& passes, RasterStats& stats, Progress* progress = nullptr);
 
 } // namespace detail
 } // namespace vdb_ewa

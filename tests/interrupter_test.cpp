@@ -1,0 +1,224 @@
+/// @file interrupter_test.cpp
+/// @brief Progress and cancellation (Interrupter), and renderers running side by side in one
+///        process.
+#include "fixtures.h"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <mutex>
+#include <thread>
+
+using namespace vdb_ewa;
+using namespace vdb_ewa::test;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+/// Records what the renderer reports.
+class Recorder : public Interrupter
+{
+public:
+    void start(const char* name) override
+    {
+        ++starts;
+        this->name = name;
+    }
+    void end() override { ++ends; }
+    bool wasInterrupted(int percent) override
+    {
+        if (concurrent.exchange(true)) overlapped = true;
+        percents.push_back(percent);
+        std::this_thread::sleep_for(std::chrono::microseconds(200)); // widen any overlap
+        concurrent = false;
+        return false;
+    }
+
+    int starts = 0, ends = 0;
+    std::string name;
+    std::vector<int> percents;
+    std::atomic<bool> concurrent{false};
+    bool overlapped = false;
+};
+
+/// Cancels from another thread once the render has passed @a startPercent, and measures how
+/// long the render takes to return after the cancel.
+class CancelFromAnotherThread : public Interrupter
+{
+public:
+    explicit CancelFromAnotherThread(int startPercent) : mStartPercent(startPercent) {}
+
+    bool wasInterrupted(int percent) override
+    {
+        if (percent >= mStartPercent) {
+            std::lock_guard<std::mutex> lock(mMutex);
+            mStarted = true;
+            mCv.notify_all();
+        }
+        return false;
+    }
+
+    /// Runs on the cancelling thread.
+    void cancelWhenStarted()
+    {
+        std::unique_lock<std::mutex> lock(mMutex);
+        mCv.wait(lock, [&] { return mStarted; });
+        cancelledAt = Clock::now();
+        cancel();
+    }
+
+    Clock::time_point cancelledAt;
+
+private:
+    int mStartPercent;
+    bool mStarted = false;
+    std::mutex mMutex;
+    std::condition_variable mCv;
+};
+
+/// A render that takes long enough to cancel in the middle: the sample cloud at 2.5 cm voxels
+/// (about 0.7 M voxels) at high quality.
+struct SlowRender
+{
+    GridSource grid = makeSampleGrid(SampleGrid::Cloud, 0.025);
+    Camera camera = cloudCamera(grid, 960, 540);
+};
+
+} // namespace
+
+TEST(Interrupter, ReportsRisingPercentsFromOneThreadAtATimeAndBracketsTheRender)
+{
+    const GridSource grid = makeSampleGrid(SampleGrid::Cloud, 0.03);
+    RenderSettings s = RenderSettings::preset(Quality::High);
+    Recorder recorder;
+    const Image withProgress = Renderer(s).render(grid, cloudCamera(grid, 480, 270), nullptr, &recorder);
+    EXPECT_EQ(recorder.starts, 1);
+    EXPECT_EQ(recorder.ends, 1);
+    EXPECT_EQ(recorder.name, grid.name());
+    ASSERT_GE(recorder.percents.size(), 2u);
+    EXPECT_EQ(recorder.percents.back(), 100);
+    for (std::size_t i = 1; i < recorder.percents.size(); ++i) {
+        EXPECT_GE(recorder.percents[i], recorder.percents[i - 1]);
+        EXPECT_GE(recorder.percents[i], 0);
+        EXPECT_LE(recorder.percents[i], 100);
+    }
+    EXPECT_FALSE(recorder.overlapped) << "wasInterrupted ran on two threads at once";
+    // Reporting does not change the image.
+    const Image without = Renderer(s).render(grid, cloudCamera(grid, 480, 270));
+    EXPECT_EQ(withProgress.rgba, without.rgba);
+}
+
+TEST(Interrupter, CancelFromAnotherThreadStopsTheRenderPromptly)
+{
+    const SlowRender scene;
+    struct Case
+    {
+        const char* name;
+        RenderSettings settings;
+    };
+    RenderSettings march;
+    march.method = Method::RayMarch;
+    for (const Case& c : {Case{"splat, high", RenderSettings::preset(Quality::High)}, Case{"raymarch", march}}) {
+        for (const int at : {1, 50}) { // early (kernels, shadows) and late (compositing)
+            CancelFromAnotherThread interrupter(at);
+            std::thread canceller([&] { interrupter.cancelWhenStarted(); });
+            const auto t0 = Clock::now();
+            bool cancelled = false;
+            try {
+                Renderer(c.settings).render(scene.grid, scene.camera, nullptr, &interrupter);
+            } catch (const Cancelled&) {
+                cancelled = true;
+            }
+            const auto returned = Clock::now();
+            canceller.join();
+            ASSERT_TRUE(cancelled) << c.name << ": the render finished before the cancel (make the scene slower)";
+            const double latency = std::chrono::duration<double>(returned - interrupter.cancelledAt).count();
+            const double ran = std::chrono::duration<double>(returned - t0).count();
+            std::printf("%s, cancel at %d%%: returned %.3f s after the cancel (render ran %.2f s)\n", c.name, at, latency, ran);
+            EXPECT_LT(latency, 0.25) << c.name;
+        }
+    }
+}
+
+TEST(Interrupter, WasInterruptedReturningTrueCancelsAndResetAllowsReuse)
+{
+    struct StopAtHalf : Interrupter
+    {
+        bool wasInterrupted(int percent) override { return percent >= 50; }
+    } stop;
+    const GridSource grid = makeSampleGrid(SampleGrid::Cloud, 0.03);
+    const Camera camera = cloudCamera(grid, 480, 270);
+    const RenderSettings high = RenderSettings::preset(Quality::High);
+    EXPECT_THROW(Renderer(high).render(grid, camera, nullptr, &stop), Cancelled);
+    EXPECT_TRUE(stop.cancelled());
+    // A cancelled interrupter cancels at once until reset.
+    Interrupter plain;
+    plain.cancel();
+    EXPECT_THROW(Renderer(high).render(grid, camera, nullptr, &plain), Cancelled);
+    plain.reset();
+    EXPECT_NO_THROW(Renderer(high).render(grid, camera, nullptr, &plain));
+}
+
+TEST(Interrupter, LevelSetsReportAndCancelToo)
+{
+    auto ls = openvdb::FloatGrid::create(0.15f);
+    ls->setTransform(openvdb::math::Transform::createLinearTransform(0.05));
+    ls->setGridClass(openvdb::GRID_LEVEL_SET);
+    {
+        auto acc = ls->getAccessor();
+        for (int i = -25; i <= 25; ++i)
+            for (int j = -25; j <= 25; ++j)
+                for (int k = -25; k <= 25; ++k) {
+                    const float d = float(0.05 * std::sqrt(double(i * i + j * j + k * k)) - 1.0);
+                    if (std::abs(d) < 0.15f) acc.setValueOn(openvdb::Coord(i, j, k), d);
+                }
+    }
+    const GridSource grid = gridSourceFromOpenVDB(ls);
+    CameraSettings c;
+    c.width = 320;
+    c.height = 240;
+    c.translate = Vec3d(0, 0, 4);
+    const Camera camera(c, Vec3d(0.0));
+    Recorder recorder;
+    Renderer(RenderSettings()).render(grid, camera, nullptr, &recorder);
+    ASSERT_FALSE(recorder.percents.empty());
+    EXPECT_EQ(recorder.percents.back(), 100);
+    Interrupter cancelled;
+    cancelled.cancel();
+    EXPECT_THROW(Renderer(RenderSettings()).render(grid, camera, nullptr, &cancelled), Cancelled);
+}
+
+TEST(Renderers, TwoRenderersWithDifferentSettingsAtOnceGiveTheImagesTheyGiveAlone)
+{
+    // Different grids, settings, cameras and thread counts, in two host threads at once.
+    const GridSource cloud = makeSampleGrid(SampleGrid::Cloud, 0.04);
+    const GridSource sheared = makeSampleGrid(SampleGrid::Sheared, 0.04);
+    RenderSettings a = RenderSettings::preset(Quality::Draft);
+    a.threads = 1;
+    RenderSettings b = RenderSettings::preset(Quality::High);
+    b.threads = 2;
+    b.scatter = Vec3d(0.5, 1.0, 2.0);
+    const Camera ca = cloudCamera(cloud, 320, 180), cb = cloudCamera(sheared, 256, 256);
+    const Image aloneA = Renderer(a).render(cloud, ca), aloneB = Renderer(b).render(sheared, cb);
+    for (int round = 0; round < 3; ++round) {
+        Image togetherA, togetherB;
+        std::thread ta([&] { togetherA = Renderer(a).render(cloud, ca); });
+        std::thread tb([&] { togetherB = Renderer(b).render(sheared, cb); });
+        ta.join();
+        tb.join();
+        EXPECT_EQ(togetherA.rgba, aloneA.rgba) << "round " << round;
+        EXPECT_EQ(togetherB.rgba, aloneB.rgba) << "round " << round;
+    }
+    // One Renderer shared by two threads.
+    const Renderer shared(b);
+    Image x, y;
+    std::thread tx([&] { x = shared.render(sheared, cb); });
+    std::thread ty([&] { y = shared.render(sheared, cb); });
+    tx.join();
+    ty.join();
+    EXPECT_EQ(x.rgba, aloneB.rgba);
+    EXPECT_EQ(y.rgba, aloneB.rgba);
+}
