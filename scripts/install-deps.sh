@@ -6,7 +6,7 @@ packages=(
   cmake g++ make pkg-config
   libopenvdb-dev libboost-iostreams-dev libopenexr-dev libimath-dev libtbb-dev libglm-dev
   libopencolorio-dev libpng-dev
-  libcli11-dev libgtest-dev
+  libcli11-dev nlohmann-json3-dev libgtest-dev
   libopenvdb-tools   # vdb_render: the peer the tests and benchmarks compare against
   openimageio-tools  # oiiotool: EXR -> PNG previews and image diffs
 )

@@ -1,6 +1,7 @@
 /// @file cli_test.cpp
 /// @brief `vdb_ewa` as a user runs it: every error path gives one line on stderr naming the
 ///        file and the problem, a documented non-zero exit, and no output file.
+#include "cli_fixtures.h"
 #include "fixtures.h"
 
 #include <gtest/gtest.h>
@@ -14,33 +15,6 @@ using namespace vdb_ewa;
 using namespace vdb_ewa::test;
 
 namespace {
-
-struct CliRun
-{
-    int code = -1;
-    std::string out, err;
-};
-
-std::string slurp(const std::string& path)
-{
-    std::ifstream in(path, std::ios::binary);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
-
-/// Run the CLI with @a args; $OCIO is unset unless @a ocio names a value for it.
-CliRun runCli(const TempDir& dir, const std::string& args, const std::string& ocio = "")
-{
-    const std::string out = dir.file("stdout.txt"), err = dir.file("stderr.txt");
-    const std::string env = ocio.empty() ? "env -u OCIO " : "env OCIO='" + ocio + "' ";
-    const int status = std::system((env + VDB_EWA_CLI_PATH + " " + args + " >" + out + " 2>" + err).c_str());
-    CliRun r;
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = slurp(out);
-    r.err = slurp(err);
-    return r;
-}
 
 class Cli : public ::testing::Test
 {

@@ -2,6 +2,7 @@
 /// @brief vdb_ewa: argv -> a subcommand; the one place that prints errors and picks exit codes.
 #include "commands.h"
 #include "exit_codes.h"
+#include "job_file.h"
 #include "option_values.h"
 
 #include <vdb_ewa/vdb_ewa.h>
@@ -27,6 +28,17 @@ int main(int argc, char* argv[])
     }
     std::vector<std::string> args(argv + 1, argv + argc);
     args = normalizeSingleDashOptions(args, longNames);
+    // --job FILE: the job's settings go before the command line's, which override them.
+    if (!args.empty() && args.front() == "render") {
+        try {
+            std::vector<std::string> rest = applyJobFile({args.begin() + 1, args.end()}, *commands.front()->subcommand());
+            rest.insert(rest.begin(), "render");
+            args = std::move(rest);
+        } catch (const std::exception& e) {
+            std::cerr << "vdb_ewa: " << e.what() << "\n";
+            return exitCodeFor(e);
+        }
+    }
     std::reverse(args.begin(), args.end()); // CLI11 takes a reversed vector
 
     try {
@@ -42,18 +54,9 @@ int main(int argc, char* argv[])
         if (!cmd->subcommand()->parsed()) continue;
         try {
             return cmd->run();
-        } catch (const vdb_ewa::ValueError& e) {
-            std::cerr << "vdb_ewa: " << e.what() << "\n";
-            return kExitBadArguments;
-        } catch (const vdb_ewa::IoError& e) {
-            std::cerr << "vdb_ewa: " << e.what() << "\n";
-            return kExitBadInput;
-        } catch (const vdb_ewa::InputError& e) {
-            std::cerr << "vdb_ewa: " << e.what() << "\n";
-            return kExitBadInput;
         } catch (const std::exception& e) {
             std::cerr << "vdb_ewa: " << e.what() << "\n";
-            return kExitRenderFailed;
+            return exitCodeFor(e);
         }
     }
     return kExitBadArguments;

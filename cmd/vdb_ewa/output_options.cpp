@@ -61,7 +61,7 @@ void OutputOptions::add(CLI::App* app)
         "write a deep scanline EXR: one sample per non-empty slab (R, G, B, A premultiplied, Z, ZBack; tidy)");
 }
 
-void OutputOptions::prepare(const std::string& output, std::vector<std::string>& warnings)
+void OutputOptions::prepare(const std::string& output, const std::string& preview, std::vector<std::string>& warnings)
 {
     if (!endsWith(output, ".exr")) throw ValueError(output + ": unsupported output format (expected a .exr file)");
     mExr.colorType = mExrType.empty() ? ExrPixelType::Half : parseChoice("exr-type", mExrType, kExrTypes);
@@ -96,11 +96,11 @@ void OutputOptions::prepare(const std::string& output, std::vector<std::string>&
     if (!mExr.chromaticities) warnings.push_back("no chromaticities attribute written (" + how + ")");
 
     if (!mPreview.empty()) {
-        if (!endsWith(mPreview, ".png")) throw ValueError(mPreview + ": --preview writes a .png file");
+        if (!endsWith(preview, ".png")) throw ValueError(preview + ": --preview writes a .png file");
         if (mDisplay.empty()) mDisplay = mConfig->defaultDisplay();
         if (mView.empty()) mView = mConfig->defaultView(mDisplay);
         mConfig->checkDisplayView(mDisplay, mView);
-        checkOutputWritable(mPreview);
+        checkOutputWritable(preview);
     } else if (!mDisplay.empty() || !mView.empty()) {
         throw ValueError("--display and --view choose the --preview transform; give --preview OUT.png");
     }
@@ -125,14 +125,15 @@ Attributes OutputOptions::resolved() const
     return a;
 }
 
-void OutputOptions::write(Frame& frame, const Camera& camera, const std::string& output, const Attributes& attributes) const
+void OutputOptions::write(Frame& frame, const Camera& camera, const std::string& output, const std::string& preview,
+    const Attributes& attributes) const
 {
     // The preview reads the working-space beauty: keep a copy for it, and write the EXR, the
     // main output, first.
-    const Image workingBeauty = mPreview.empty() ? Image() : frame.beauty;
+    const Image workingBeauty = preview.empty() ? Image() : frame.beauty;
     writeExrInOutputSpace(frame, camera, output, attributes);
-    if (!mPreview.empty()) {
-        writePreviewPng(workingBeauty, ColorTransform::toDisplay(*mConfig, mWorkingSpace, mDisplay, mView), mPreview);
+    if (!preview.empty()) {
+        writePreviewPng(workingBeauty, ColorTransform::toDisplay(*mConfig, mWorkingSpace, mDisplay, mView), preview);
     }
 }
 

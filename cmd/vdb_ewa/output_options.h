@@ -24,9 +24,13 @@ public:
     void add(CLI::App* app);
 
     /// Everything that can fail before rendering: the config (warnings for fallbacks), the
-    /// colour spaces, display and view, the option words, the output and preview paths.
+    /// colour spaces, display and view, the option words, the paths @a output and @a preview
+    /// (the first frame's; empty: no preview).
     /// @throw ValueError or IoError naming the option or path.
-    void prepare(const std::string& output, std::vector<std::string>& warnings);
+    void prepare(const std::string& output, const std::string& preview, std::vector<std::string>& warnings);
+
+    /// --preview as given (it may hold a frame pattern); empty without one.
+    const std::string& previewOption() const { return mPreview; }
 
     /// The passes the EXR will hold.
     PassRequest passes() const { return mPasses; }
@@ -35,8 +39,9 @@ public:
     Attributes resolved() const;
 
     /// Convert @a frame from the working to the output space and write the EXR (flat or deep),
-    /// then the preview. @a attributes are added to the EXR header.
-    void write(Frame& frame, const Camera& camera, const std::string& output, const Attributes& attributes) const;
+    /// then the preview @a preview (empty: none). @a attributes are added to the EXR header.
+    void write(Frame& frame, const Camera& camera, const std::string& output, const std::string& preview,
+        const Attributes& attributes) const;
 
 private:
     void writeExrInOutputSpace(Frame& frame, const Camera& camera, const std::string& output,

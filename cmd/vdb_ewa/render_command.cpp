@@ -2,8 +2,10 @@
 /// @brief `vdb_ewa render IN.vdb OUT.exr [options]`: vdb_render's options, GNU spelling.
 #include "commands.h"
 #include "exit_codes.h"
+#include "frame_sequence.h"
 #include "option_values.h"
 #include "output_options.h"
+#include "progress_report.h"
 
 #include <vdb_ewa/vdb_ewa.h>
 
@@ -12,6 +14,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iomanip>
 #include <iostream>
 #include <sstream>
@@ -113,48 +116,80 @@ public:
             "without extra samples (default: 1)");
         mApp->add_option("--threads,--cpus", mThreads, "worker threads, 0 = all cores (default: 0)");
         mOutputOptions.add(mApp);
-        mApp->add_flag("-v,--verbose", mVerbose, "print the resolved settings, counts and stage timings");
+        // Batch jobs.
+        mApp->add_option("--frames", mFrames,
+            "render a sequence: frames N, A-B, A-BxS (every S), comma-separated (1-10,20); IN and OUT (and "
+            "--preview) hold a frame pattern, #### (padded to the number of #) or %04d (default: one frame)");
+        mApp->add_flag("--skip-existing", mSkipExisting,
+            "skip frames whose output exists (outputs are written whole or not at all, so a killed job resumes)");
+        mApp->add_option("--job", mJob,
+            "JSON job file of option: value pairs (long option names, plus input and output); options on the "
+            "command line override it, unknown keys are an error (docs/batch.md)");
+        mApp->add_flag("-v,--verbose", mVerbose,
+            "-v: also print the resolved settings, counts and stage timings; -vv: for every frame (default: "
+            "progress, warnings and one line per frame)");
+        mApp->add_flag("-q,--quiet", mQuiet, "print errors only");
     }
 
     CLI::App* subcommand() const override { return mApp; }
 
     int run() override
     {
+        const Verbosity verbosity = mQuiet ? Verbosity::Quiet
+            : mVerbose >= 2                ? Verbosity::Debug
+            : mVerbose == 1                ? Verbosity::Verbose
+                                           : Verbosity::Normal;
         CameraSettings cam;
         RenderSettings rs;
         resolve(cam, rs);
-        Renderer renderer(rs); // validates the render settings
+        const Renderer renderer(rs); // validates the render settings
+        const std::vector<int> frames = frameList();
         std::vector<std::string> warnings;
-        mOutputOptions.prepare(mOutput, warnings); // colour config, spaces, output paths
-        for (const std::string& w : warnings) std::cerr << "vdb_ewa: warning: " << w << "\n";
-
-        const auto t0 = std::chrono::steady_clock::now();
-        GridSource grid = openInput();
-        const double loadSeconds = seconds(t0);
-        Camera camera(cam, grid.worldCentre());
-        const std::vector<Attributes> options = resolvedOptions(grid, camera, rs);
-        if (mVerbose) printSettings(grid, options);
-
-        RenderStats stats;
-        Frame frame = renderer.renderFrame(grid, camera, mOutputOptions.passes(), &stats);
-        for (const std::string& w : stats.warnings) std::cerr << "vdb_ewa: warning: " << mInput << ": " << w << "\n";
-
-        const auto t1 = std::chrono::steady_clock::now();
-        setExrThreadsProcessWide(rs.threads);
-        Attributes attributes{{"software", std::string("vdb_ewa ") + versionString()},
-            {"vdb_ewa/input", mInput}, {"vdb_ewa/grid", grid.name()}};
-        for (const Attributes& group : options)
-            for (const auto& [key, value] : group) {
-                // The thread count never changes the image; leaving it out keeps files byte-identical.
-                if (key != "threads") attributes.emplace_back("vdb_ewa/" + key, value);
-            }
-        try {
-            mOutputOptions.write(frame, camera, mOutput, attributes);
-        } catch (const IoError& e) {
-            std::cerr << "vdb_ewa: " << e.what() << "\n";
-            return kExitRenderFailed;
+        mOutputOptions.prepare(pathOf(mOutput, frames.front()), pathOf(mOutputOptions.previewOption(), frames.front()),
+            warnings); // colour config, spaces, output paths
+        if (verbosity != Verbosity::Quiet) {
+            for (const std::string& w : warnings) std::cerr << "vdb_ewa: warning: " << w << "\n";
         }
-        if (mVerbose) printStats(stats, loadSeconds, seconds(t1));
+        setExrThreadsProcessWide(rs.threads);
+
+        ProgressReport report(int(frames.size()), verbosity);
+        installStopHandlers(report);
+        std::vector<int> failed;
+        int failCode = kExitOk, written = 0, skipped = 0;
+        for (std::size_t i = 0; i < frames.size() && !stopRequested(); ++i) {
+            report.beginFrame(int(i));
+            const std::string output = pathOf(mOutput, frames[i]);
+            if (mSkipExisting && std::filesystem::exists(output)) {
+                ++skipped;
+                if (verbosity >= Verbosity::Verbose) std::cout << "vdb_ewa: " << output << " exists: skipped\n";
+                continue;
+            }
+            try {
+                renderOneFrame(renderer, cam, rs, frames[i], output, report, verbosity, i == 0);
+                ++written;
+            } catch (const Cancelled&) {
+                break;
+            } catch (const std::exception& e) {
+                if (!isSequence()) throw;
+                std::cerr << "vdb_ewa: frame " << frames[i] << ": " << e.what() << "\n";
+                failed.push_back(frames[i]);
+                if (failCode == kExitOk) failCode = exitCodeFor(e);
+            }
+        }
+        report.finishJob();
+        if (stopRequested() || report.cancelled()) {
+            std::cerr << "vdb_ewa: interrupted: " << written << " of " << frames.size() << " frames written\n";
+            return kExitInterrupted;
+        }
+        if (!failed.empty()) {
+            std::ostringstream list;
+            for (std::size_t i = 0; i < failed.size(); ++i) list << (i ? ", " : "") << failed[i];
+            std::cerr << "vdb_ewa: " << failed.size() << " of " << frames.size() << " frames failed: " << list.str() << "\n";
+            return failCode;
+        }
+        if (isSequence() && verbosity != Verbosity::Quiet) {
+            std::cout << "vdb_ewa: " << written << " frames written, " << skipped << " skipped (--skip-existing)\n";
+        }
         return kExitOk;
     }
 
@@ -164,10 +199,61 @@ private:
         return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
     }
 
-    GridSource openInput() const
+    bool isSequence() const { return !mFrames.empty(); }
+
+    /// --frames, checked against the paths' frame patterns; {0} (unused) without --frames.
+    std::vector<int> frameList() const
     {
-        const GridSource grid = GridSource::open(mInput, mName);
-        return mColor.empty() ? grid : grid.withColorGrid(mColor);
+        if (!isSequence()) {
+            if (hasFramePattern(mInput)) throw ValueError(mInput + ": a frame pattern (#### or %04d) needs --frames");
+            return {0};
+        }
+        const std::vector<int> frames = parseFrameList(mFrames);
+        if (!hasFramePattern(mInput)) throw ValueError("--frames: the input " + mInput + " has no frame pattern (#### or %04d)");
+        for (const std::string& out : {mOutput, mOutputOptions.previewOption()}) {
+            if (!out.empty() && frames.size() > 1 && !hasFramePattern(out)) {
+                throw ValueError("--frames: " + out + " has no frame pattern (#### or %04d): every frame would overwrite it");
+            }
+        }
+        return frames;
+    }
+
+    /// @a path for @a frame (as it is without --frames).
+    std::string pathOf(const std::string& path, int frame) const { return isSequence() ? framePath(path, frame) : path; }
+
+    /// Load, render and write one frame. @a first: print the settings (-v).
+    void renderOneFrame(const Renderer& renderer, const CameraSettings& cam, const RenderSettings& rs, int frameNumber,
+        const std::string& output, ProgressReport& report, Verbosity verbosity, bool first) const
+    {
+        const std::string input = pathOf(mInput, frameNumber);
+        const auto t0 = std::chrono::steady_clock::now();
+        const GridSource opened = GridSource::open(input, mName);
+        const GridSource grid = mColor.empty() ? opened : opened.withColorGrid(mColor);
+        const double loadSeconds = seconds(t0);
+        const Camera camera(cam, grid.worldCentre());
+        const std::vector<Attributes> options = resolvedOptions(grid, camera, rs);
+        if (verbosity >= Verbosity::Verbose && (first || verbosity >= Verbosity::Debug)) printSettings(grid, input, options);
+
+        RenderStats stats;
+        Frame frame = renderer.renderFrame(grid, camera, mOutputOptions.passes(), &stats, &report);
+        if (verbosity != Verbosity::Quiet) {
+            for (const std::string& w : stats.warnings) std::cerr << "vdb_ewa: warning: " << input << ": " << w << "\n";
+        }
+        const auto t1 = std::chrono::steady_clock::now();
+        Attributes attributes{{"software", std::string("vdb_ewa ") + versionString()}, {"vdb_ewa/input", input},
+            {"vdb_ewa/grid", grid.name()}};
+        if (isSequence()) attributes.emplace_back("vdb_ewa/frame", std::to_string(frameNumber));
+        for (const Attributes& group : options)
+            for (const auto& [key, value] : group) {
+                // The thread count never changes the image; leaving it out keeps files byte-identical.
+                if (key != "threads") attributes.emplace_back("vdb_ewa/" + key, value);
+            }
+        mOutputOptions.write(frame, camera, output, pathOf(mOutputOptions.previewOption(), frameNumber), attributes);
+        if (verbosity >= Verbosity::Verbose) printStats(stats, loadSeconds, seconds(t1));
+        if (isSequence() && verbosity >= Verbosity::Normal) {
+            std::cout << "vdb_ewa: frame " << frameNumber << ": " << output << " (" << std::fixed << std::setprecision(2)
+                      << seconds(t0) << " s)\n" << std::defaultfloat;
+        }
     }
 
     void resolve(CameraSettings& cam, RenderSettings& rs) const
@@ -264,9 +350,9 @@ private:
         return {cameraGroup, model, method, mOutputOptions.resolved()};
     }
 
-    void printSettings(const GridSource& grid, const std::vector<Attributes>& groups) const
+    static void printSettings(const GridSource& grid, const std::string& input, const std::vector<Attributes>& groups)
     {
-        std::cout << "vdb_ewa: grid '" << grid.name() << "' (" << grid.storedType() << ") from " << mInput << ": "
+        std::cout << "vdb_ewa: grid '" << grid.name() << "' (" << grid.storedType() << ") from " << input << ": "
                   << grid.activeVoxelCount() << " active voxels, " << grid.activeTileCount() << " active tiles, "
                   << (grid.isLinear() ? "affine" : "non-linear") << " transform\n";
         const char* titles[] = {"camera", "model", "splat", "output"};
@@ -302,7 +388,9 @@ private:
     std::optional<double> mFov, mFocal, mAperture, mFrame, mNear, mFar, mGain, mCutoff, mShadowStep, mStep, mLod;
     std::optional<double> mKernelSigma, mLowpass, mCutoffRadius, mSlab;
     int mThreads = 0;
-    bool mVerbose = false;
+    int mVerbose = 0;
+    bool mQuiet = false, mSkipExisting = false;
+    std::string mFrames, mJob;
     OutputOptions mOutputOptions;
 };
 

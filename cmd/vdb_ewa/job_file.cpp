@@ -1,0 +1,142 @@
+/// @file job_file.cpp
+#include "job_file.h"
+
+#include <vdb_ewa/error.h>
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+namespace vdb_ewa::cli {
+namespace {
+
+bool contains(const std::vector<std::string>& list, const std::string& s)
+{
+    return std::find(list.begin(), list.end(), s) != list.end();
+}
+
+/// A scalar as a command-line word.
+std::string word(const nlohmann::json& v, const std::string& where)
+{
+    if (v.is_string()) return v.get<std::string>();
+    if (v.is_number_integer()) return std::to_string(v.get<long long>());
+    if (v.is_number()) {
+        std::ostringstream s;
+        s.precision(17);
+        s << v.get<double>();
+        return s.str();
+    }
+    if (v.is_boolean()) return v.get<bool>() ? "on" : "off";
+    throw ValueError(where + ": expected a string, number or true/false");
+}
+
+} // namespace
+
+std::vector<std::string> jobArguments(const std::string& path, const std::vector<std::string>& knownOptions,
+    const std::vector<std::string>& flags, const std::vector<std::string>& givenOnCommandLine, bool positionalsGiven)
+{
+    std::ifstream in(path);
+    if (!in) throw IoError(path + ": cannot open the job file");
+    nlohmann::json job;
+    try {
+        job = nlohmann::json::parse(in);
+    } catch (const nlohmann::json::parse_error& e) {
+        throw IoError(path + ": not a JSON job file (" + std::string(e.what()) + ")");
+    }
+    if (!job.is_object()) throw ValueError(path + ": a job file holds one JSON object of option: value");
+
+    std::vector<std::string> args, positionals(2);
+    for (const auto& [key, value] : job.items()) {
+        const std::string where = path + ": " + key;
+        if (key == "input" || key == "output") {
+            if (!value.is_string()) throw ValueError(where + ": expected a file name");
+            positionals[key == "input" ? 0 : 1] = value.get<std::string>();
+            continue;
+        }
+        if (key == "job") throw ValueError(where + ": a job file cannot name another job file");
+        if (!contains(knownOptions, key)) throw ValueError(path + ": unknown key '" + key + "' (keys are the long option names of vdb_ewa render --help)");
+        if (contains(givenOnCommandLine, key)) continue;
+        if (contains(flags, key)) {
+            if (!value.is_boolean()) throw ValueError(where + ": expected true or false");
+            if (value.get<bool>()) args.push_back("--" + key);
+            continue;
+        }
+        if (value.is_array()) {
+            if (value.empty()) throw ValueError(where + ": empty list");
+            std::string joined;
+            for (const auto& element : value) {
+                if (element.is_array() || element.is_object()) throw ValueError(where + ": expected a flat list");
+                joined += (joined.empty() ? "" : ",") + word(element, where);
+            }
+            args.push_back("--" + key);
+            args.push_back(joined);
+            continue;
+        }
+        if (value.is_object() || value.is_null()) throw ValueError(where + ": expected a string, number, true/false or list");
+        args.push_back("--" + key);
+        args.push_back(word(value, where));
+    }
+    if (!positionalsGiven) {
+        if (positionals[0].empty() || positionals[1].empty()) {
+            throw ValueError(path + ": give input and output, in the job file or on the command line");
+        }
+        args.insert(args.begin(), positionals.begin(), positionals.end());
+    }
+    return args;
+}
+
+std::vector<std::string> applyJobFile(const std::vector<std::string>& args, const CLI::App& render)
+{
+    // The option names, and which take no value.
+    std::vector<std::string> known, flags;
+    std::map<char, const CLI::Option*> shortNames;
+    std::map<std::string, const CLI::Option*> longNames;
+    for (const CLI::Option* opt : render.get_options()) {
+        const bool flag = opt->get_expected_min() == 0;
+        for (const std::string& n : opt->get_lnames()) {
+            longNames[n] = opt;
+            if (n == "help" || n == "job") continue;
+            known.push_back(n);
+            if (flag) flags.push_back(n);
+        }
+        for (const std::string& n : opt->get_snames()) shortNames[n[0]] = opt;
+    }
+    // Scan the command line: which options it gives, where --job is, how many positionals.
+    std::vector<std::string> given, rest;
+    std::string jobPath;
+    int positionals = 0;
+    for (std::size_t i = 0; i < args.size(); ++i) {
+        const std::string& a = args[i];
+        const CLI::Option* opt = nullptr;
+        bool inlineValue = false;
+        if (a.rfind("--", 0) == 0 && a.size() > 2) {
+            const std::size_t eq = a.find('=');
+            inlineValue = eq != std::string::npos;
+            const auto it = longNames.find(a.substr(2, inlineValue ? eq - 2 : std::string::npos));
+            if (it != longNames.end()) opt = it->second;
+            if (opt && opt->get_lnames().front() == "job") {
+                if (inlineValue) jobPath = a.substr(eq + 1);
+                else if (i + 1 < args.size()) jobPath = args[++i];
+                else throw ValueError("--job: expected a job file");
+                continue;
+            }
+        } else if (a.size() == 2 && a[0] == '-' && shortNames.count(a[1])) {
+            opt = shortNames[a[1]];
+        } else if (a.empty() || a[0] != '-' || a == "-") {
+            ++positionals;
+        }
+        rest.push_back(a);
+        if (!opt) continue;
+        given.insert(given.end(), opt->get_lnames().begin(), opt->get_lnames().end());
+        if (opt->get_expected_min() > 0 && !inlineValue && i + 1 < args.size()) rest.push_back(args[++i]);
+    }
+    if (jobPath.empty()) return args;
+    std::vector<std::string> out = jobArguments(jobPath, known, flags, given, positionals >= 2);
+    out.insert(out.end(), rest.begin(), rest.end());
+    return out;
+}
+
+} // namespace vdb_ewa::cli

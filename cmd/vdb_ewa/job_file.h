@@ -1,0 +1,30 @@
+/// @file job_file.h
+/// @brief `--job shot.json`: a JSON object whose keys are the render command's long option
+///        names (and `input`, `output`), so a job file says everything the command line can.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <string>
+#include <vector>
+
+namespace vdb_ewa::cli {
+
+/// Read the job file @a path and return its settings as command-line arguments, leaving out
+/// every option in @a givenOnCommandLine (the command line overrides the job) and the
+/// positionals when @a positionalsGiven. @a knownOptions: the long option names the render
+/// command accepts (without dashes); @a flags: those that take no value.
+/// Values: strings as they are, numbers, true/false for flags and on/off switches, arrays of
+/// numbers joined with commas (`"translate": [0, 0, 5]`), arrays of strings repeated or
+/// joined (`"aov": ["shadow", "emission"]`).
+/// @throw IoError (unreadable, not JSON) or ValueError (unknown key, wrong value) naming the
+///        file and the key.
+std::vector<std::string> jobArguments(const std::string& path, const std::vector<std::string>& knownOptions,
+    const std::vector<std::string>& flags, const std::vector<std::string>& givenOnCommandLine, bool positionalsGiven);
+
+/// If @a args (the render subcommand's arguments, after the subcommand's name) hold
+/// `--job FILE` (or `--job=FILE`), return them with the job's settings inserted before them
+/// and `--job FILE` removed; else return them as they are. @a render supplies the option names.
+std::vector<std::string> applyJobFile(const std::vector<std::string>& args, const CLI::App& render);
+
+} // namespace vdb_ewa::cli

@@ -1,0 +1,48 @@
+/// @file progress_report.h
+/// @brief The CLI's side of a render's progress: `NN% done` lines on stdout for farm
+///        managers, a bar on a terminal, and a clean stop on SIGINT / SIGTERM.
+#pragma once
+
+#include <vdb_ewa/interrupter.h>
+
+#include <string>
+
+namespace vdb_ewa::cli {
+
+/// Verbosity levels: -q, default, -v, -vv.
+enum class Verbosity { Quiet = 0, Normal = 1, Verbose = 2, Debug = 3 };
+
+/// Reports the progress of a job of @a frameCount frames as one overall percentage: lines
+/// `NN% done` (every 5 %) when stdout is not a terminal, an updating bar when it is. Quiet
+/// prints nothing. SIGINT and SIGTERM cancel it (see installStopHandlers).
+class ProgressReport : public Interrupter
+{
+public:
+    ProgressReport(int frameCount, Verbosity verbosity);
+    ~ProgressReport() override;
+
+    /// The next frame (0-based) begins.
+    void beginFrame(int index) { mFrame = index; }
+    /// 100 % after the last frame (unless cancelled); ends a terminal bar's line.
+    void finishJob();
+
+    bool wasInterrupted(int percent) override;
+
+private:
+    void show(int overall);
+
+    int mFrames;
+    int mFrame = 0;
+    int mShown = -1;
+    bool mTerminal;
+    Verbosity mVerbosity;
+};
+
+/// SIGINT and SIGTERM cancel @a report (an atomic store) and set stopRequested(); a second
+/// signal kills the process at once (the default action is restored after the first).
+void installStopHandlers(ProgressReport& report);
+
+/// True once SIGINT or SIGTERM arrived.
+bool stopRequested();
+
+} // namespace vdb_ewa::cli

@@ -1,0 +1,227 @@
+/// @file batch_test.cpp
+/// @brief Batch jobs as a render farm runs them: frame lists and patterns, sequences with a
+///        missing frame, resuming a killed job, job files, progress lines, exit codes and a
+///        clean stop on SIGTERM / SIGINT.
+#include "cli_fixtures.h"
+
+#include "../cmd/vdb_ewa/frame_sequence.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <filesystem>
+#include <regex>
+#include <thread>
+
+using namespace vdb_ewa;
+using namespace vdb_ewa::test;
+using vdb_ewa::cli::framePath;
+using vdb_ewa::cli::hasFramePattern;
+using vdb_ewa::cli::parseFrameList;
+
+namespace fs = std::filesystem;
+
+namespace {
+
+/// Hidden temporary files a write leaves if it is killed (.NAME.tmpPID_N).
+int temporaryFiles(const TempDir& dir)
+{
+    int n = 0;
+    for (const auto& e : fs::directory_iterator(dir.file(""))) n += e.path().filename().string().find(".tmp") != std::string::npos;
+    return n;
+}
+
+/// Poll @a done every 20 ms for up to @a seconds.
+template <typename F>
+bool waitFor(F done, double seconds)
+{
+    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+    while (std::chrono::steady_clock::now() < end) {
+        if (done()) return true;
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    return done();
+}
+
+/// The percentages of the `NN% done` lines in @a out.
+std::vector<int> percents(const std::string& out)
+{
+    std::vector<int> p;
+    static const std::regex line(R"((^|\n)(\d+)% done(?=\n))");
+    for (auto it = std::sregex_iterator(out.begin(), out.end(), line); it != std::sregex_iterator(); ++it) {
+        p.push_back(std::stoi((*it)[2]));
+    }
+    return p;
+}
+
+class Batch : public ::testing::Test
+{
+protected:
+    void SetUp() override
+    {
+        for (int f : {1, 2, 4}) writeSampleGrid(SampleGrid::Cloud, mDir.file("smoke." + std::to_string(10000 + f).substr(1) + ".vdb"), 0.08);
+    }
+    TempDir mDir;
+};
+
+} // namespace
+
+TEST(FrameList, ParsesRangesStepsAndLists)
+{
+    EXPECT_EQ(parseFrameList("1-5"), (std::vector<int>{1, 2, 3, 4, 5}));
+    EXPECT_EQ(parseFrameList("1-10x3"), (std::vector<int>{1, 4, 7, 10}));
+    EXPECT_EQ(parseFrameList("1-3,20"), (std::vector<int>{1, 2, 3, 20}));
+    EXPECT_EQ(parseFrameList("7"), (std::vector<int>{7}));
+    EXPECT_EQ(parseFrameList("5,1-3,2"), (std::vector<int>{5, 1, 2, 3})) << "order kept, repeats dropped";
+    EXPECT_EQ(parseFrameList("-2-1"), (std::vector<int>{-2, -1, 0, 1}));
+    EXPECT_EQ(parseFrameList("-5--3"), (std::vector<int>{-5, -4, -3}));
+    for (const char* bad : {"", "1-", "a", "5-1", "1-10x0", "1-10x", "1,,2", "1-2-3", "1 - 2", "99999999999", "0-2000000000"}) {
+        EXPECT_THROW(parseFrameList(bad), ValueError) << "'" << bad << "'";
+    }
+}
+
+TEST(FrameList, ReplacesHashAndPrintfPatterns)
+{
+    EXPECT_TRUE(hasFramePattern("smoke.####.vdb"));
+    EXPECT_TRUE(hasFramePattern("smoke.%04d.vdb"));
+    EXPECT_TRUE(hasFramePattern("smoke.%d.vdb"));
+    EXPECT_FALSE(hasFramePattern("smoke.vdb"));
+    EXPECT_FALSE(hasFramePattern("smoke%.vdb"));
+    EXPECT_EQ(framePath("smoke.####.vdb", 7), "smoke.0007.vdb");
+    EXPECT_EQ(framePath("smoke.#.vdb", 1234), "smoke.1234.vdb");
+    EXPECT_EQ(framePath("smoke.%04d.vdb", 12), "smoke.0012.vdb");
+    EXPECT_EQ(framePath("smoke.%d.vdb", 12), "smoke.12.vdb");
+    EXPECT_EQ(framePath("smoke.###.vdb", -4), "smoke.-004.vdb");
+    EXPECT_EQ(framePath("dir/smoke.vdb", 3), "dir/smoke.vdb");
+    EXPECT_THROW(framePath("s.####.%04d.vdb", 1), ValueError);
+}
+
+TEST_F(Batch, SequenceWithAMissingFrameRendersTheRestAndListsIt)
+{
+    const CliRun r = runCli(mDir, "render " + mDir.file("smoke.####.vdb") + " " + mDir.file("out.####.exr") +
+        " --frames 1-4 --res 48x32 -translate 0,0,5");
+    EXPECT_EQ(r.code, 3) << "bad input: a frame is missing\n" << r.err;
+    EXPECT_NE(r.err.find("frame 3: " + mDir.file("smoke.0003.vdb") + ": no such file"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("1 of 4 frames failed: 3\n"), std::string::npos) << r.err;
+    for (int f : {1, 2, 4}) EXPECT_TRUE(fs::exists(mDir.file("out.000" + std::to_string(f) + ".exr"))) << f;
+    EXPECT_FALSE(fs::exists(mDir.file("out.0003.exr")));
+    // Each output comes from its own frame and says so.
+    const Image one = readExr(mDir.file("out.0001.exr"));
+    EXPECT_GT(alphaSum(one), 5.0);
+    EXPECT_NE(slurp(mDir.file("out.0004.exr")).find("smoke.0004.vdb"), std::string::npos);
+    // Progress lines for farm managers: rising multiples of 5 up to 100.
+    const std::vector<int> p = percents(r.out);
+    ASSERT_GE(p.size(), 3u) << r.out;
+    EXPECT_EQ(p.front(), 0);
+    EXPECT_EQ(p.back(), 100);
+    for (std::size_t i = 1; i < p.size(); ++i) EXPECT_GT(p[i], p[i - 1]);
+    // -q: nothing on stdout.
+    EXPECT_EQ(runCli(mDir, "render " + mDir.file("smoke.####.vdb") + " " + mDir.file("q.####.exr") +
+        " --frames 1-2 --res 48x32 -translate 0,0,5 -q").out, "");
+}
+
+TEST_F(Batch, FramePatternErrors)
+{
+    const std::string in = mDir.file("smoke.####.vdb");
+    auto fails = [&](const std::string& args, const std::string& needle) {
+        const CliRun r = runCli(mDir, "render " + args);
+        EXPECT_EQ(r.code, 2) << args;
+        EXPECT_NE(r.err.find(needle), std::string::npos) << r.err;
+    };
+    fails(in + " " + mDir.file("out.exr") + " --frames 1-2", "every frame would overwrite it");
+    fails(in + " " + mDir.file("out.####.exr"), "needs --frames");
+    fails(mDir.file("smoke.0001.vdb") + " " + mDir.file("out.####.exr") + " --frames 1-2", "has no frame pattern");
+    fails(in + " " + mDir.file("out.####.exr") + " --frames 3-1", "ends before it starts");
+    EXPECT_TRUE(fs::is_empty(mDir.file("")) || !fs::exists(mDir.file("out.0001.exr")));
+}
+
+TEST_F(Batch, SkipExistingResumesAKilledJobWithoutRedoingFinishedFrames)
+{
+    for (int f : {3}) writeSampleGrid(SampleGrid::Cloud, mDir.file("smoke.000" + std::to_string(f) + ".vdb"), 0.08);
+    // A slow job (the raymarch reference), killed once its first frame is written.
+    const std::vector<std::string> slow{"render", mDir.file("smoke.####.vdb"), mDir.file("out.####.exr"), "--frames", "1-4",
+        "--res", "480x270", "--translate", "0,0,5", "--method", "raymarch", "--step", "0.25"};
+    {
+        BackgroundCli job(mDir, slow);
+        ASSERT_TRUE(job.started());
+        ASSERT_TRUE(waitFor([&] { return fs::exists(mDir.file("out.0001.exr")); }, 120.0)) << job.err();
+        job.signal(SIGKILL);
+        EXPECT_EQ(job.wait(), 128 + SIGKILL);
+    }
+    ASSERT_FALSE(fs::exists(mDir.file("out.0004.exr"))) << "the job finished before it was killed";
+    const auto firstTime = fs::last_write_time(mDir.file("out.0001.exr"));
+    const std::string firstBytes = slurp(mDir.file("out.0001.exr"));
+    // Resume, fast: finished frames are skipped, not redone.
+    const CliRun r = runCli(mDir, "render " + mDir.file("smoke.####.vdb") + " " + mDir.file("out.####.exr") +
+        " --frames 1-4 --res 480x270 -translate 0,0,5 --quality draft --skip-existing -v");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find(mDir.file("out.0001.exr") + " exists: skipped"), std::string::npos) << r.out;
+    EXPECT_EQ(fs::last_write_time(mDir.file("out.0001.exr")), firstTime);
+    EXPECT_EQ(slurp(mDir.file("out.0001.exr")), firstBytes);
+    for (int f : {2, 3, 4}) EXPECT_GT(alphaSum(readExr(mDir.file("out.000" + std::to_string(f) + ".exr"))), 5.0) << f;
+}
+
+TEST_F(Batch, SigtermAndSigintStopCleanlyWithoutOutput)
+{
+    for (const int sig : {SIGTERM, SIGINT}) {
+        const std::string out = mDir.file("stopped.exr");
+        fs::remove(out);
+        BackgroundCli job(mDir, {"render", mDir.file("smoke.0001.vdb"), out, "--res", "640x360", "--translate", "0,0,5",
+                                    "--method", "raymarch", "--step", "0.1"});
+        ASSERT_TRUE(job.started());
+        // Signal once the rays are being marched (progress past the kernels and shadows).
+        ASSERT_TRUE(waitFor([&] { const auto p = percents(job.out()); return !p.empty() && p.back() >= 20; }, 120.0)) << job.out();
+        const auto t0 = std::chrono::steady_clock::now();
+        job.signal(sig);
+        const int code = job.wait();
+        const double latency = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        EXPECT_EQ(code, 130) << job.err();
+        EXPECT_LT(latency, 1.0);
+        EXPECT_NE(job.err().find("interrupted: 0 of 1 frames written"), std::string::npos) << job.err();
+        EXPECT_FALSE(fs::exists(out));
+        EXPECT_EQ(temporaryFiles(mDir), 0);
+        EXPECT_LT(percents(job.out()).back(), 100);
+    }
+}
+
+TEST_F(Batch, JobFileHoldsTheSettingsAndTheCommandLineOverridesIt)
+{
+    const std::string job = mDir.file("shot.json");
+    std::ofstream(job) << R"({"input": ")" << mDir.file("smoke.####.vdb") << R"(", "output": ")" << mDir.file("job.####.exr")
+                       << R"(", "frames": "1-2", "res": "64x48", "translate": [0, 0, 5], "quality": "draft",
+                          "aov": ["shadow", "emission"], "exr-type": "float", "skip-existing": true})";
+    const CliRun r = runCli(mDir, "render --job " + job + " --res 32x16 -v");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const Image img = readExr(mDir.file("job.0002.exr"));
+    EXPECT_EQ(img.width, 32) << "the command line's --res wins";
+    EXPECT_EQ(img.height, 16);
+    EXPECT_NE(r.out.find("--translate 0,0,5"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("--slab 4"), std::string::npos) << "draft from the job";
+    EXPECT_NE(r.out.find("--aov shadow,emission"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("--exr-type float"), std::string::npos) << r.out;
+    // Positionals on the command line win too; flags from the job apply (skip-existing).
+    const CliRun again = runCli(mDir, "render --job " + job + " " + mDir.file("smoke.####.vdb") + " " +
+        mDir.file("other.####.exr") + " -v");
+    ASSERT_EQ(again.code, 0) << again.err;
+    EXPECT_TRUE(fs::exists(mDir.file("other.0001.exr")));
+    const CliRun skip = runCli(mDir, "render --job " + job + " -v");
+    EXPECT_NE(skip.out.find("exists: skipped"), std::string::npos) << skip.out;
+
+    // Unknown keys and wrong values name the key; a broken file names the file.
+    auto fails = [&](const std::string& json, int code, const std::string& needle) {
+        std::ofstream(job) << json;
+        const CliRun f = runCli(mDir, "render --job " + job);
+        EXPECT_EQ(f.code, code) << json << "\n" << f.err;
+        EXPECT_NE(f.err.find(needle), std::string::npos) << f.err;
+        EXPECT_EQ(std::count(f.err.begin(), f.err.end(), '\n'), 1) << f.err;
+    };
+    fails(R"({"input": "a.vdb", "output": "b.exr", "resolution": "64x48"})", 2, job + ": unknown key 'resolution'");
+    fails(R"({"input": "a.vdb", "output": "b.exr", "res": {"w": 1}})", 2, job + ": res: expected");
+    fails(R"({"input": "a.vdb", "output": "b.exr", "skip-existing": "yes"})", 2, job + ": skip-existing: expected true or false");
+    fails(R"({"output": "b.exr"})", 2, "give input and output");
+    fails(R"({"input": )", 3, job + ": not a JSON job file");
+    fails(R"([1, 2])", 2, job + ": a job file holds one JSON object");
+    const CliRun missing = runCli(mDir, "render --job " + mDir.file("nope.json"));
+    EXPECT_EQ(missing.code, 3);
+    EXPECT_NE(missing.err.find("nope.json: cannot open the job file"), std::string::npos) << missing.err;
+}
