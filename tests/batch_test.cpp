@@ -120,6 +120,18 @@ TEST_F(Batch, SequenceWithAMissingFrameRendersTheRestAndListsIt)
         " --frames 1-2 --res 48x32 -translate 0,0,5 -q").out, "");
 }
 
+TEST_F(Batch, AFrameThatCannotBeWrittenIsARenderFailure)
+{
+    // The pattern is in the folder name: frame 1's folder exists, frame 2's does not.
+    fs::create_directory(mDir.file("d0001"));
+    const CliRun r = runCli(mDir, "render " + mDir.file("smoke.####.vdb") + " " + mDir.file("d####/out.exr") +
+        " --frames 1-2 --res 48x32 -translate 0,0,5");
+    EXPECT_EQ(r.code, 4) << r.err;
+    EXPECT_NE(r.err.find("frame 2: "), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("1 of 2 frames failed: 2\n"), std::string::npos) << r.err;
+    EXPECT_TRUE(fs::exists(mDir.file("d0001/out.exr")));
+}
+
 TEST_F(Batch, FramePatternErrors)
 {
     const std::string in = mDir.file("smoke.####.vdb");

@@ -248,7 +248,11 @@ private:
                 // The thread count never changes the image; leaving it out keeps files byte-identical.
                 if (key != "threads") attributes.emplace_back("vdb_ewa/" + key, value);
             }
-        mOutputOptions.write(frame, camera, output, pathOf(mOutputOptions.previewOption(), frameNumber), attributes);
+        try {
+            mOutputOptions.write(frame, camera, output, pathOf(mOutputOptions.previewOption(), frameNumber), attributes);
+        } catch (const IoError& e) {
+            throw std::runtime_error(e.what()); // a failed write is a render failure (exit 4), not bad input
+        }
         if (verbosity >= Verbosity::Verbose) printStats(stats, loadSeconds, seconds(t1));
         if (isSequence() && verbosity >= Verbosity::Normal) {
             std::cout << "vdb_ewa: frame " << frameNumber << ": " << output << " (" << std::fixed << std::setprecision(2)
