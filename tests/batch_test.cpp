@@ -144,12 +144,12 @@ TEST_F(Batch, FramePatternErrors)
     fails(in + " " + mDir.file("out.####.exr"), "needs --frames");
     fails(mDir.file("smoke.0001.vdb") + " " + mDir.file("out.####.exr") + " --frames 1-2", "has no frame pattern");
     fails(in + " " + mDir.file("out.####.exr") + " --frames 3-1", "ends before it starts");
-    EXPECT_TRUE(fs::is_empty(mDir.file("")) || !fs::exists(mDir.file("out.0001.exr")));
+    EXPECT_FALSE(fs::exists(mDir.file("out.0001.exr")));
 }
 
 TEST_F(Batch, SkipExistingResumesAKilledJobWithoutRedoingFinishedFrames)
 {
-    for (int f : {3}) writeSampleGrid(SampleGrid::Cloud, mDir.file("smoke.000" + std::to_string(f) + ".vdb"), 0.08);
+    writeSampleGrid(SampleGrid::Cloud, mDir.file("smoke.0003.vdb"), 0.08);
     // A slow job (the raymarch reference), killed once its first frame is written.
     const std::vector<std::string> slow{"render", mDir.file("smoke.####.vdb"), mDir.file("out.####.exr"), "--frames", "1-4",
         "--res", "480x270", "--translate", "0,0,5", "--method", "raymarch", "--step", "0.25"};

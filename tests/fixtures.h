@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <unistd.h>
 
@@ -104,6 +105,33 @@ inline std::string assetsDir()
     const char* env = std::getenv("VDB_EWA_ASSETS");
     const std::string dir = env ? env : VDB_EWA_DEFAULT_ASSETS;
     return std::filesystem::is_directory(dir) ? dir : "";
+}
+
+/// A narrow-band level set (3 voxels each side) of the signed distance @a sdf, sampled in the
+/// index box [lo, hi] with voxel size @a h.
+inline openvdb::FloatGrid::Ptr makeLevelSet(const std::function<double(const Vec3d&)>& sdf, const openvdb::Coord& lo,
+    const openvdb::Coord& hi, double h)
+{
+    const float band = float(3.0 * h);
+    auto grid = openvdb::FloatGrid::create(band);
+    grid->setTransform(openvdb::math::Transform::createLinearTransform(h));
+    grid->setGridClass(openvdb::GRID_LEVEL_SET);
+    grid->setName("surface");
+    auto acc = grid->getAccessor();
+    for (int i = lo.x(); i <= hi.x(); ++i)
+        for (int j = lo.y(); j <= hi.y(); ++j)
+            for (int k = lo.z(); k <= hi.z(); ++k) {
+                const double d = sdf(Vec3d(i, j, k) * h);
+                if (std::abs(d) < band) acc.setValueOn(openvdb::Coord(i, j, k), float(d));
+                else acc.setValueOff(openvdb::Coord(i, j, k), d < 0 ? -band : band);
+            }
+    return grid;
+}
+
+inline openvdb::FloatGrid::Ptr sphereLevelSet(double radius, double h)
+{
+    const int n = int(std::ceil(radius / h)) + 4;
+    return makeLevelSet([=](const Vec3d& p) { return glm::length(p) - radius; }, openvdb::Coord(-n), openvdb::Coord(n), h);
 }
 
 /// Settings for a pure absorber with no cutoffs: transmittance tests.

@@ -164,19 +164,7 @@ TEST(Interrupter, WasInterruptedReturningTrueCancelsAndResetAllowsReuse)
 
 TEST(Interrupter, LevelSetsReportAndCancelToo)
 {
-    auto ls = openvdb::FloatGrid::create(0.15f);
-    ls->setTransform(openvdb::math::Transform::createLinearTransform(0.05));
-    ls->setGridClass(openvdb::GRID_LEVEL_SET);
-    {
-        auto acc = ls->getAccessor();
-        for (int i = -25; i <= 25; ++i)
-            for (int j = -25; j <= 25; ++j)
-                for (int k = -25; k <= 25; ++k) {
-                    const float d = float(0.05 * std::sqrt(double(i * i + j * j + k * k)) - 1.0);
-                    if (std::abs(d) < 0.15f) acc.setValueOn(openvdb::Coord(i, j, k), d);
-                }
-    }
-    const GridSource grid = gridSourceFromOpenVDB(ls);
+    const GridSource grid = gridSourceFromOpenVDB(sphereLevelSet(1.0, 0.05));
     CameraSettings c;
     c.width = 320;
     c.height = 240;

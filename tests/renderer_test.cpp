@@ -23,6 +23,23 @@ openvdb::FloatGrid::Ptr slab(int depth, float rho, double h)
     return makeBoxGrid(openvdb::Coord(-20, -20, 0), openvdb::Coord(19, 19, depth - 1), rho, h);
 }
 
+/// A white scatterer (extinction @a sigma, no absorption) lit from the camera's side (+z) by a
+/// white light, with no gain or cutoff and fine shadow and reference steps: the slab
+/// scattering tests' closed form C = albedo L (1 - exp(-2 tau)) / 2 holds.
+RenderSettings scatteringSlabSettings(double sigma)
+{
+    RenderSettings s;
+    s.absorb = Vec3d(0.0);
+    s.scatter = Vec3d(sigma);
+    s.lightDir = Vec3d(0, 0, 1);
+    s.lightColor = Vec3d(1.0);
+    s.gain = 0.0;
+    s.cutoff = 0.0;
+    s.shadowStep = 0.1;
+    s.step = 0.25;
+    return s;
+}
+
 } // namespace
 
 TEST(Renderer, UniformSlabTransmittanceIsExpMinusTau)
@@ -74,15 +91,7 @@ TEST(Renderer, UniformSlabSingleScatteringMatchesTheClosedForm)
     // C = albedo L (1 - exp(-2 tau)) / 2 (gain 0, no absorption).
     const double sigma = 0.15, rho = 0.5, h = 0.1;
     const int depth = 12;
-    RenderSettings s;
-    s.absorb = Vec3d(0.0);
-    s.scatter = Vec3d(sigma);
-    s.lightDir = Vec3d(0, 0, 1);
-    s.lightColor = Vec3d(1.0);
-    s.gain = 0.0;
-    s.cutoff = 0.0;
-    s.shadowStep = 0.1;
-    s.step = 0.25;
+    RenderSettings s = scatteringSlabSettings(sigma);
     const double tau = sigma * rho * depth;
     const double expected = 0.5 * (1.0 - std::exp(-2.0 * tau));
     for (const Method method : {Method::Splat, Method::RayMarch}) {
@@ -111,15 +120,7 @@ TEST(Renderer, ColorGridTintsTheScatteredLightPerVoxel)
         color->tree().setValueOn(ijk, ijk.x() < 0 ? openvdb::Vec3s(1, 0, 0) : openvdb::Vec3s(0.2f, 0.5f, 1.0f));
     }
     const GridSource source = withColorGrid(gridSourceFromOpenVDB(density), color);
-    RenderSettings s;
-    s.absorb = Vec3d(0.0);
-    s.scatter = Vec3d(sigma);
-    s.lightDir = Vec3d(0, 0, 1);
-    s.lightColor = Vec3d(1.0);
-    s.gain = 0.0;
-    s.cutoff = 0.0;
-    s.shadowStep = 0.1;
-    s.step = 0.25;
+    RenderSettings s = scatteringSlabSettings(sigma);
     s.emission = Vec3d(0.0, 0.05, 0.0);
     const double tau = sigma * rho * depth;
     const double scattered = 0.5 * (1.0 - std::exp(-2.0 * tau));

@@ -5,39 +5,10 @@
 
 #include <gtest/gtest.h>
 
-#include <functional>
-
 using namespace vdb_ewa;
 using namespace vdb_ewa::test;
 
 namespace {
-
-/// A narrow-band level set (3 voxels each side) of the signed distance @a sdf, sampled in the
-/// index box [lo, hi] with voxel size @a h.
-openvdb::FloatGrid::Ptr makeLevelSet(const std::function<double(const Vec3d&)>& sdf, const openvdb::Coord& lo,
-    const openvdb::Coord& hi, double h)
-{
-    const float band = float(3.0 * h);
-    auto grid = openvdb::FloatGrid::create(band);
-    grid->setTransform(openvdb::math::Transform::createLinearTransform(h));
-    grid->setGridClass(openvdb::GRID_LEVEL_SET);
-    grid->setName("surface");
-    auto acc = grid->getAccessor();
-    for (int i = lo.x(); i <= hi.x(); ++i)
-        for (int j = lo.y(); j <= hi.y(); ++j)
-            for (int k = lo.z(); k <= hi.z(); ++k) {
-                const double d = sdf(Vec3d(i, j, k) * h);
-                if (std::abs(d) < band) acc.setValueOn(openvdb::Coord(i, j, k), float(d));
-                else acc.setValueOff(openvdb::Coord(i, j, k), d < 0 ? -band : band);
-            }
-    return grid;
-}
-
-openvdb::FloatGrid::Ptr sphereLevelSet(double radius, double h)
-{
-    const int n = int(std::ceil(radius / h)) + 4;
-    return makeLevelSet([=](const Vec3d& p) { return glm::length(p) - radius; }, openvdb::Coord(-n), openvdb::Coord(n), h);
-}
 
 openvdb::FloatGrid::Ptr torusLevelSet(double major, double minor, double h)
 {
