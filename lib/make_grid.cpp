@@ -3,12 +3,10 @@
 #include <vdb_ewa/make_grid.h>
 
 #include "detail/grid_source_impl.h"
+#include "detail/openvdb_tools.h"
 
 #include <vdb_ewa/error.h>
 #include <vdb_ewa/openvdb_grid.h>
-
-#include <openvdb/math/Maps.h>
-#include <openvdb/tools/Prune.h>
 
 #include <array>
 #include <cmath>

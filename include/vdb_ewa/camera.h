@@ -16,7 +16,7 @@ namespace vdb_ewa {
 
 enum class Projection { Perspective, Orthographic };
 
-struct CameraSettings
+struct VDB_EWA_API CameraSettings
 {
     Projection projection = Projection::Perspective;
     int width = 1920;                 ///< image width in pixels

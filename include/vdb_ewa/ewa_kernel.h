@@ -11,7 +11,7 @@
 namespace vdb_ewa {
 
 /// Symmetric 2x2 matrix [xx xy; xy yy].
-struct Sym2
+struct VDB_EWA_API Sym2
 {
     double xx = 0, xy = 0, yy = 0;
     double det() const { return xx * yy - xy * xy; }
@@ -27,11 +27,11 @@ struct Sym2
 };
 
 /// Zwicker et al. 2002, Eq. (26): camera space t -> ray space x = (t0/t2, t1/t2, |t|).
-Vec3d rayFromCamera(const Vec3d& t);
+VDB_EWA_API Vec3d rayFromCamera(const Vec3d& t);
 
 /// Zwicker et al. 2002, Eq. (29): Jacobian of Eq. (26) at t (rows: d x_i / d t).
 /// det = |t| / t2^3.
-Mat3d rayJacobian(const Vec3d& t);
+VDB_EWA_API Mat3d rayJacobian(const Vec3d& t);
 
 /// Everything projectKernel needs to know about the camera and the filter.
 struct ProjectionParams
@@ -73,7 +73,7 @@ struct Footprint
 
 /// Project a kernel of camera-space centre @a tCentre and camera-space covariance
 /// @a covCamera (world units^2) to its screen-space resampling filter (Eq. 31-33).
-Footprint projectKernel(const Vec3d& tCentre, const Mat3d& covCamera, const ProjectionParams& params);
+VDB_EWA_API Footprint projectKernel(const Vec3d& tCentre, const Mat3d& covCamera, const ProjectionParams& params);
 
 /// Project a surface kernel (Sec. 6.3, 6.4): a 2D Gaussian of std. deviation @a sigma (world)
 /// in the plane through @a tCentre spanned by the orthonormal camera-space tangents
@@ -81,7 +81,7 @@ Footprint projectKernel(const Vec3d& tCentre, const Mat3d& covCamera, const Proj
 /// Screen filter (Eq. 35): covariance sigma^2 M M^T + V^h with M = J S_k, J the screen
 /// Jacobian at the centre; peak |det M| / (2 pi sqrt(det Cov)) per unit surface area
 /// (1/world^2), so that rho = |det M| G_Cov. depthSd is 0.
-Footprint projectSurfaceKernel(const Vec3d& tCentre, const Vec3d& tangent0, const Vec3d& tangent1, double sigma,
+VDB_EWA_API Footprint projectSurfaceKernel(const Vec3d& tCentre, const Vec3d& tangent0, const Vec3d& tangent1, double sigma,
     const ProjectionParams& params);
 
 } // namespace vdb_ewa

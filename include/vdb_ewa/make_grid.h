@@ -18,11 +18,11 @@ enum class SampleGrid
 };
 
 /// Parse "cloud", "anisotropic", "sheared", "tiles". @throw ValueError otherwise.
-SampleGrid sampleGridFromName(const std::string& name);
+VDB_EWA_API SampleGrid sampleGridFromName(const std::string& name);
 
 /// Density of the analytic cloud at a world position (world units; about 2 units across,
 /// centred on the origin). Values in [0, 0.35].
-double sampleCloudDensity(const Vec3d& pWorld);
+VDB_EWA_API double sampleCloudDensity(const Vec3d& pWorld);
 
 /// Build a sample grid in memory. @a voxelSize is the smallest voxel edge in world units.
 VDB_EWA_API GridSource makeSampleGrid(SampleGrid kind, double voxelSize = 0.04);

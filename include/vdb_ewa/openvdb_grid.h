@@ -4,7 +4,12 @@
 ///       host's OpenVDB is the one vdb_ewa was built against.
 #pragma once
 
+// OpenVDB declarations keep the default visibility libopenvdb was built with, also in code
+// compiled with -fvisibility=hidden: its templates share statics across modules (hidden copies
+// crash openvdb::initialize(); lib/detail/openvdb.h explains).
+#pragma GCC visibility push(default)
 #include <openvdb/Grid.h>
+#pragma GCC visibility pop
 
 #include "grid_source.h"
 

@@ -46,7 +46,7 @@ enum class Method
     RayMarch ///< reference integrator: ray-march the same Gaussian reconstruction (a yardstick)
 };
 
-struct RenderSettings
+struct VDB_EWA_API RenderSettings
 {
     Method method = Method::Splat;
     // --- Optical model (vdb_render's names and defaults) ---

@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstdint>
 
+#include "export.h"
+
 namespace vdb_ewa {
 
 /// Standard normal cumulative distribution.
@@ -34,7 +36,7 @@ inline bool clippedDepthRange(double mu, double sd, double truncation, double cl
 
 /// Slabs overlapped by mu +- truncation * sd clipped to [clipNear, clipFar]: sets @a first
 /// and returns their number (0 if the clipped range is empty).
-std::int64_t slabSpan(const SlabGrid& slabs, double mu, double sd, double truncation,
+VDB_EWA_API std::int64_t slabSpan(const SlabGrid& slabs, double mu, double sd, double truncation,
     double clipNear, double clipFar, std::int64_t& first);
 
 /// Shares of a Gaussian of mean @a mu and std. deviation @a sd (along the ray) in each slab
@@ -43,7 +45,7 @@ std::int64_t slabSpan(const SlabGrid& slabs, double mu, double sd, double trunca
 /// part outside [clipNear, clipFar] (near and far planes) is dropped, not redistributed.
 /// Writes at most @a maxCount shares to @a shares and the first slab index to @a first.
 /// @return the number of slabs written (0 if the kernel lies outside the clip range).
-int slabShares(const SlabGrid& slabs, double mu, double sd, double truncation,
+VDB_EWA_API int slabShares(const SlabGrid& slabs, double mu, double sd, double truncation,
     double clipNear, double clipFar, std::int64_t& first, float* shares, int maxCount);
 
 /// Exact front-to-back update of one homogeneous slab for one colour channel: optical depth

@@ -5,11 +5,7 @@
 
 #include <glm/glm.hpp>
 
-#if defined(VDB_EWA_BUILDING)
-#define VDB_EWA_API __attribute__((visibility("default")))
-#else
-#define VDB_EWA_API
-#endif
+#include "export.h"
 
 namespace vdb_ewa {
 

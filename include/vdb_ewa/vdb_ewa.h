@@ -6,6 +6,7 @@
 #include "color_management.h"
 #include "error.h"
 #include "ewa_kernel.h"
+#include "export.h"
 #include "exr_output.h"
 #include "frame.h"
 #include "grid_source.h"

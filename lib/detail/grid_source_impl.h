@@ -4,7 +4,7 @@
 
 #include <vdb_ewa/grid_source.h>
 
-#include <openvdb/openvdb.h>
+#include "openvdb.h"
 
 namespace vdb_ewa {
 

@@ -6,7 +6,7 @@
 #include <vdb_ewa/camera.h>
 #include <vdb_ewa/grid_source.h>
 
-#include <openvdb/openvdb.h>
+#include "openvdb.h"
 
 namespace vdb_ewa {
 namespace detail {

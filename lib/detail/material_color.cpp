@@ -1,7 +1,8 @@
 /// @file material_color.cpp
 #include "material_color.h"
 
-#include <openvdb/tools/Interpolation.h>
+#include "openvdb_tools.h"
+
 #include <tbb/parallel_for.h>
 
 #include <cmath>

@@ -3,8 +3,8 @@
 
 #include "empty_space.h"
 #include "grid_source_impl.h"
+#include "openvdb_tools.h"
 
-#include <openvdb/tools/Interpolation.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>

@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# ctest install.consumer (tests/CMakeLists.txt): install the build into a fresh prefix, check the
+# symbols libvdb_ewa.so exports, run the installed CLI, then configure, build and run the consumer
+# project next to this script (plugin_example.cpp) against the installed package only.
+set -euo pipefail
+if [ "$#" -ne 9 ]; then
+  echo "usage: $0 CMAKE NM BUILD_DIR CONFIG WORK_DIR LIBDIR GENERATOR CXX WARNING_FLAGS" >&2
+  exit 2
+fi
+cmake=$1 nm=$2 build=$3 config=$4 work=$5 libdir=$6 generator=$7 cxx=$8 warning_flags=$9
+here=$(cd "$(dirname "$0")" && pwd)
+prefix=$work/prefix
+rm -rf "$work"
+mkdir -p "$work"
+
+echo "== cmake --install into $prefix"
+"$cmake" --install "$build" --prefix "$prefix" ${config:+--config "$config"} >"$work/install.log"
+
+echo "== exported dynamic symbols of $prefix/$libdir/libvdb_ewa.so"
+lib=$prefix/$libdir/libvdb_ewa.so
+[ -f "$lib" ] || { echo "FAIL: $lib not installed" >&2; exit 1; }
+# "ADDRESS TYPE NAME" lines, names demangled.
+"$nm" -D --defined-only --demangle "$lib" | cut -d' ' -f3- >"$work/exports.txt"
+echo "$(wc -l <"$work/exports.txt") symbols exported"
+api='^((typeinfo|typeinfo name|vtable) for )?vdb_ewa::'
+if grep -Ev "$api" "$work/exports.txt" >"$work/foreign.txt" ||
+   grep -E "${api}detail::" "$work/exports.txt" >>"$work/foreign.txt"; then
+  echo "FAIL: symbols outside the vdb_ewa API are exported (OpenVDB, std::, vdb_ewa::detail...):" >&2
+  head -20 "$work/foreign.txt" >&2
+  exit 1
+fi
+for symbol in 'vdb_ewa::Renderer::Renderer(' 'vdb_ewa::Renderer::render(' 'vdb_ewa::gridSourceFromOpenVDB(' \
+              'typeinfo for vdb_ewa::Error'; do
+  grep -qF "$symbol" "$work/exports.txt" || { echo "FAIL: $symbol is not exported" >&2; exit 1; }
+done
+
+echo "== installed CLI"
+"$prefix/bin/vdb_ewa" --version
+
+echo "== consumer project"
+# No build type (-O0): the OpenVDB headers compile a third faster, and the rendering runs in the
+# installed, optimised library anyway.
+"$cmake" -S "$here" -B "$work/build" -G "$generator" -DCMAKE_CXX_COMPILER="$cxx" \
+  -DCMAKE_BUILD_TYPE= -DCMAKE_PREFIX_PATH="$prefix" -DCMAKE_CXX_FLAGS="$warning_flags" \
+  >"$work/configure.log" || { cat "$work/configure.log"; exit 1; }
+"$cmake" --build "$work/build" || exit 1
+"$work/build/plugin_example"
