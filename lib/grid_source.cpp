@@ -95,6 +95,20 @@ void GridSource::Impl::derive()
     }
 }
 
+Vec3d GridSource::Impl::indexToWorld(const Vec3d& p) const
+{
+    if (linear) return indexToWorldOffset + indexToWorldLinear * p;
+    const openvdb::Vec3d w = grid->transform().indexToWorld(openvdb::Vec3d(p.x, p.y, p.z));
+    return Vec3d(w.x(), w.y(), w.z());
+}
+
+Vec3d GridSource::Impl::worldToIndex(const Vec3d& w) const
+{
+    if (linear) return glm::inverse(indexToWorldLinear) * (w - indexToWorldOffset);
+    const openvdb::Vec3d p = grid->transform().worldToIndex(openvdb::Vec3d(w.x, w.y, w.z));
+    return Vec3d(p.x(), p.y(), p.z());
+}
+
 namespace {
 
 /// Check that @a path is a readable file. @throw IoError

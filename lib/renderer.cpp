@@ -89,14 +89,9 @@ void Renderer::addIsoSurface(const GridSource::Impl& grid, const Camera& camera,
     const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(grid, mSettings.iso, mSettings.kernelSigma, true, &progress);
     // Shadow transmittance at the surface kernels: the volume's shadow rays from their centres.
     detail::KernelSet points;
-    const Mat3d indexFromWorld = glm::inverse(grid.indexToWorldLinear);
     points.kernels.reserve(surfaces.kernels.size());
     for (const detail::SurfaceKernel& k : surfaces.kernels) {
-        const Vec3d pIndex = grid.linear ? indexFromWorld * (k.pWorld - grid.indexToWorldOffset) : [&] {
-            const openvdb::Vec3d p = grid.grid->transform().worldToIndex(openvdb::Vec3d(k.pWorld.x, k.pWorld.y, k.pWorld.z));
-            return Vec3d(p.x(), p.y(), p.z());
-        }();
-        points.kernels.push_back(detail::Kernel{pIndex, 1.0f, 1.0f});
+        points.kernels.push_back(detail::Kernel{grid.worldToIndex(k.pWorld), 1.0f, 1.0f});
     }
     const std::vector<detail::Rgb> shadows = detail::shadowTransmittance(grid, points, mSettings, &progress);
     detail::appendSurfaceSplats(splats, surfaces, shadows, camera, mSettings, grid.voxelLength, passes);

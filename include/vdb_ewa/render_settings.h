@@ -85,7 +85,9 @@ struct VDB_EWA_API RenderSettings
     double isoOpacity = 1.0;    ///< opacity of that surface, in [0, 1]
 
     // --- Execution ---
-    int threads = 0;            ///< worker threads, 0 = all cores (a tbb::task_arena, never global)
+    /// Worker threads: N > 0 runs the render in its own tbb::task_arena of N threads; 0 runs it
+    /// in the caller's arena (all cores, unless the host limits TBB). Never process-wide.
+    int threads = 0;
 
     /// Throw ValueError naming the first setting out of range.
     void validate() const;

@@ -69,14 +69,14 @@ public:
 
 private:
     /// Level sets: flattened surface kernels (Sec. 6.3, 6.4) and a z-buffer (Sec. 7.2).
-    void renderLevelSet(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes, Frame& frame,
+    VDB_EWA_LOCAL void renderLevelSet(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes, Frame& frame,
         RenderStats& stats, detail::Progress& progress) const;
     /// Fog volumes: kernels, shadows, splats (Eq. 29-33), slab compositing.
-    void renderFogVolume(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes, Frame& frame,
+    VDB_EWA_LOCAL void renderFogVolume(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes, Frame& frame,
         RenderStats& stats, detail::Progress& progress) const;
 
     /// Fog volumes with settings.iso: the iso-surface's kernels join the volume's splats.
-    void addIsoSurface(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes,
+    VDB_EWA_LOCAL void addIsoSurface(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes,
         detail::SplatSet& splats, detail::Progress& progress) const;
 
     RenderSettings mSettings;

@@ -8,7 +8,7 @@
 
 namespace vdb_ewa {
 
-struct GridSource::Impl
+struct VDB_EWA_LOCAL GridSource::Impl
 {
     /// Always a float grid: double grids are converted on load (densities need no more).
     openvdb::FloatGrid::ConstPtr grid;
@@ -27,6 +27,12 @@ struct GridSource::Impl
 
     /// Fill the derived fields from @a grid.
     void derive();
+
+    /// World position of an index-space point: A p + offset for affine grids, the grid's
+    /// transform otherwise.
+    Vec3d indexToWorld(const Vec3d& pIndex) const;
+    /// The inverse of indexToWorld.
+    Vec3d worldToIndex(const Vec3d& pWorld) const;
 };
 
 namespace detail {

@@ -30,16 +30,10 @@ std::vector<Rgb> kernelColors(const GridSource::Impl& grid, const KernelSet& ker
     std::vector<Rgb> out;
     if (!grid.color) return out;
     out.resize(kernels.kernels.size());
-    const auto& xform = grid.grid->transform();
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.size(), 4096), [&](const tbb::blocked_range<std::size_t>& r) {
         MaterialColor color(grid);
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
-            const Vec3d& p = kernels.kernels[i].pIndex;
-            const Vec3d w = grid.linear ? grid.indexToWorldOffset + grid.indexToWorldLinear * p : [&] {
-                const openvdb::Vec3d v = xform.indexToWorld(openvdb::Vec3d(p.x, p.y, p.z));
-                return Vec3d(v.x(), v.y(), v.z());
-            }();
-            const Vec3d c = color.at(w);
+            const Vec3d c = color.at(grid.indexToWorld(kernels.kernels[i].pIndex));
             out[i] = Rgb{float(c.x), float(c.y), float(c.z)};
         }
     });

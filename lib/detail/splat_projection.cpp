@@ -104,16 +104,13 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
         [&](const tbb::blocked_range<std::size_t>& range) {
             for (std::size_t i = range.begin(); i < range.end(); ++i) {
                 const Kernel& k = kernels.kernels[i];
-                Vec3d pWorld;
+                const Vec3d pWorld = grid.indexToWorld(k.pIndex);
                 Mat3d cov;
                 double volume;
                 if (grid.linear) {
-                    pWorld = grid.indexToWorldOffset + grid.indexToWorldLinear * k.pIndex;
                     cov = covUnit;
                     volume = volumeUnit;
                 } else {
-                    const openvdb::Vec3d w = xform.indexToWorld(openvdb::Vec3d(k.pIndex.x, k.pIndex.y, k.pIndex.z));
-                    pWorld = Vec3d(w.x(), w.y(), w.z());
                     const Mat3d a = R * indexToWorldJacobian(xform, openvdb::Vec3d(k.pIndex.x, k.pIndex.y, k.pIndex.z));
                     cov = a * glm::transpose(a);
                     volume = std::abs(glm::determinant(a));

@@ -29,8 +29,15 @@ if grep -Ev "$api" "$work/exports.txt" >"$work/foreign.txt" ||
   head -20 "$work/foreign.txt" >&2
   exit 1
 fi
+# Private members of exported classes are VDB_EWA_LOCAL.
+if grep -E 'vdb_ewa::GridSource::Impl::|vdb_ewa::Renderer::(renderLevelSet|renderFogVolume|addIsoSurface)\(' \
+     "$work/exports.txt" >"$work/private.txt"; then
+  echo "FAIL: private members are exported:" >&2
+  cat "$work/private.txt" >&2
+  exit 1
+fi
 for symbol in 'vdb_ewa::Renderer::Renderer(' 'vdb_ewa::Renderer::render(' 'vdb_ewa::gridSourceFromOpenVDB(' \
-              'typeinfo for vdb_ewa::Error'; do
+              'vdb_ewa::Renderer::renderFrame(' 'typeinfo for vdb_ewa::Error' 'typeinfo for vdb_ewa::Cancelled'; do
   grep -qF "$symbol" "$work/exports.txt" || { echo "FAIL: $symbol is not exported" >&2; exit 1; }
 done
 
