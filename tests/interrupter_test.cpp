@@ -3,6 +3,14 @@
 ///        process.
 #include "fixtures.h"
 
+#include "detail/kernel_extraction.h"
+#include "detail/progress.h"
+#include "detail/shadow_transmittance.h"
+#include "detail/splat_projection.h"
+#include "detail/surface_extraction.h"
+#include "detail/surface_rasterizer.h"
+#include "detail/tile_rasterizer.h"
+
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -109,6 +117,45 @@ TEST(Interrupter, ReportsRisingPercentsFromOneThreadAtATimeAndBracketsTheRender)
     // Reporting does not change the image.
     const Image without = Renderer(s).render(grid, cloudCamera(grid, 480, 270));
     EXPECT_EQ(withProgress.rgba, without.rgba);
+}
+
+// Each stage declares its units of work (setUnits) and advances exactly that many: a stage
+// that over- or under-counts reports percents that jump to its end early or never reach it.
+TEST(Progress, EveryStageAdvancesExactlyTheUnitsItDeclares)
+{
+    Interrupter plain; // counts only with an interrupter
+    detail::Progress progress(&plain);
+    progress.stage(0, 100);
+    auto expectComplete = [&](const char* stage, std::uint64_t units) {
+        EXPECT_EQ(progress.units(), units) << stage;
+        EXPECT_EQ(progress.unitsDone(), progress.units()) << stage;
+    };
+    const RenderSettings settings;
+
+    const GridSource cloud = makeSampleGrid(SampleGrid::Cloud, 0.05);
+    const Camera cloudView = cloudCamera(cloud, 200, 150);
+    const GridSource::Impl& fog = cloud.impl();
+    const detail::KernelSet kernels = detail::extractKernels(fog, settings, nullptr, &progress);
+    expectComplete("kernel extraction (one per leaf node)", fog.grid->tree().leafCount());
+    const std::vector<detail::Rgb> shadows = detail::shadowTransmittance(fog, kernels, settings, &progress);
+    EXPECT_GT(progress.units(), 1u);
+    expectComplete("shadow marches", progress.units());
+    const detail::SplatSet splats = detail::projectSplats(fog, kernels, shadows, {}, cloudView, settings, {}, &progress);
+    expectComplete("splat projection (one per kernel)", kernels.kernels.size());
+    detail::RasterStats raster;
+    detail::rasterizeSplats(splats, cloudView, settings, {}, raster, &progress);
+    EXPECT_GT(progress.units(), 1u);
+    expectComplete("slab compositing (one per screen tile)", progress.units());
+
+    const GridSource sphere = gridSourceFromOpenVDB(sphereLevelSet(1.0, 0.04));
+    const GridSource::Impl& surface = sphere.impl();
+    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(surface, 0.0, settings.kernelSigma, false, &progress);
+    expectComplete("surface kernels (one per leaf node)", surface.grid->tree().leafCount());
+    detail::SurfaceStats surfaceStats;
+    const Camera sphereView(orthoDownZ(0.0, 0.0, 5.0, 3.0, 150), Vec3d(0.0));
+    detail::rasterizeSurfaces(surfaces, sphereView, settings, surface.voxelLength, {}, surfaceStats, &progress);
+    EXPECT_GT(progress.units(), 1u);
+    expectComplete("surface z-buffer (one per screen tile)", progress.units());
 }
 
 TEST(Interrupter, CancelFromAnotherThreadStopsTheRenderPromptly)

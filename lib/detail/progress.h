@@ -42,6 +42,11 @@ public:
         if (mInterrupter && mInterrupter->cancelled()) throw Cancelled();
     }
 
+    /// The current stage's units, and how many of them are done (for tests: a stage that
+    /// keeps its declared count ends with both equal).
+    std::uint64_t units() const { return mUnits; }
+    std::uint64_t unitsDone() const { return mDone.load(std::memory_order_relaxed); }
+
     static constexpr std::chrono::milliseconds kReportInterval{50};
 
 private:

@@ -120,8 +120,8 @@ SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, double isovalue, 
                 perLeaf[l].push_back(k);
                 perLeafVoxels[l].push_back(ijk);
             }
-        advance(progress, r.size());
         }
+        advance(progress, r.size());
     });
     std::size_t total = 0;
     for (const auto& v : perLeaf) total += v.size();
