@@ -111,10 +111,9 @@ SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, double isovalue, 
                 const Vec3d stepWorld = -d * gWorld / g2;
                 const Vec3d stepIndex = Ainv * stepWorld;
                 if (std::max({std::abs(stepIndex.x), std::abs(stepIndex.y), std::abs(stepIndex.z)}) > kReach) continue;
-                const openvdb::Vec3d w = xform.indexToWorld(c);
                 SurfaceKernel k;
                 k.normal = (outwardDecreasing ? -1.0 : 1.0) * gWorld / std::sqrt(g2);
-                k.pWorld = Vec3d(w.x(), w.y(), w.z()) + stepWorld;
+                k.pWorld = grid.indexToWorld(Vec3d(c.x(), c.y(), c.z())) + stepWorld;
                 k.area = 0.0; // normalizeAreas
                 k.albedo = color.at(k.pWorld);
                 perLeaf[l].push_back(k);
