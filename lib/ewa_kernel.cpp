@@ -62,6 +62,28 @@ void finishFootprint(Sym2 cov, double scale, const ProjectionParams& params, Foo
         cov.xx += params.lowpass;
         cov.yy += params.lowpass;
         break;
+    case AntiAliasing::Floor: {
+        // Raise each principal variance below the low-pass variance to it: footprints wider
+        // than a pixel are left exact (the field is already band-limited on the pixel grid),
+        // minified ones get EWA's filter size. cov += (lowpass - lambda) v v^T per short axis.
+        const double mean = 0.5 * (cov.xx + cov.yy);
+        const double half = std::sqrt(0.25 * (cov.xx - cov.yy) * (cov.xx - cov.yy) + cov.xy * cov.xy);
+        const double lambdaMin = mean - half, lambdaMax = mean + half;
+        if (lambdaMax <= params.lowpass) {
+            cov = {params.lowpass, 0.0, params.lowpass};
+        } else if (lambdaMin < params.lowpass) {
+            // Unit eigenvector of lambdaMin: the larger-normed of the two null-space candidates.
+            double vx = cov.xy, vy = lambdaMin - cov.xx;
+            const double ux = lambdaMin - cov.yy, uy = cov.xy;
+            if (ux * ux + uy * uy > vx * vx + vy * vy) { vx = ux; vy = uy; }
+            const double n2 = vx * vx + vy * vy;
+            const double add = (params.lowpass - lambdaMin) / n2;
+            cov.xx += add * vx * vx;
+            cov.xy += add * vx * vy;
+            cov.yy += add * vy * vy;
+        }
+        break;
+    }
     case AntiAliasing::Swan: {
         // Uniform scaling: grow the whole footprint until its minor axis has the low-pass
         // variance added; isotropic footprints match EWA, elongated ones over-blur.

@@ -5,6 +5,7 @@
 #include <vdb_ewa/error.h>
 #include <vdb_ewa/openvdb_grid.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -75,8 +76,38 @@ GridSource makeSource(openvdb::GridBase::ConstPtr base, const std::string& path)
 
 } // namespace
 
+namespace {
+
+/// The value the field reads for a stored voxel value (NaN and negative: 0; clamped above).
+float fieldValue(float v)
+{
+    if (!(v > 0.0f)) return 0.0f;
+    return std::min(v, detail::kMaxDensity);
+}
+
+/// @a grid itself if every value already reads as the field does, else a sanitised copy.
+openvdb::FloatGrid::ConstPtr sanitisedField(const openvdb::FloatGrid::ConstPtr& grid)
+{
+    bool clean = grid->background() == 0.0f;
+    for (auto it = grid->cbeginValueAll(); clean && it; ++it) {
+        const float v = *it;
+        if (it.isValueOn() ? fieldValue(v) != v : v != 0.0f) clean = false;
+    }
+    if (clean) return grid;
+    openvdb::FloatGrid::Ptr copy = openvdb::FloatGrid::create(0.0f);
+    copy->setTransform(grid->transform().copy());
+    copy->tree().topologyUnion(grid->tree());
+    auto acc = grid->getConstAccessor();
+    for (auto it = copy->beginValueOn(); it; ++it) it.setValue(fieldValue(acc.getValue(it.getCoord())));
+    return copy;
+}
+
+} // namespace
+
 void GridSource::Impl::derive()
 {
+    // Level sets are rendered as surfaces: no density field.
+    field = grid->getGridClass() == openvdb::GRID_LEVEL_SET ? grid : sanitisedField(grid);
     const auto& xform = grid->transform();
     linear = xform.isLinear();
     activeVoxels = grid->tree().activeLeafVoxelCount();

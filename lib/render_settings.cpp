@@ -29,9 +29,10 @@ void RenderSettings::validate() const
     if (!(gain >= 0.0) || !std::isfinite(gain)) fail("--gain must be finite and >= 0");
     if (!(cutoff >= 0.0 && cutoff < 1.0)) fail("--cutoff must be in [0, 1)");
     if (!(shadowStep > 0.0) || !std::isfinite(shadowStep)) fail("--shadowstep must be > 0 voxels");
-    if (shadowResolution < 1 || shadowResolution > 16) fail("--shadow-res must be in [1, 16] voxels");
+    if (!(shadowResolution >= 0.25 && shadowResolution <= 16.0)) fail("--shadow-res must be in [0.25, 16] voxels");
     if (!(step >= 1e-3) || !std::isfinite(step)) fail("--step must be >= 0.001 voxels");
     if (!(kernelSigma >= 0.1 && kernelSigma <= 4.0)) fail("--kernel-sigma must be in [0.1, 4] voxels");
+    if (!(surfaceSigma >= 0.1 && surfaceSigma <= 4.0)) fail("--surface-sigma must be in [0.1, 4] voxels");
     if (!(lowpass >= 0.0 && lowpass <= 100.0)) fail("--lowpass must be in [0, 100] pixels^2");
     if (antiAliasing != AntiAliasing::None && !(lowpass > 0.0)) fail("--lowpass must be > 0 unless --aa none");
     if (!(cutoffRadius >= 1.0 && cutoffRadius <= 6.0)) fail("--cutoff-radius must be in [1, 6] sigma");
@@ -51,18 +52,17 @@ RenderSettings RenderSettings::preset(Quality quality)
     switch (quality) {
     case Quality::Draft:
         s.cutoffRadius = 2.0;
-        s.slab = 4.0;
-        s.shadowResolution = 4;
+        s.slab = 2.0;
+        s.shadowResolution = 2.0;
         s.tileKernelSpacing = 8;
         s.lodPixels = 10.0;
         break;
     case Quality::Default:
         break;
     case Quality::High:
-        s.cutoffRadius = 4.0;
         s.slab = 0.5;
         s.shadowStep = 0.375;
-        s.shadowResolution = 1;
+        s.shadowResolution = 0.5;
         s.tileKernelSpacing = 2;
         s.expEvaluation = ExpEvaluation::Exact;
         s.lodPixels = 0.0;

@@ -8,6 +8,7 @@
 #include "detail/kernel_extraction.h"
 #include "detail/material_color.h"
 #include "detail/progress.h"
+#include "detail/quasi_interpolation.h"
 #include "detail/reference_integrator.h"
 #include "detail/shadow_transmittance.h"
 #include "detail/splat_projection.h"
@@ -56,7 +57,7 @@ Renderer::Renderer(const RenderSettings& settings) : mSettings(settings)
 void Renderer::renderLevelSet(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes,
     Frame& frame, RenderStats& stats, detail::Progress& progress) const
 {
-    if (mSettings.method == Method::RayMarch) {
+    if (mSettings.method != Method::Splat) {
         throw ValueError("--method raymarch renders fog volumes; level sets are rendered with surface splats");
     }
     if (passes.shadow || passes.emission || passes.deep) {
@@ -65,7 +66,7 @@ void Renderer::renderLevelSet(const GridSource::Impl& grid, const Camera& camera
     if (!std::isnan(mSettings.iso)) throw ValueError("--iso is for fog volumes; a level set's surface is chosen with --isovalue");
     StageTimer timer;
     progress.stage(0, 60);
-    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(grid, mSettings.isovalue, mSettings.kernelSigma, false, &progress);
+    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(grid, mSettings.isovalue, mSettings.surfaceSigma, false, &progress);
     stats.kernelSeconds = timer.lap();
     progress.stage(60, 100);
     detail::SurfaceStats surfaceStats;
@@ -84,16 +85,12 @@ void Renderer::renderLevelSet(const GridSource::Impl& grid, const Camera& camera
 }
 
 void Renderer::addIsoSurface(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes,
-    detail::SplatSet& splats, detail::Progress& progress) const
+    const detail::LightMap& light, detail::SplatSet& splats, detail::Progress& progress) const
 {
-    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(grid, mSettings.iso, mSettings.kernelSigma, true, &progress);
-    // Shadow transmittance at the surface kernels: the volume's shadow rays from their centres.
-    detail::KernelSet points;
-    points.kernels.reserve(surfaces.kernels.size());
-    for (const detail::SurfaceKernel& k : surfaces.kernels) {
-        points.kernels.push_back(detail::Kernel{grid.worldToIndex(k.pWorld), 1.0f, 1.0f});
-    }
-    const std::vector<detail::Rgb> shadows = detail::shadowTransmittance(grid, points, mSettings, &progress);
+    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(grid, mSettings.iso, mSettings.surfaceSigma, true, &progress);
+    // The light's transmittance at the surface kernels, from the volume's light map.
+    std::vector<detail::Rgb> shadows(surfaces.kernels.size());
+    for (std::size_t i = 0; i < shadows.size(); ++i) shadows[i] = light.transmittance(light.coordinates(surfaces.kernels[i].pWorld));
     detail::appendSurfaceSplats(splats, surfaces, shadows, camera, mSettings, grid.voxelLength, passes);
 }
 
@@ -104,19 +101,20 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     StageTimer timer;
     progress.stage(0, 10);
     const detail::LevelOfDetail lod(g, camera, mSettings.lodPixels);
-    const detail::KernelSet kernels = detail::extractKernels(g, mSettings, &lod, &progress);
+    detail::KernelSet kernels = detail::extractKernels(g, mSettings, &lod, &progress);
+    if (mSettings.prefilter) stats.haloKernels = detail::quasiInterpolate(g, detail::quasiInterpolationAlpha(mSettings.kernelSigma), kernels);
     stats.kernelSeconds = timer.lap();
     progress.stage(10, 35);
-    const std::vector<detail::Rgb> shadows = detail::shadowTransmittance(g, kernels, mSettings, &progress);
+    const detail::LightMap light(g, mSettings, &progress);
     stats.shadowSeconds = timer.lap();
     progress.stage(35, 45);
     const std::vector<detail::Rgb> colors = detail::kernelColors(g, kernels);
-    detail::SplatSet splats = detail::projectSplats(g, kernels, shadows, colors, camera, mSettings, passes, &progress);
-    if (!std::isnan(mSettings.iso)) addIsoSurface(g, camera, passes, splats, progress);
+    detail::SplatSet splats = detail::projectSplats(g, kernels, colors, camera, mSettings, passes, &progress);
+    if (!std::isnan(mSettings.iso)) addIsoSurface(g, camera, passes, light, splats, progress);
     stats.projectSeconds = timer.lap();
     progress.stage(45, 100);
     detail::RasterStats raster;
-    frame = detail::rasterizeSplats(splats, camera, mSettings, passes, raster, &progress);
+    frame = detail::rasterizeSplats(splats, camera, mSettings, passes, raster, &light, !colors.empty(), &progress);
     stats.rasterSeconds = timer.lap();
 
     stats.activeVoxels = kernels.activeVoxels;
@@ -176,6 +174,8 @@ Frame Renderer::renderFrame(const GridSource& grid, const Camera& camera, const 
             renderLevelSet(g, camera, passes, frame, stats, progress);
         } else if (mSettings.method == Method::RayMarch) {
             frame = detail::rayMarchReference(g, camera, mSettings, passes, stats, &progress);
+        } else if (mSettings.method == Method::RayMarchGaussian) {
+            frame = detail::rayMarchGaussianSum(g, camera, mSettings, passes, stats, &progress);
         } else {
             renderFogVolume(g, camera, passes, frame, stats, progress);
         }

@@ -145,6 +145,23 @@ inline RenderSettings absorberSettings(double sigma)
     return s;
 }
 
+/// A white scatterer (extinction @a sigma, no absorption) lit from the camera's side (+z) by a
+/// white light, with no gain or cutoff and fine shadow and reference steps: seen down -z, the
+/// closed form C = albedo L (1 - exp(-2 tau)) / 2 of a slab holds whatever its profile.
+inline RenderSettings scatteringSlabSettings(double sigma)
+{
+    RenderSettings s;
+    s.absorb = Vec3d(0.0);
+    s.scatter = Vec3d(sigma);
+    s.lightDir = Vec3d(0, 0, 1);
+    s.lightColor = Vec3d(1.0);
+    s.gain = 0.0;
+    s.cutoff = 0.0;
+    s.shadowStep = 0.1;
+    s.step = 0.25;
+    return s;
+}
+
 } // namespace vdb_ewa::test
 
 namespace vdb_ewa::test {

@@ -5,7 +5,7 @@
 
 #include "detail/kernel_extraction.h"
 #include "detail/progress.h"
-#include "detail/shadow_transmittance.h"
+#include "detail/light_map.h"
 #include "detail/splat_projection.h"
 #include "detail/surface_extraction.h"
 #include "detail/surface_rasterizer.h"
@@ -137,13 +137,13 @@ TEST(Progress, EveryStageAdvancesExactlyTheUnitsItDeclares)
     const GridSource::Impl& fog = cloud.impl();
     const detail::KernelSet kernels = detail::extractKernels(fog, settings, nullptr, &progress);
     expectComplete("kernel extraction (one per leaf node)", fog.grid->tree().leafCount());
-    const std::vector<detail::Rgb> shadows = detail::shadowTransmittance(fog, kernels, settings, &progress);
+    const detail::LightMap light(fog, settings, &progress);
     EXPECT_GT(progress.units(), 1u);
-    expectComplete("shadow marches", progress.units());
-    const detail::SplatSet splats = detail::projectSplats(fog, kernels, shadows, {}, cloudView, settings, {}, &progress);
+    expectComplete("light map (one per row of shadow rays)", progress.units());
+    const detail::SplatSet splats = detail::projectSplats(fog, kernels, {}, cloudView, settings, {}, &progress);
     expectComplete("splat projection (one per kernel)", kernels.kernels.size());
     detail::RasterStats raster;
-    detail::rasterizeSplats(splats, cloudView, settings, {}, raster, &progress);
+    detail::rasterizeSplats(splats, cloudView, settings, {}, raster, &light, false, &progress);
     EXPECT_GT(progress.units(), 1u);
     expectComplete("slab compositing (one per screen tile)", progress.units());
 

@@ -3,6 +3,8 @@
 ///        unity, tiles, anisotropic, sheared and frustum maps, thread-count independence.
 #include "fixtures.h"
 
+#include "detail/kernel_extraction.h"
+
 #include <gtest/gtest.h>
 
 #include <openvdb/math/Maps.h>
@@ -21,23 +23,6 @@ constexpr double kPi = 3.14159265358979323846;
 openvdb::FloatGrid::Ptr slab(int depth, float rho, double h)
 {
     return makeBoxGrid(openvdb::Coord(-20, -20, 0), openvdb::Coord(19, 19, depth - 1), rho, h);
-}
-
-/// A white scatterer (extinction @a sigma, no absorption) lit from the camera's side (+z) by a
-/// white light, with no gain or cutoff and fine shadow and reference steps: the slab
-/// scattering tests' closed form C = albedo L (1 - exp(-2 tau)) / 2 holds.
-RenderSettings scatteringSlabSettings(double sigma)
-{
-    RenderSettings s;
-    s.absorb = Vec3d(0.0);
-    s.scatter = Vec3d(sigma);
-    s.lightDir = Vec3d(0, 0, 1);
-    s.lightColor = Vec3d(1.0);
-    s.gain = 0.0;
-    s.cutoff = 0.0;
-    s.shadowStep = 0.1;
-    s.step = 0.25;
-    return s;
 }
 
 } // namespace
@@ -115,10 +100,13 @@ TEST(Renderer, ColorGridTintsTheScatteredLightPerVoxel)
     auto density = slab(depth, float(rho), h);
     auto color = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
     color->setTransform(density->transform().copy());
-    for (auto it = density->cbeginValueOn(); it; ++it) {
-        const openvdb::Coord ijk = it.getCoord();
-        color->tree().setValueOn(ijk, ijk.x() < 0 ? openvdb::Vec3s(1, 0, 0) : openvdb::Vec3s(0.2f, 0.5f, 1.0f));
-    }
+    // The colour covers the density's trilinear support (one voxel beyond its active values), as
+    // a TD's colour volume does: the reference's trilinear colour then does not fade at the faces.
+    for (int k = -1; k <= depth; ++k)
+        for (int j = -21; j <= 20; ++j)
+            for (int i = -21; i <= 20; ++i) {
+                color->tree().setValueOn(openvdb::Coord(i, j, k), i < 0 ? openvdb::Vec3s(1, 0, 0) : openvdb::Vec3s(0.2f, 0.5f, 1.0f));
+            }
     const GridSource source = withColorGrid(gridSourceFromOpenVDB(density), color);
     RenderSettings s = scatteringSlabSettings(sigma);
     s.emission = Vec3d(0.0, 0.05, 0.0);
@@ -157,13 +145,18 @@ TEST(Renderer, SingleVoxelImageIntegral)
             cam.translate = Vec3d(0.0, 0.0, 100 * h);
             cam.lookAt = Vec3d(0.0);
             RenderSettings s = absorberSettings(sigma);
-            const Image img = renderGrid(grid, cam, s);
             const Camera camera(cam, Vec3d(0.0));
             const Vec3d t = camera.cameraFromWorldPoint(Vec3d(c.x(), c.y(), c.z()) * h);
             const double f = camera.focalPixels();
             const double expectedTau = sigma * rho * h * h * glm::length(t) / (t.z * t.z * t.z) * f * f;
             // alpha = 1 - exp(-tau) ~ tau - tau^2 / 2 for the small peak optical depths here.
-            EXPECT_NEAR(alphaSum(img), expectedTau, 0.01 * expectedTau) << "voxel " << c << " size " << h;
+            s.prefilter = false;
+            EXPECT_NEAR(alphaSum(renderGrid(grid, cam, s)), expectedTau, 0.01 * expectedTau) << "voxel " << c << " size " << h;
+            // The prefilter keeps the mass (1 + 6 alpha - 6 alpha), but an isolated voxel's
+            // negative halo lobes project outside its footprint, where a slab's optical depth
+            // is clamped at 0: 4 % more (docs/numerics.md#quasi-interpolation).
+            s.prefilter = true;
+            EXPECT_NEAR(alphaSum(renderGrid(grid, cam, s)), 1.04 * expectedTau, 0.01 * expectedTau) << "voxel " << c << " size " << h;
         }
     }
 }
@@ -193,8 +186,15 @@ TEST(Renderer, PartitionOfUnityRippleShrinksWithKernelSigma)
         std::printf("partition of unity: sigma %.2f voxels, max |sum - 1| = %.2e\n", sigma, r);
         EXPECT_LT(r, previous);
         previous = r;
+        // The default trades a 4.4 % ripple (2.9 % in a line integral, the image of thin fog)
+        // for sharpness: with the prefilter it is the most accurate against the trilinear field
+        // (docs/numerics.md#quasi-interpolation). Coarse lattices (tiles, level of detail), whose
+        // regions are uniform, need flatness instead.
         if (sigma == RenderSettings().kernelSigma) {
-            EXPECT_LT(r, 0.02); // the default's criterion: docs/equations.md#kernel-standard-deviation
+            EXPECT_LT(r, 0.05);
+        }
+        if (sigma == detail::kCoarseKernelSigma) {
+            EXPECT_LT(r, 0.005);
         }
     }
 }
@@ -346,7 +346,6 @@ TEST(Renderer, FrustumTransformUsesPerVoxelJacobians)
     cam.height = 64;
     cam.translate = Vec3d(0.7, 0.5, 4.0);
     RenderSettings s;
-    s.shadowResolution = 1; // the shadow lattice serves affine grids only: compare like with like
     const Image a = renderGrid(gridF, cam, s);
     const Image b = renderGrid(gridA, cam, s);
     EXPECT_GT(alphaSum(a), 50.0);
@@ -499,21 +498,22 @@ TEST(Renderer, QualityPresetsOrderTheirErrorAgainstTheReference)
     }
 }
 
-TEST(Renderer, ShadowLatticeConvergesToPerKernelShadows)
+TEST(Renderer, LightMapConvergesAsItsRaysGetDenser)
 {
-    // Shadow rays every N voxels, trilinear in between (--shadow-res): error grows with N.
+    // Shadow rays every N voxels across the light (--shadow-res), bilinear in optical depth in
+    // between: the error against a fine map falls with N.
     RenderSettings s;
     s.shadowStep = 0.5;
-    s.shadowResolution = 1;
-    const Image perKernel = renderSample(SampleGrid::Cloud, 0.04, s);
+    s.shadowResolution = 0.25;
+    const Image fine = renderSample(SampleGrid::Cloud, 0.04, s);
     double previous = 0.0;
-    for (int n : {2, 4, 8}) {
+    for (double n : {0.5, 1.0, 2.0, 4.0}) {
         s.shadowResolution = n;
-        const double e = rmse(renderSample(SampleGrid::Cloud, 0.04, s), perKernel, 0);
-        std::printf("shadow lattice every %d voxels: red RMSE against per-kernel shadows %.2e\n", n, e);
+        const double e = rmse(renderSample(SampleGrid::Cloud, 0.04, s), fine, 0);
+        std::printf("light map rays every %g voxels: red RMSE against rays every 0.25 voxels %.2e\n", n, e);
         EXPECT_GT(e, previous);
         previous = e;
-        if (n == 2) {
+        if (n == 1.0) {
             EXPECT_LT(e, 5e-3);
         }
     }

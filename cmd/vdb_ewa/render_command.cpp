@@ -32,8 +32,8 @@ std::string fmt(double v)
 std::string fmt3(const Vec3d& v) { return fmt(v.x) + "," + fmt(v.y) + "," + fmt(v.z); }
 
 const Choices<Quality> kQualities = {{"draft", Quality::Draft}, {"default", Quality::Default}, {"high", Quality::High}};
-const Choices<Method> kMethods = {{"splat", Method::Splat}, {"raymarch", Method::RayMarch}};
-const Choices<AntiAliasing> kAntiAliasing = {{"ewa", AntiAliasing::Ewa}, {"swan", AntiAliasing::Swan}, {"none", AntiAliasing::None}};
+const Choices<Method> kMethods = {{"splat", Method::Splat}, {"raymarch", Method::RayMarch}, {"raymarch-gaussian", Method::RayMarchGaussian}};
+const Choices<AntiAliasing> kAntiAliasing = {{"ewa", AntiAliasing::Ewa}, {"floor", AntiAliasing::Floor}, {"swan", AntiAliasing::Swan}, {"none", AntiAliasing::None}};
 const Choices<ExpEvaluation> kExpEvaluations = {
     {"incremental", ExpEvaluation::Incremental}, {"exact", ExpEvaluation::Exact}, {"table", ExpEvaluation::Table}};
 const Choices<bool> kOnOff = {{"on", true}, {"off", false}};
@@ -81,19 +81,21 @@ public:
         mApp->add_option("--cutoff", mCutoff,
             "density cutoff, and rays stop where |transmittance RGB|^2 < cutoff (default: " + fmt(rs.cutoff) + ")");
         mApp->add_option("--shadowstep", mShadowStep, "shadow-ray step in voxels (default: " + fmt(rs.shadowStep) + ")");
-        mApp->add_option("--shadow-res", mShadowRes, "shadow rays start every N voxels and are interpolated trilinearly in between; 1 = one per kernel (default: " + std::to_string(rs.shadowResolution) + ")");
+        mApp->add_option("--shadow-res", mShadowRes, "light map: shadow rays every N voxels across the light, interpolated in between; range [0.25, 16] (default: " + fmt(rs.shadowResolution) + ")");
         mApp->add_option("--step", mStep, "primary-ray step in voxels for --method raymarch (default: " + fmt(rs.step) + "); the splatter has no primary rays and ignores it");
-        mApp->add_option("--method", mMethod, "splat (EWA volume splatting) or raymarch (reference integrator of the same Gaussian reconstruction, slow) (default: splat)");
+        mApp->add_option("--method", mMethod, "splat (EWA volume splatting), raymarch (the reference: ray-marches the trilinear field with a shadow ray per sample, as vdb_render; slow) or raymarch-gaussian (diagnostic: ray-marches the splatter's own Gaussian reconstruction and per-kernel shadows) (default: splat)");
         // EWA splatting.
         mApp->add_option("--kernel-sigma", mKernelSigma, "reconstruction kernel std. deviation in voxels (default: " + fmt(rs.kernelSigma) + ")");
+        mApp->add_option("--surface-sigma", mSurfaceSigma, "level sets and --iso: surface kernel std. deviation along the surface in voxels, range [0.1, 4] (default: " + fmt(rs.surfaceSigma) + ")");
         mApp->add_option("--lowpass", mLowpass, "screen-space low-pass filter variance in pixels^2 (default: " + fmt(rs.lowpass) + ")");
-        mApp->add_option("--aa", mAa, "anti-aliasing: ewa (resampling filter), swan (uniform scaling) or none (default: ewa)");
+        mApp->add_option("--aa", mAa, "anti-aliasing: floor (each footprint axis at least --lowpass wide), ewa (resampling filter, Eq. 33: always adds --lowpass), swan (uniform scaling) or none (default: floor)");
         mApp->add_option("--cutoff-radius", mCutoffRadius, "footprint cut-off radius in std. deviations (default: " + fmt(rs.cutoffRadius) + ")");
         mApp->add_option("--slab", mSlab, "image-aligned slab thickness in voxel lengths (default: " + fmt(rs.slab) + ")");
         mApp->add_option("--quality", mQuality,
             "preset of the speed/accuracy knobs: draft, default or high; explicit options override it "
             "(values in docs/performance.md) (default: default)");
         mApp->add_option("--exp", mExp, "footprint exp(-r/2): incremental (forward differencing), exact or table (default: incremental)");
+        mApp->add_option("--prefilter", mPrefilter, "on: quasi-interpolating kernel weights (the Gaussian sum keeps the trilinear field's sharpness; negative halo kernels at its faces); off: each kernel weighs its voxel's value (default: on)");
         mApp->add_option("--renormalize", mRenormalize, "on: divide footprints by the mass kept inside --cutoff-radius; off: keep the truncated mass (default: on)");
         mApp->add_option("--precision", mPrecision, "world-to-camera transform and covariances in double or float (default: double)");
         mApp->add_option("--tile-spacing", mTileSpacing, "largest kernel spacing in voxels for active tiles, 1 to voxelise them (default: 4)");
@@ -297,11 +299,13 @@ private:
         if (mStep) rs.step = *mStep;
         if (!mMethod.empty()) rs.method = parseChoice("method", mMethod, kMethods);
         if (mKernelSigma) rs.kernelSigma = *mKernelSigma;
+        if (mSurfaceSigma) rs.surfaceSigma = *mSurfaceSigma;
         if (mLowpass) rs.lowpass = *mLowpass;
         if (!mAa.empty()) rs.antiAliasing = parseChoice("aa", mAa, kAntiAliasing);
         if (mCutoffRadius) rs.cutoffRadius = *mCutoffRadius;
         if (!mExp.empty()) rs.expEvaluation = parseChoice("exp", mExp, kExpEvaluations);
         if (!mRenormalize.empty()) rs.renormalize = parseChoice("renormalize", mRenormalize, kOnOff);
+        if (!mPrefilter.empty()) rs.prefilter = parseChoice("prefilter", mPrefilter, kOnOff);
         if (mTileSpacing) rs.tileKernelSpacing = *mTileSpacing;
         if (!mPrecision.empty()) rs.doublePrecision = parseChoice("precision", mPrecision, kPrecisions);
         if (mSlab) rs.slab = *mSlab;
@@ -332,19 +336,21 @@ private:
             cameraGroup.emplace_back(k, v);
         Attributes model{{"absorb", fmt3(rs.absorb)}, {"scatter", fmt3(rs.scatter)}, {"emission", fmt3(rs.emission)},
             {"light", fmt3(rs.lightDir) + "," + fmt3(rs.lightColor)}, {"gain", fmt(rs.gain)}, {"cutoff", fmt(rs.cutoff)},
-            {"shadowstep", fmt(rs.shadowStep)}, {"shadow-res", std::to_string(rs.shadowResolution)}};
+            {"shadowstep", fmt(rs.shadowStep)}, {"shadow-res", fmt(rs.shadowResolution)}};
         if (grid.hasColorGrid()) model.emplace_back("color", mColor);
         Attributes method{{"method", choiceName(rs.method, kMethods)}};
-        if (rs.method == Method::RayMarch) method.emplace_back("step", fmt(rs.step));
+        if (rs.method != Method::Splat) method.emplace_back("step", fmt(rs.step));
         if (!grid.isLevelSet() && !std::isnan(rs.iso)) {
             method.emplace_back("iso", fmt(rs.iso));
             method.emplace_back("iso-opacity", fmt(rs.isoOpacity));
+            method.emplace_back("surface-sigma", fmt(rs.surfaceSigma));
         }
         if (grid.isLevelSet()) {
             method.emplace_back("isovalue", fmt(rs.isovalue));
             method.emplace_back("shader", choiceName(rs.shader, kShaders));
+            method.emplace_back("surface-sigma", fmt(rs.surfaceSigma));
         }
-        for (const auto& [k, v] : Attributes{{"kernel-sigma", fmt(rs.kernelSigma)}, {"lowpass", fmt(rs.lowpass)},
+        for (const auto& [k, v] : Attributes{{"kernel-sigma", fmt(rs.kernelSigma)}, {"prefilter", choiceName(rs.prefilter, kOnOff)}, {"lowpass", fmt(rs.lowpass)},
                  {"aa", choiceName(rs.antiAliasing, kAntiAliasing)}, {"cutoff-radius", fmt(rs.cutoffRadius)},
                  {"renormalize", choiceName(rs.renormalize, kOnOff)}, {"exp", choiceName(rs.expEvaluation, kExpEvaluations)},
                  {"precision", choiceName(rs.doublePrecision, kPrecisions)}, {"slab", fmt(rs.slab)},
@@ -374,7 +380,7 @@ private:
     {
         std::cout << "vdb_ewa: " << s.activeVoxels << " active voxels and " << s.activeTiles << " active tiles read; "
                   << s.kernels << " kernels (" << s.voxelsMerged << " voxels merged into " << s.mergedKernels
-                  << " by --lod), " << s.kernelsSkipped << " values skipped (below --cutoff or NaN), "
+                  << " by --lod, " << s.haloKernels << " halo kernels by --prefilter), " << s.kernelsSkipped << " values skipped (below --cutoff or NaN), "
                   << s.kernelsCulled << " kernels culled, " << s.splats << " splatted into " << s.splatTilePairs
                   << " (splat, tile) pairs; " << s.screenTilesOpaque << " of " << s.screenTiles
                   << " screen tiles turned opaque early, skipping " << s.splatTilePairsSkipped << " pairs\n"
@@ -385,12 +391,13 @@ private:
 
     CLI::App* mApp = nullptr;
     std::string mInput, mOutput, mName, mRes, mTranslate, mRotate, mLookAt, mUp, mCamera;
-    std::string mAbsorb, mScatter, mEmission, mLight, mAa, mMethod, mQuality, mExp, mRenormalize, mPrecision;
-    std::optional<int> mTileSpacing, mShadowRes, mSamples;
+    std::string mAbsorb, mScatter, mEmission, mLight, mAa, mMethod, mQuality, mExp, mRenormalize, mPrefilter, mPrecision;
+    std::optional<int> mTileSpacing, mSamples;
+    std::optional<double> mShadowRes;
     std::optional<double> mIsovalue, mIso, mIsoOpacity;
     std::string mShader, mColor;
     std::optional<double> mFov, mFocal, mAperture, mFrame, mNear, mFar, mGain, mCutoff, mShadowStep, mStep, mLod;
-    std::optional<double> mKernelSigma, mLowpass, mCutoffRadius, mSlab;
+    std::optional<double> mKernelSigma, mSurfaceSigma, mLowpass, mCutoffRadius, mSlab;
     int mThreads = 0;
     int mVerbose = 0;
     bool mQuiet = false, mSkipExisting = false;

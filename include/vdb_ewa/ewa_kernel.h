@@ -47,7 +47,7 @@ struct ProjectionParams
     /// optical depth (the column through the centre) does not depend on the distance; only
     /// the angular spread is bounded. See docs/numerics.md.
     double minDistanceSigmas = 3.0;
-    AntiAliasing antiAliasing = AntiAliasing::Ewa;
+    AntiAliasing antiAliasing = AntiAliasing::Floor;
     double lowpass = 1.0;        ///< V^h = lowpass * I, pixels^2
     double cutoffRadius = 3.0;   ///< in standard deviations of the filtered footprint
     bool renormalize = true;     ///< divide the peak by the mass kept inside the cut-off

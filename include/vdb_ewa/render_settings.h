@@ -15,6 +15,8 @@ namespace vdb_ewa {
 enum class AntiAliasing
 {
     Ewa,  ///< EWA resampling filter: footprint covariance + low-pass covariance (Eq. 33)
+    Floor, ///< each principal footprint variance raised to at least the low-pass variance: EWA's
+           ///< filter where kernels are minified, no extra blur where they span pixels
     Swan, ///< Swan et al.: scale the whole footprint uniformly (comparison mode, over-blurs)
     None  ///< no low-pass filter: point-sample the projected kernel (aliases when minified)
 };
@@ -42,8 +44,9 @@ enum class SurfaceShader
 /// How the image is formed.
 enum class Method
 {
-    Splat,   ///< EWA volume splatting (the renderer)
-    RayMarch ///< reference integrator: ray-march the same Gaussian reconstruction (a yardstick)
+    Splat,           ///< EWA volume splatting (the renderer)
+    RayMarch,        ///< reference integrator: ray-march the field (trilinear), a shadow ray per sample
+    RayMarchGaussian ///< diagnostic: ray-march the splatter's Gaussian reconstruction, shadows per kernel
 };
 
 struct VDB_EWA_API RenderSettings
@@ -58,19 +61,24 @@ struct VDB_EWA_API RenderSettings
                                       ///< per unit optical length, like scatter x light colour); 0 = none
     double gain = 0.2;                ///< shadow-ray extinction falls as 1/(1 + gain * s), s in voxels
     double cutoff = 0.005;            ///< density cutoff; rays stop where |T|^2 < cutoff (RGB T)
-    double shadowStep = 1.0;          ///< shadow-ray step in voxels (vdb_render's default is 3)
-    int shadowResolution = 2;         ///< shadow rays start every N voxels (trilinear in between); 1 = at every kernel
+    double shadowStep = 0.75;         ///< shadow-ray step in voxels (vdb_render's default is 3)
+    double shadowResolution = 1.0;    ///< light map: shadow rays every N voxel lengths across the light, bilinear
+                                      ///< in between (docs/numerics.md#shading-per-slab-sample)
     double step = 1.0;                ///< primary-ray step in voxels (--method raymarch only)
 
     // --- EWA splatting ---
-    double kernelSigma = 0.55;  ///< reconstruction kernel std. deviation in voxels (Eq. 19, V = s^2 I)
+    double kernelSigma = 0.5;   ///< reconstruction kernel std. deviation in voxels (Eq. 19, V = s^2 I)
+    /// Quasi-interpolating kernel weights: voxel kernels weighted so that the Gaussian sum has the
+    /// trilinear field's local second moment, with negative halo kernels at the support's faces
+    /// (docs/numerics.md#quasi-interpolation); false: each kernel weighs its voxel's value.
+    bool prefilter = true;
     double lowpass = 1.0;       ///< low-pass filter variance in pixels^2 (Eq. 33, V^h = lowpass I)
-    AntiAliasing antiAliasing = AntiAliasing::Ewa;
+    AntiAliasing antiAliasing = AntiAliasing::Floor;
     double cutoffRadius = 3.0;  ///< footprint evaluated where r = d^T Q d < cutoffRadius^2 (in sigma)
     bool renormalize = true;    ///< divide by the mass kept inside the cut-off, 1 - exp(-c^2/2)
     ExpEvaluation expEvaluation = ExpEvaluation::Incremental;
     bool doublePrecision = true; ///< world -> camera transform and covariances in double (false: float)
-    double slab = 2.0;          ///< image-aligned slab thickness in voxel lengths
+    double slab = 1.0;          ///< image-aligned slab thickness in voxel lengths
     int tileKernelSpacing = 4;  ///< largest kernel spacing (voxels) used to model active tiles
     double lodPixels = 2.0;     ///< level of detail: merge blocks of 2^L voxels into one kernel where
                                 ///< the block spacing projects to at most this many pixels; 0 = off
@@ -78,6 +86,8 @@ struct VDB_EWA_API RenderSettings
     // --- Surfaces (level-set grids; docs/equations.md#surface-kernels) ---
     double isovalue = 0.0;      ///< iso-surface of a level set, world units (vdb_render -isovalue)
     SurfaceShader shader = SurfaceShader::Diffuse;
+    double surfaceSigma = 0.55; ///< surface kernel std. deviation in voxels along the tangent plane
+                                ///< (Sec. 6.4; wider than kernelSigma so that no holes open between samples)
     double surfaceTolerance = 4.0; ///< z-buffer depth tolerance in voxel lengths (Sec. 7.2)
     /// Fog volumes: also render the iso-surface density == iso with flattened surface kernels
     /// composited with the volume's (Sec. 6.4); NaN = off.

@@ -18,18 +18,20 @@ namespace vdb_ewa {
 namespace detail {
 struct SplatSet;
 class Progress;
+class LightMap;
 } // namespace detail
 
 /// What a render read, culled and splatted, and how long each stage took (seconds).
 struct RenderStats
 {
     double kernelSeconds = 0;   ///< active voxels and tiles -> reconstruction kernels
-    double shadowSeconds = 0;   ///< shadow transmittance per kernel
+    double shadowSeconds = 0;   ///< the light map (shadow rays through the field)
     double projectSeconds = 0;  ///< kernels -> screen-space splats (Eq. 29-33) and binning
     double rasterSeconds = 0;   ///< per-tile slab compositing
     std::uint64_t activeVoxels = 0;
     std::uint64_t activeTiles = 0;
-    std::uint64_t kernels = 0;        ///< kernels built (voxels + tile kernels)
+    std::uint64_t kernels = 0;        ///< kernels built (voxels + tile kernels + halo kernels)
+    std::uint64_t haloKernels = 0;    ///< negative kernels beside the support (--prefilter)
     std::uint64_t kernelsSkipped = 0; ///< below the density cutoff, or invalid values
     std::uint64_t voxelsMerged = 0;   ///< active voxels merged into level-of-detail kernels (--lod)
     std::uint64_t mergedKernels = 0;  ///< the level-of-detail kernels they became
@@ -77,7 +79,7 @@ private:
 
     /// Fog volumes with settings.iso: the iso-surface's kernels join the volume's splats.
     VDB_EWA_LOCAL void addIsoSurface(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes,
-        detail::SplatSet& splats, detail::Progress& progress) const;
+        const detail::LightMap& light, detail::SplatSet& splats, detail::Progress& progress) const;
 
     RenderSettings mSettings;
 };

@@ -43,10 +43,14 @@ VDB_EWA_API std::int64_t slabSpan(const SlabGrid& slabs, double mu, double sd, d
 /// it overlaps: Phi((z1 - mu)/sd) - Phi((z0 - mu)/sd). The Gaussian is truncated to
 /// mu +- truncation * sd and renormalised, so the shares of an unclipped kernel sum to 1; the
 /// part outside [clipNear, clipFar] (near and far planes) is dropped, not redistributed.
-/// Writes at most @a maxCount shares to @a shares and the first slab index to @a first.
+/// Writes at most @a maxCount shares to @a shares and the first slab index to @a first. With
+/// @a moments (2 floats a share), also where each share lies in its slab: the mean and the
+/// mean square of the position of the Gaussian restricted to the slab (a truncated normal:
+/// mean mu + sd (phi(a) - phi(b)) / Z, variance sd^2 (1 + (a phi(a) - b phi(b)) / Z - ((phi(a) -
+/// phi(b)) / Z)^2), Z = Phi(b) - Phi(a)), in units of the slab's thickness from its front.
 /// @return the number of slabs written (0 if the kernel lies outside the clip range).
 VDB_EWA_API int slabShares(const SlabGrid& slabs, double mu, double sd, double truncation,
-    double clipNear, double clipFar, std::int64_t& first, float* shares, int maxCount);
+    double clipNear, double clipFar, std::int64_t& first, float* shares, int maxCount, float* moments = nullptr);
 
 /// Exact front-to-back update of one homogeneous slab for one colour channel: optical depth
 /// @a tau, extinction-weighted emission @a emission (= sum of colour x optical depth).
@@ -57,6 +61,23 @@ inline void compositeSlab(float tau, float emission, float& colour, float& trans
     const float absorbed = -std::expm1(-tau);
     colour += transmittance * (tau > 1e-7f ? emission / tau * absorbed : emission);
     transmittance *= 1.0f - absorbed;
+}
+
+/// The light transmittance that, used as one value for the whole slab, lights a uniform layer
+/// of optical depth @a tau (one channel) exactly when the light's transmittance along the
+/// viewing ray falls exponentially from @a front at the layer's front to @a back at its back
+/// (linear light optical depth, as between two light-map samples): compositeSlab(tau, a S T)
+/// then adds T a S int_0^1 T_L(u) e^(-tau u) du, T_L(u) = front (back / front)^u. That integral
+/// is front E(tau + k) with E(x) = (1 - e^-x) / x and k = ln(front / back), so the value
+/// returned is front E(tau + k) / E(tau): the light at the layer's front where it is optically
+/// thick (it is seen only there), the mean of the exponential where it is thin
+/// (docs/numerics.md#shading-per-slab-sample).
+inline float slabLightTransmittance(float tau, float front, float back)
+{
+    const auto meanOfExp = [](double x) { return std::abs(x) < 1e-6 ? 1.0 - 0.5 * x : -std::expm1(-x) / x; };
+    const double f = front > 1e-30f ? double(front) : 1e-30, b = back > 1e-30f ? double(back) : 1e-30;
+    const double t = tau > 0.0f ? double(tau) : 0.0;
+    return float(f * meanOfExp(t + std::log(f / b)) / meanOfExp(t));
 }
 
 /// Where a homogeneous slab's mean transmittance, falling exponentially from @a before at its

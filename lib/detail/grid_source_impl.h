@@ -7,6 +7,12 @@
 #include "openvdb.h"
 
 namespace vdb_ewa {
+namespace detail {
+
+/// Densities above this are clamped: a voxel this dense is opaque at any sane setting.
+constexpr float kMaxDensity = 1.0e6f;
+
+} // namespace detail
 
 struct VDB_EWA_LOCAL GridSource::Impl
 {
@@ -24,6 +30,12 @@ struct VDB_EWA_LOCAL GridSource::Impl
     Vec3d worldCentre{0.0};
     /// Material colours for level-set shaders (vdb_render -color), or null.
     openvdb::Vec3SGrid::ConstPtr color;
+    /// The voxel values of the continuous field every integrator reconstructs (its trilinear
+    /// interpolation, OpenVDB's BoxSampler; docs/equations.md#the-field): @c grid with NaN,
+    /// negative values and inactive values read as 0 and values above kMaxDensity clamped. The
+    /// same pointer as @c grid when no value needs that (fog volumes as written by DCCs) and for
+    /// level sets.
+    openvdb::FloatGrid::ConstPtr field;
 
     /// Fill the derived fields from @a grid.
     void derive();

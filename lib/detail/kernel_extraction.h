@@ -5,10 +5,12 @@
 #include <vdb_ewa/grid_source.h>
 #include <vdb_ewa/render_settings.h>
 
+#include "grid_source_impl.h"
 #include "level_of_detail.h"
 #include "progress.h"
 
 #include <cstdint>
+#include <algorithm>
 #include <vector>
 
 namespace vdb_ewa {
@@ -21,8 +23,21 @@ struct Kernel
 {
     Vec3d pIndex;   ///< centre, index space
     float density;  ///< sanitised voxel value (>= cutoff, <= kMaxDensity)
-    float spacing;  ///< lattice spacing in voxels: sigma = kernelSigma * spacing, weight x spacing^3
+    float spacing;  ///< lattice spacing in voxels: sigma = kernelSigmaVoxels(), weight x spacing^3
 };
+
+/// Standard deviation of kernels on a lattice coarser than the voxels (active tiles, level of
+/// detail): large enough that their sum over a uniform region is flat (partition of unity to
+/// 1.5 %, docs/numerics.md#kernel-standard-deviation), since such regions are uniform or
+/// already smoothed; voxel kernels keep --kernel-sigma, sharper for thin dense media.
+inline constexpr double kCoarseKernelSigma = 0.6;
+
+/// The standard deviation of kernel @a k in voxel lengths (Eq. 19, V = sigma^2 I in index space).
+inline double kernelSigmaVoxels(const Kernel& k, double kernelSigma)
+{
+    const double s = double(k.spacing);
+    return (s > 1.0 ? std::max(kernelSigma, kCoarseKernelSigma) : kernelSigma) * s;
+}
 
 struct KernelSet
 {
@@ -35,9 +50,6 @@ struct KernelSet
     std::uint64_t mergedVoxels = 0; ///< active voxels merged into level-of-detail kernels
     std::uint64_t mergedKernels = 0; ///< level-of-detail kernels they became
 };
-
-/// Densities above this are clamped: a voxel this dense is opaque at any sane setting.
-constexpr float kMaxDensity = 1.0e6f;
 
 /// Lattice spacing (voxels) used for an active tile of @a tileDim voxels a side: the largest
 /// power of two <= min(tileDim, maxSpacing), but coarse enough that a tile yields at most

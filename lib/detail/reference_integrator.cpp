@@ -5,6 +5,9 @@
 #include "empty_space.h"
 #include "grid_source_impl.h"
 #include "material_color.h"
+#include "openvdb_tools.h"
+#include "optical_model.h"
+#include "quasi_interpolation.h"
 #include "shadow_transmittance.h"
 
 #include <vdb_ewa/error.h>
@@ -43,7 +46,8 @@ ReferenceVolume buildVolume(const GridSource::Impl& grid, const RenderSettings& 
     impl->grid = voxels;
     RenderSettings unit = settings;
     unit.tileKernelSpacing = 1;
-    const KernelSet kernels = extractKernels(*impl, unit);
+    KernelSet kernels = extractKernels(*impl, unit);
+    if (settings.prefilter) quasiInterpolate(*impl, quasiInterpolationAlpha(settings.kernelSigma), kernels);
     stats.activeVoxels = kernels.activeVoxels;
     stats.kernels = kernels.kernels.size();
     stats.kernelsSkipped = kernels.belowCutoff + kernels.notANumber;
@@ -53,13 +57,7 @@ ReferenceVolume buildVolume(const GridSource::Impl& grid, const RenderSettings& 
     stats.kernelSeconds = t1;
     stats.shadowSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() - t1;
 
-    // Source colour per unit optical depth: scattered light, plus emission / extinction.
-    double albedo[3], emitted[3];
-    for (int c = 0; c < 3; ++c) {
-        const double ext = settings.absorb[c] + settings.scatter[c];
-        albedo[c] = ext > 0.0 ? settings.lightColor[c] * settings.scatter[c] / ext : 0.0;
-        emitted[c] = ext > 0.0 ? settings.emission[c] / ext : 0.0;
-    }
+    const OpticalModel model(settings);
     ReferenceVolume v;
     v.density = openvdb::FloatGrid::create(0.0f);
     v.density->setTransform(grid.grid->transform().copy());
@@ -73,7 +71,7 @@ ReferenceVolume buildVolume(const GridSource::Impl& grid, const RenderSettings& 
         openvdb::Vec3s source;
         for (int c = 0; c < 3; ++c) {
             const double color = colors.empty() ? 1.0 : double(colors[i][c]);
-            source[c] = float(k.density * (albedo[c] * color * shadows[i][c] + emitted[c]));
+            source[c] = float(k.density * model.source(c, shadows[i][c], color));
         }
         eAcc.setValueOn(ijk, source);
     }
@@ -132,39 +130,87 @@ private:
     int mRadius;
 };
 
-} // namespace
-
-Frame rayMarchReference(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings,
-    const PassRequest& passes, RenderStats& stats, Progress* progress)
+/// The Gaussian sum's sampler: density and source per unit optical depth from the pre-shaded
+/// kernels (shadows at kernel centres). One per thread.
+class GaussianSumSampler
 {
-    if (!grid.linear) throw ValueError("--method raymarch needs an affine grid transform (this grid has a frustum map)");
-    if (passes.shadow || passes.emission || passes.deep) {
-        throw ValueError("--method raymarch renders the beauty, Z and transmittance only (shadow, emission and deep passes need --method splat)");
+public:
+    GaussianSumSampler(const ReferenceVolume& v, double sigma) : mSum(v, sigma) {}
+    bool sample(const Vec3d& pIndex, double& density, double source[3])
+    {
+        Vec3d sourceSum;
+        mSum.sample(pIndex, density, sourceSum);
+        if (!(density > 0.0)) return false;
+        for (int c = 0; c < 3; ++c) source[c] = sourceSum[c] / density;
+        return true;
     }
-    if (progress) progress->stage(0, 15); // kernels and shadows, then the rays
-    const ReferenceVolume volume = buildVolume(grid, settings, stats, progress);
-    const auto t0 = std::chrono::steady_clock::now();
 
+private:
+    KernelSum mSum;
+};
+
+/// The field's sampler: trilinear density, and the source from a shadow ray marched from the
+/// sample itself and the material colour there. One per thread.
+class TrilinearSampler
+{
+public:
+    TrilinearSampler(const GridSource::Impl& grid, const RenderSettings& settings)
+        : mGrid(grid), mAccessor(grid.field->getConstAccessor()), mShadows(grid, settings), mColor(grid),
+          mModel(settings), mCutoff(settings.cutoff), mLit(!mModel.unlit()), mTinted(bool(grid.color))
+    {
+    }
+    bool sample(const Vec3d& pIndex, double& density, double source[3])
+    {
+        float d = 0.0f;
+        openvdb::tools::BoxSampler::sample(mAccessor, openvdb::Vec3d(pIndex.x, pIndex.y, pIndex.z), d);
+        density = d;
+        if (!(density >= mCutoff) || !(density > 0.0)) return false; // vdb_render skips samples below its cutoff
+        const Rgb shadow = mLit ? mShadows.march(pIndex) : Rgb{1.0f, 1.0f, 1.0f};
+        const Vec3d color = mTinted ? mColor.at(mGrid.indexToWorld(pIndex)) : Vec3d(1.0);
+        for (int c = 0; c < 3; ++c) source[c] = mModel.source(c, shadow[c], color[c]);
+        return true;
+    }
+
+private:
+    const GridSource::Impl& mGrid;
+    openvdb::FloatGrid::ConstAccessor mAccessor;
+    ShadowMarcher mShadows;
+    MaterialColor mColor;
+    OpticalModel mModel;
+    double mCutoff;
+    bool mLit, mTinted;
+};
+
+void checkMarchable(const GridSource::Impl& grid, const PassRequest& passes, const char* method)
+{
+    if (!grid.linear) throw ValueError(std::string("--method ") + method + " needs an affine grid transform (this grid has a frustum map)");
+    if (passes.shadow || passes.emission || passes.deep) {
+        throw ValueError(std::string("--method ") + method + " renders the beauty, Z and transmittance only (shadow, emission and deep passes need --method splat)");
+    }
+}
+
+/// March every pixel's centre ray through the index-space box [boxLo, boxHi] in steps of
+/// settings.step voxel lengths, sampling at step midpoints (@a makeSampler() gives one
+/// sampler per thread) and compositing each step with the exact homogeneous update.
+/// Empty nodes of @a occupancy are skipped with @a skipMargin. Progress: one unit per row.
+template <typename MakeSampler>
+Frame marchRays(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings,
+    const PassRequest& passes, const openvdb::FloatGrid& occupancy, int skipMargin, const Vec3d& boxLo,
+    const Vec3d& boxHi, MakeSampler makeSampler, Progress* progress)
+{
+    const OpticalModel model(settings);
     const Mat3d indexFromWorld = glm::inverse(grid.indexToWorldLinear);
     const double ell = grid.voxelLength;
     const double step = settings.step; // voxel lengths
-    double extinction[3];
-    for (int c = 0; c < 3; ++c) extinction[c] = settings.absorb[c] + settings.scatter[c];
     const float cutoff = float(settings.cutoff);
-    const openvdb::CoordBBox box = volume.density->evalActiveVoxelBoundingBox();
-    const double pad = kReferenceTruncation * settings.kernelSigma + 1.0;
-    const Vec3d boxLo = Vec3d(box.min().x(), box.min().y(), box.min().z()) - pad;
-    const Vec3d boxHi = Vec3d(box.max().x(), box.max().y(), box.max().z()) + pad;
     const int width = camera.width(), height = camera.height();
     Frame frame = blankFrame(width, height, passes);
-    if (box.empty()) return frame;
     const Vec3d forward = glm::transpose(camera.cameraFromWorld())[2];
 
-    if (progress) progress->stage(15, 100);
     setUnits(progress, std::uint64_t(height));
     tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
-        KernelSum sum(volume, settings.kernelSigma);
-        EmptySpaceSkipper skipper(*volume.density, sum.radius());
+        auto sampler = makeSampler();
+        EmptySpaceSkipper skipper(occupancy, skipMargin);
         for (int y = rows.begin(); y < rows.end(); ++y) {
             advance(progress); // per row: a cancel stops within one row's time
             for (int x = 0; x < width; ++x) {
@@ -172,7 +218,7 @@ Frame rayMarchReference(const GridSource::Impl& grid, const Camera& camera, cons
                 camera.worldRay(x + 0.5, y + 0.5, origin, dir);
                 // Parameter s: world distance from the near-plane origin; far plane likewise.
                 const double sFar = camera.projection() == Projection::Perspective
-                    ? (camera.far() - camera.near()) / glm::dot(dir, glm::transpose(camera.cameraFromWorld())[2])
+                    ? (camera.far() - camera.near()) / glm::dot(dir, forward)
                     : camera.far() - camera.near();
                 const Vec3d oIndex = indexFromWorld * (origin - grid.indexToWorldOffset);
                 const Vec3d dIndex = indexFromWorld * dir; // index units per world unit
@@ -191,15 +237,12 @@ Frame rayMarchReference(const GridSource::Impl& grid, const Camera& camera, cons
                             s += ds * std::floor(jump / ds) - ds;
                             continue;
                         }
-                        double density;
-                        Vec3d emission;
-                        sum.sample(p, density, emission);
-                        if (density <= 0.0) continue;
+                        double density, source[3];
+                        if (!sampler.sample(p, density, source)) continue;
                         const float before = (T[0] + T[1] + T[2]) / 3.0f;
                         for (int c = 0; c < 3; ++c) {
-                            // Extinction per world unit is sigma_t rho / l: tau = sigma_t rho step.
-                            const float tau = float(extinction[c] * density * step);
-                            compositeSlab(tau, float(extinction[c] * emission[c] * step), C[c], T[c]);
+                            const float tau = float(model.opticalDepth(c, density, step));
+                            compositeSlab(tau, float(tau * source[c]), C[c], T[c]);
                         }
                         if (passes.depth && before > 0.5f && !std::isfinite(z)) {
                             const double u = halfAlphaFraction(before, (T[0] + T[1] + T[2]) / 3.0f);
@@ -217,6 +260,46 @@ Frame rayMarchReference(const GridSource::Impl& grid, const Camera& camera, cons
             }
         }
     });
+    return frame;
+}
+
+} // namespace
+
+Frame rayMarchReference(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings,
+    const PassRequest& passes, RenderStats& stats, Progress* progress)
+{
+    checkMarchable(grid, passes, "raymarch");
+    const auto t0 = std::chrono::steady_clock::now();
+    stats.activeVoxels = grid.activeVoxels;
+    stats.activeTiles = grid.activeTiles;
+    const openvdb::CoordBBox box = grid.field->evalActiveVoxelBoundingBox();
+    if (box.empty()) return blankFrame(camera.width(), camera.height(), passes);
+    // Trilinear support: one voxel beyond the active ones.
+    const Vec3d boxLo = Vec3d(box.min().x(), box.min().y(), box.min().z()) - 1.0;
+    const Vec3d boxHi = Vec3d(box.max().x(), box.max().y(), box.max().z()) + 1.0;
+    if (progress) progress->stage(0, 100);
+    Frame frame = marchRays(grid, camera, settings, passes, *grid.field, 0, boxLo, boxHi,
+        [&] { return TrilinearSampler(grid, settings); }, progress);
+    stats.rasterSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return frame;
+}
+
+Frame rayMarchGaussianSum(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings,
+    const PassRequest& passes, RenderStats& stats, Progress* progress)
+{
+    checkMarchable(grid, passes, "raymarch-gaussian");
+    if (progress) progress->stage(0, 15); // kernels and shadows, then the rays
+    const ReferenceVolume volume = buildVolume(grid, settings, stats, progress);
+    const auto t0 = std::chrono::steady_clock::now();
+    const openvdb::CoordBBox box = volume.density->evalActiveVoxelBoundingBox();
+    if (box.empty()) return blankFrame(camera.width(), camera.height(), passes);
+    const double pad = kReferenceTruncation * settings.kernelSigma + 1.0;
+    const Vec3d boxLo = Vec3d(box.min().x(), box.min().y(), box.min().z()) - pad;
+    const Vec3d boxHi = Vec3d(box.max().x(), box.max().y(), box.max().z()) + pad;
+    if (progress) progress->stage(15, 100);
+    const int radius = int(std::ceil(kReferenceTruncation * settings.kernelSigma));
+    Frame frame = marchRays(grid, camera, settings, passes, *volume.density, radius, boxLo, boxHi,
+        [&] { return GaussianSumSampler(volume, settings.kernelSigma); }, progress);
     stats.rasterSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return frame;
 }

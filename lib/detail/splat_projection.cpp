@@ -2,6 +2,7 @@
 #include "splat_projection.h"
 
 #include "grid_source_impl.h"
+#include "optical_model.h"
 #include "surface_extraction.h"
 
 #include <vdb_ewa/ewa_kernel.h>
@@ -64,15 +65,13 @@ bool pixelBox(const Footprint& fp, int width, int height, int& x0, int& y0, int&
     return true;
 }
 
-SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
-    const std::vector<Rgb>& shadows, const std::vector<Rgb>& colors, const Camera& camera,
-    const RenderSettings& settings, const PassRequest& passes, Progress* progress)
+SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels, const std::vector<Rgb>& colors,
+    const Camera& camera, const RenderSettings& settings, const PassRequest& passes, Progress* progress)
 {
     SplatSet out;
     const ProjectionParams params = projectionParams(camera, settings);
     const bool perspective = params.perspective;
     const Mat3d R = camera.cameraFromWorld();
-    const double sigma2 = settings.kernelSigma * settings.kernelSigma;
     const double ell = grid.voxelLength;
     out.slabs.zBase = perspective ? 0.0 : camera.near();
     out.slabs.thickness = settings.slab * ell;
@@ -82,11 +81,7 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
     const Mat3d covUnit = RA * glm::transpose(RA);
     const double volumeUnit = std::abs(glm::determinant(grid.indexToWorldLinear));
 
-    double extinction[3], albedo[3];
-    for (int c = 0; c < 3; ++c) {
-        extinction[c] = settings.absorb[c] + settings.scatter[c];
-        albedo[c] = extinction[c] > 0.0 ? settings.lightColor[c] * settings.scatter[c] / extinction[c] : 0.0;
-    }
+    const OpticalModel model(settings);
     const int width = camera.width(), height = camera.height();
     const auto& xform = grid.grid->transform();
 
@@ -115,8 +110,8 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
                     cov = a * glm::transpose(a);
                     volume = std::abs(glm::determinant(a));
                 }
-                const double s = k.spacing;
-                cov *= sigma2 * s * s;
+                const double s = k.spacing, sigma = kernelSigmaVoxels(k, settings.kernelSigma);
+                cov *= sigma * sigma;
                 const Vec3d t = settings.doublePrecision ? camera.cameraFromWorldPoint(pWorld)
                                                          : cameraFromWorldFloat(camera, pWorld);
                 if (!settings.doublePrecision) cov = Mat3d(glm::mat3(cov));
@@ -143,20 +138,21 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
 
                 setFootprint(sp, fp, params.cutoffRadius);
                 // Weight w_k = density x voxel volume / voxel length (Eq. 8 with extinction
-                // per voxel length), times the footprint peak (Eq. 32, 33).
+                // per voxel length), times the footprint peak (Eq. 32, 33): the peak optical
+                // depth in voxel lengths of unit density.
                 const double weight = double(k.density) * volume * s * s * s / ell * fp.peak;
-                // Source terms (optical depth x colour): single scattering of the light, and
-                // the medium's own emission, emission x density per voxel length.
+                // Source terms: the self-emission (optical depth x emission per unit optical
+                // depth) and the scattering weight, lit by the compositor per slab sample.
                 float* pass = passSources.data() + i * std::size_t(passCount) * 3;
                 for (int c = 0; c < 3; ++c) {
-                    const double tau = extinction[c] * weight;
-                    const double emitted = settings.emission[c] * weight;
+                    const double tau = model.opticalDepth(c, weight, 1.0);
                     sp.tau[c] = float(tau);
                     const double color = colors.empty() ? 1.0 : double(colors[i][c]);
-                    sp.emission[c] = float(tau * albedo[c] * color * double(shadows[i][c]) + emitted);
+                    sp.emission[c] = float(tau * model.emitted(c));
+                    sp.scatter[c] = float(tau * color);
                     int j = 0;
-                    if (passes.shadow) pass[3 * j++ + c] = float(tau * double(shadows[i][c]));
-                    if (passes.emission) pass[3 * j++ + c] = float(emitted);
+                    if (passes.shadow) pass[3 * j++ + c] = 0.0f; // lit per slab sample
+                    if (passes.emission) pass[3 * j++ + c] = float(tau * model.emitted(c));
                 }
                 visible[i] = 1;
             }
@@ -190,6 +186,7 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
         total += splats[i].slabCount;
     }
     out.shares.resize(total);
+    out.shareMoments.resize(2 * total);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096),
         [&](const tbb::blocked_range<std::size_t>& range) {
             for (std::size_t i = range.begin(); i < range.end(); ++i) {
@@ -197,7 +194,8 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
                 const DepthExtent& e = extents[i];
                 std::int64_t first = 0;
                 slabShares(out.slabs, e.mu, e.sd, kDepthTruncation, e.clipNear, e.clipFar, first,
-                    out.shares.data() + splats[i].shareOffset, int(splats[i].slabCount));
+                    out.shares.data() + splats[i].shareOffset, int(splats[i].slabCount),
+                    out.shareMoments.data() + 2 * splats[i].shareOffset);
             }
         });
     out.splats.reserve(std::size_t(std::count(visible.begin(), visible.end(), 1)));
@@ -252,12 +250,15 @@ void appendSurfaceSplats(SplatSet& set, const SurfaceSet& surfaces, const std::v
         for (int c = 0; c < 3; ++c) {
             sp.tau[c] = float(tau);
             sp.emission[c] = float(tau * settings.lightColor[c] * k.albedo[c] * lambert * double(shadows[i][c]));
+            sp.scatter[c] = 0.0f;
         }
         sp.firstSlab = first;
         sp.slabCount = std::uint32_t(span);
         sp.shareOffset = set.shares.size();
         set.shares.resize(set.shares.size() + std::size_t(span));
-        slabShares(set.slabs, e.mu, e.sd, kDepthTruncation, e.clipNear, e.clipFar, first, set.shares.data() + sp.shareOffset, int(span));
+        set.shareMoments.resize(2 * set.shares.size());
+        slabShares(set.slabs, e.mu, e.sd, kDepthTruncation, e.clipNear, e.clipFar, first, set.shares.data() + sp.shareOffset,
+            int(span), set.shareMoments.data() + 2 * sp.shareOffset);
         set.splats.push_back(sp);
         if (passes.shadow) {
             for (int c = 0; c < 3; ++c) set.passSources.push_back(float(tau * double(shadows[i][c])));

@@ -17,14 +17,16 @@ namespace vdb_ewa {
 namespace detail {
 
 /// A kernel ready to rasterise: optical depth tau_c(p) = tau[c] * exp(-0.5 d^T Q d) * share_s,
-/// emission E_c(p) = emission[c] * exp(-0.5 d^T Q d) * share_s in slab s.
+/// emission E_c(p) = emission[c] * exp(-0.5 d^T Q d) * share_s in slab s, and the scattering
+/// weight scatter[c] likewise, which the compositor lights at each slab sample (light map).
 struct Splat
 {
     float cx, cy;              ///< centre, raster
     float qa, qb, qc;          ///< conic Q = [qa qb; qb qc], 1/pixels^2
     float cutoff;              ///< evaluate where d^T Q d < cutoff (= cutoffRadius^2)
     float tau[3];              ///< peak optical depth per channel
-    float emission[3];         ///< peak optical depth x source colour per channel
+    float emission[3];         ///< peak optical depth x source colour already shaded (self-emission, surfaces)
+    float scatter[3];          ///< peak optical depth x material colour: lit per slab sample
     int x0, y0, x1, y1;        ///< inclusive pixel box, clipped to the image
     std::int64_t firstSlab;    ///< first slab it overlaps
     std::uint64_t shareOffset; ///< index of its first slab share in SplatSet::shares
@@ -35,6 +37,9 @@ struct SplatSet
 {
     std::vector<Splat> splats; ///< in kernel order (deterministic)
     std::vector<float> shares; ///< slab shares of all splats
+    /// Where each share's mass lies in its slab: the mean and mean square of its position,
+    /// 0 at the slab's front and 1 at its back; two floats per share.
+    std::vector<float> shareMoments;
     SlabGrid slabs;
     std::uint64_t culled = 0;     ///< outside the frustum or behind the eye
     std::uint64_t beforeNear = 0; ///< centre before the near plane: dropped
@@ -83,13 +88,12 @@ void setFootprint(S& s, const Footprint& fp, double cutoffRadius)
 bool projectSurface(const SurfaceKernel& kernel, double sigma, const Camera& camera, const ProjectionParams& params,
     Vec3d& t, Vec3d& normal, Footprint& fp);
 
-/// @a shadows: the light's transmittance at each kernel; @a colors: each kernel's material
-/// colour, multiplied into the scattering albedo (empty: white). @a passes: the shadow and
-/// emission passes add their source terms to SplatSet::passSources. @a progress: one unit per
-/// kernel; throws Cancelled.
-SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels,
-    const std::vector<Rgb>& shadows, const std::vector<Rgb>& colors, const Camera& camera,
-    const RenderSettings& settings, const PassRequest& passes = {}, Progress* progress = nullptr);
+/// @a colors: each kernel's material colour, multiplied into the scattering weight (empty:
+/// white); the light's transmittance is applied by the compositor per slab sample. @a passes:
+/// the emission pass adds its source term to SplatSet::passSources (the shadow pass is lit per
+/// slab sample too). @a progress: one unit per kernel; throws Cancelled.
+SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels, const std::vector<Rgb>& colors,
+    const Camera& camera, const RenderSettings& settings, const PassRequest& passes = {}, Progress* progress = nullptr);
 
 /// Fog volumes with an iso-surface (Sec. 6.4): append @a surfaces to @a set as thin splats of
 /// the slab compositor. Each covers its pixels with optical depth -ln(1 - settings.isoOpacity)

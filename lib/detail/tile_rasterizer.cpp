@@ -2,6 +2,8 @@
 #include "tile_rasterizer.h"
 
 #include "blank_frame.h"
+#include "light_map.h"
+#include "optical_model.h"
 #include "tile_bins.h"
 
 #include <tbb/parallel_for.h>
@@ -45,6 +47,13 @@ struct CompositeOptions
     SlabGrid slabs;
     PassRequest passes;
     int passSources = 0; ///< extra source terms (shadow, emission passes), SplatSet::passSourceCount
+    /// Shading per slab sample (docs/numerics.md#shading-per-slab-sample): the light's
+    /// transmittance at each (pixel, slab) from the light map lights the splats' scattering
+    /// weights; null when nothing scatters.
+    const LightMap* light = nullptr;
+    const OpticalModel* model = nullptr;
+    const Camera* camera = nullptr;
+    bool tinted = false; ///< scattering weights differ from optical depths (material colours)
 };
 
 /// A tile's deep samples, grouped by tile pixel in depth order (depths still along the ray).
@@ -71,8 +80,24 @@ public:
           mEmission(std::size_t(ringSize) * C * kTilePixels, 0.0f),
           mPassEmission(std::size_t(ringSize) * std::size_t(mPassCount) * C * kTilePixels, 0.0f),
           mPassC(std::size_t(mPassCount) * C * kTilePixels, 0.0f),
+          mScatter(options.tinted ? std::size_t(ringSize) * C * kTilePixels : 0, 0.0f),
+          mMoment(options.light ? std::size_t(ringSize) * kTilePixels : 0, 0.0f),
+          mMoment2(options.light ? std::size_t(ringSize) * kTilePixels : 0, 0.0f),
           mDirty(std::size_t(ringSize))
     {
+        if (options.light) {
+            // Each pixel's ray in light-map coordinates: q(z) = base + z dir, z the slab
+            // coordinate (distance from the eye, or depth for orthographic cameras).
+            const Camera& camera = *options.camera;
+            for (int ly = 0; ly < h; ++ly)
+                for (int lx = 0; lx < w; ++lx) {
+                    Vec3d origin, dir;
+                    camera.worldRay(x0 + lx + 0.5, y0 + ly + 0.5, origin, dir);
+                    const Vec3d base = camera.projection() == Projection::Perspective ? camera.eye() : origin - camera.near() * dir;
+                    mRayBase[ly * kTileSize + lx] = options.light->coordinates(base);
+                    mRayDir[ly * kTileSize + lx] = options.light->direction(dir);
+                }
+        }
         std::fill(std::begin(mT), std::end(mT), 1.0f);
         std::fill(std::begin(mC), std::end(mC), 0.0f);
         std::fill(std::begin(mZ), std::end(mZ), std::numeric_limits<float>::infinity());
@@ -114,7 +139,8 @@ public:
     }
 
     /// @a passSources: the splat's extra source terms (mPassCount x RGB), or null if none.
-    void add(const Splat& s, const float* shares, const float* passSources)
+    /// @a moments: the position moments of each share in its slab (SplatSet::shareMoments).
+    void add(const Splat& s, const float* shares, const float* moments, const float* passSources)
     {
         // Slabs in front of this splat's first one can receive nothing more: flush them.
         flushBefore(s.firstSlab);
@@ -155,6 +181,19 @@ public:
             // Spread the row into every slab the kernel overlaps: contiguous, vectorisable.
             for (int j = 0; j < count; ++j) {
                 const std::size_t base = slot(s.firstSlab + j) * C * kTilePixels + std::size_t(p0);
+                if (!mMoment.empty()) {
+                    // The first and second moments of the optical depth's position in the slab.
+                    // Weighted by the optical depth summed over R, G, B, the same in both paths.
+                    const float w = shares[j] * (s.tau[0] + s.tau[1] + s.tau[2]);
+                    const float w1 = w * moments[2 * j], w2 = w * moments[2 * j + 1];
+                    const std::size_t mb = slot(s.firstSlab + j) * kTilePixels + std::size_t(p0);
+                    float* m1 = &mMoment[mb];
+                    float* m2 = &mMoment2[mb];
+                    for (int i = 0; i < n; ++i) {
+                        m1[i] += weights[i] * w1;
+                        m2[i] += weights[i] * w2;
+                    }
+                }
                 for (int c = 0; c < C; ++c) {
                     const float wt = shares[j] * s.tau[c], we = shares[j] * s.emission[c];
                     float* tau = &mTau[base + std::size_t(c) * kTilePixels];
@@ -162,6 +201,11 @@ public:
                     for (int i = 0; i < n; ++i) {
                         tau[i] += weights[i] * wt;
                         em[i] += weights[i] * we;
+                    }
+                    if (!mScatter.empty()) {
+                        const float ws = shares[j] * s.scatter[c];
+                        float* sc = &mScatter[base + std::size_t(c) * kTilePixels];
+                        for (int i = 0; i < n; ++i) sc[i] += weights[i] * ws;
                     }
                     for (int k = 0; k < mPassCount; ++k) {
                         const float wp = shares[j] * passSources[3 * k + c];
@@ -258,7 +302,9 @@ private:
     }
 
     /// The passes' share of a slab at pixel p: Z crossing, deep sample, extra sources.
-    void flushPasses(std::int64_t slab, int p, float meanBefore)
+    /// @a emission: the slab's lit emission per channel; @a lit: the scattering weight x light
+    /// transmittance per channel (the shadow pass's source).
+    void flushPasses(std::int64_t slab, int p, float meanBefore, const float* emission, const float* lit)
     {
         const std::size_t base = slot(slab) * C * kTilePixels + std::size_t(p);
         if (mOptions.passes.depth && meanBefore > 0.5f && std::isinf(mZ[p])) {
@@ -269,8 +315,9 @@ private:
             for (int c = 0; c < C; ++c) {
                 // The beauty's transmittance before this slab, recovered per channel.
                 float t = mTBefore[c];
-                compositeSlab(mTau[base + c * kTilePixels], mPassEmission[passIndex(slab, k, c) + std::size_t(p)],
-                    mPassC[(std::size_t(k) * C + c) * kTilePixels + p], t);
+                float source = mPassEmission[passIndex(slab, k, c) + std::size_t(p)];
+                if (k == 0 && mOptions.passes.shadow) source += lit[c];
+                compositeSlab(mTau[base + c * kTilePixels], source, mPassC[(std::size_t(k) * C + c) * kTilePixels + p], t);
             }
         if (mOptions.passes.deep) {
             // The slab on its own: colour and transmittance as if nothing were in front.
@@ -279,7 +326,7 @@ private:
             for (int c = 0; c < C; ++c) {
                 colour[c] = 0.0f;
                 t[c] = 1.0f;
-                compositeSlab(mTau[base + c * kTilePixels], mEmission[base + c * kTilePixels], colour[c], t[c]);
+                compositeSlab(mTau[base + c * kTilePixels], emission[c], colour[c], t[c]);
                 empty = empty && !(mTau[base + c * kTilePixels] > 0.0f);
             }
             if (!empty) {
@@ -293,6 +340,13 @@ private:
                 mDeep.emplace_back(std::uint16_t(p), d);
             }
         }
+    }
+
+    /// The light's transmittance on pixel p's ray at fraction @a u of @a slab's thickness.
+    std::array<float, 3> lightAt(int p, std::int64_t slab, float u) const
+    {
+        const double z = mOptions.slabs.start(slab) + double(u) * mOptions.slabs.thickness;
+        return mOptions.light->transmittance(mRayBase[p] + z * mRayDir[p]);
     }
 
     void flush(std::int64_t slab)
@@ -309,24 +363,53 @@ private:
                         for (int c = 0; c < C; ++c) mTBefore[c] = mT[c * kTilePixels + p];
                         meanBefore = meanT(p);
                     }
+                    float emission[C], lit[C];
+                    for (int c = 0; c < C; ++c) {
+                        const std::size_t i = base + c * kTilePixels + std::size_t(p);
+                        // Halo kernels (--prefilter) weigh negative: a slab's sums stay >= 0.
+                        emission[c] = std::max(mEmission[i], 0.0f);
+                        lit[c] = 0.0f;
+                    }
+                    float mass = 0.0f; // the slab's optical depth summed over R, G, B (as in add())
+                    for (int c = 0; c < 3; ++c) mass += mTau[base + std::size_t(channel(c)) * kTilePixels + std::size_t(p)];
+                    if (mOptions.light && mass > 0.0f) {
+                        // Shading per slab sample (docs/numerics.md#shading-per-slab-sample): the
+                        // slab's mass, as a uniform layer with the mean and variance of its
+                        // position, lit by the light's transmittance at the layer's front and back
+                        // and integrated with the slab's own attenuation (slabLightTransmittance).
+                        const std::size_t m = slot(slab) * kTilePixels + std::size_t(p);
+                        const float mean = std::clamp(mMoment[m] / mass, 0.0f, 1.0f);
+                        const float half = std::sqrt(3.0f * std::max(mMoment2[m] / mass - mean * mean, 0.0f));
+                        const std::array<float, 3> front = lightAt(p, slab, std::max(mean - half, 0.0f));
+                        const std::array<float, 3> back = lightAt(p, slab, std::min(mean + half, 1.0f));
+                        for (int c = 0; c < C; ++c) {
+                            const std::size_t i = base + c * kTilePixels + std::size_t(p);
+                            const float tl = slabLightTransmittance(mTau[i], front[std::size_t(c)], back[std::size_t(c)]);
+                            lit[c] = std::max(mScatter.empty() ? mTau[i] : mScatter[i], 0.0f) * tl;
+                            emission[c] += float(mOptions.model->scattered(c, 1.0, 1.0)) * lit[c];
+                        }
+                    }
                     float t2 = 0.0f; // |T|^2 over R, G, B
                     for (int c = 0; c < C; ++c) {
                         const std::size_t i = base + c * kTilePixels + std::size_t(p);
                         float& t = mT[c * kTilePixels + p];
-                        compositeSlab(mTau[i], mEmission[i], mC[c * kTilePixels + p], t);
+                        compositeSlab(mTau[i], emission[c], mC[c * kTilePixels + p], t);
                         t2 += t * t;
                     }
-                    if (passes) flushPasses(slab, p, meanBefore);
+                    if (passes) flushPasses(slab, p, meanBefore, emission, lit);
                     // vdb_render's ray termination: |T|^2 < cutoff (early termination, Sec. 5).
                     if (t2 * float(3 / C) < mCutoff) {
                         mAlive[p] = 0;
                         --mAliveCount;
                     }
                 }
+                if (!mMoment.empty()) mMoment[slot(slab) * kTilePixels + std::size_t(p)] = 0.0f;
+                if (!mMoment2.empty()) mMoment2[slot(slab) * kTilePixels + std::size_t(p)] = 0.0f;
                 for (int c = 0; c < C; ++c) {
                     const std::size_t i = base + c * kTilePixels + std::size_t(p);
                     mTau[i] = 0.0f;
                     mEmission[i] = 0.0f;
+                    if (!mScatter.empty()) mScatter[i] = 0.0f;
                     for (int k = 0; k < mPassCount; ++k) mPassEmission[passIndex(slab, k, c) + std::size_t(p)] = 0.0f;
                 }
             }
@@ -343,6 +426,11 @@ private:
     std::vector<float> mTau, mEmission; ///< [slot][channel][pixel]
     std::vector<float> mPassEmission;   ///< [slot][pass][channel][pixel]
     std::vector<float> mPassC;          ///< [pass][channel][pixel]
+    std::vector<float> mScatter;        ///< [slot][channel][pixel] scattering weights (tinted only)
+    /// [slot][pixel] optical depth x position in the slab (0 front, 1 back), and x its square
+    /// (lit frames only): where the slab's mass lies, for shading.
+    std::vector<float> mMoment, mMoment2;
+    Vec3d mRayBase[kTilePixels], mRayDir[kTilePixels]; ///< pixel rays in light-map coordinates
     float mZ[kTilePixels];              ///< Z pass along the ray, +inf until alpha reaches 0.5
     float mTBefore[C];
     std::vector<std::pair<std::uint16_t, DeepSample>> mDeep;
@@ -361,13 +449,16 @@ int ringSizeFor(std::uint32_t maxSpan)
     return r;
 }
 
-/// Splats whose optical depth and source terms are the same in R, G and B.
-bool allGrey(const SplatSet& set)
+/// Splats whose optical depth and source terms are the same in R, G and B, lit by a grey light.
+bool allGrey(const SplatSet& set, const OpticalModel& model)
 {
     const auto grey = [](const float* v) { return v[0] == v[1] && v[0] == v[2]; };
+    const float light[3] = {float(model.scattered(0, 1.0, 1.0)), float(model.scattered(1, 1.0, 1.0)), float(model.scattered(2, 1.0, 1.0))};
+    const float ext[3] = {float(model.extinction(0)), float(model.extinction(1)), float(model.extinction(2))};
+    if (!grey(light) || !grey(ext)) return false;
     for (std::size_t i = 0; i < set.splats.size(); ++i) {
         const Splat& s = set.splats[i];
-        if (!grey(s.tau) || !grey(s.emission)) return false;
+        if (!grey(s.tau) || !grey(s.emission) || !grey(s.scatter)) return false;
         for (int k = 0; k < set.passSourceCount; ++k) {
             if (!grey(&set.passSources[(i * std::size_t(set.passSourceCount) + std::size_t(k)) * 3])) return false;
         }
@@ -402,7 +493,7 @@ void compositeTiles(const SplatSet& set, const TileBins& bins, const CompositeOp
             const std::size_t passFloats = std::size_t(set.passSourceCount) * 3;
             for (; done < order.size() && !tile.opaque(); ++done) {
                 const Splat& s = set.splats[order[done]];
-                tile.add(s, set.shares.data() + s.shareOffset,
+                tile.add(s, set.shares.data() + s.shareOffset, set.shareMoments.data() + 2 * s.shareOffset,
                     passFloats ? set.passSources.data() + order[done] * passFloats : nullptr);
             }
             skipped[std::size_t(t)] = order.size() - done;
@@ -470,8 +561,9 @@ DeepImage assembleDeep(std::vector<TileDeep>& tiles, const TileBins& bins, int w
 } // namespace
 
 Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSettings& settings,
-    const PassRequest& passes, RasterStats& stats, Progress* progress)
+    const PassRequest& passes, RasterStats& stats, const LightMap* light, bool tinted, Progress* progress)
 {
+    const OpticalModel model(settings);
     const int width = camera.width(), height = camera.height();
     Frame frame = blankFrame(width, height, passes);
 
@@ -487,10 +579,14 @@ Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSet
     options.slabs = set.slabs;
     options.passes = passes;
     options.passSources = set.passSourceCount;
+    options.light = model.unlit() ? nullptr : light;
+    options.model = &model;
+    options.camera = &camera;
+    options.tinted = tinted && options.light;
     const std::vector<float> depthScale = (passes.depth || passes.deep) ? depthScales(camera) : std::vector<float>{};
     std::vector<TileDeep> deep(passes.deep ? std::size_t(tiles) : 0);
     setUnits(progress, std::uint64_t(bins.tilesX) * std::uint64_t(bins.tilesY));
-    if (allGrey(set)) compositeTiles<1>(set, bins, options, depthScale, frame, deep, skipped, progress);
+    if (allGrey(set, model)) compositeTiles<1>(set, bins, options, depthScale, frame, deep, skipped, progress);
     else compositeTiles<3>(set, bins, options, depthScale, frame, deep, skipped, progress);
     if (passes.deep) frame.deep = assembleDeep(deep, bins, width, height, depthScale);
     stats.tiles = std::uint64_t(tiles);

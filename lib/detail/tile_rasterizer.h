@@ -3,6 +3,7 @@
 ///        image-aligned slabs front to back (Sec. 7.1; Mueller & Crawfis sheet buffers).
 #pragma once
 
+#include "light_map.h"
 #include "splat_projection.h"
 #include "tile_bins.h"
 
@@ -23,9 +24,12 @@ struct RasterStats
 /// requested passes (include/vdb_ewa/frame.h, docs/output.md). Each tile is owned by one task
 /// and processes its splats in (first slab, kernel) order, so the result does not depend on
 /// the thread count.
+/// @a light: the light map that lights the splats' scattering weights at every (pixel, slab)
+/// sample (null: unlit); @a tinted: the splats' scattering weights carry material colours.
 /// @a progress: one unit per screen tile; throws Cancelled.
 Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSettings& settings,
-    const PassRequest& passes, RasterStats& stats, Progress* progress = nullptr);
+    const PassRequest& passes, RasterStats& stats, const LightMap* light = nullptr, bool tinted = false,
+    Progress* progress = nullptr);
 
 } // namespace detail
 } // namespace vdb_ewa

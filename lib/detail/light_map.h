@@ -1,0 +1,85 @@
+/// @file light_map.h
+/// @brief The light's transmittance anywhere in the volume: a deep shadow map for the
+///        directional light (Lokovic and Veach 2000). Shadow rays are marched once, from a
+///        lattice of points spaced --shadow-res voxel lengths apart across the light, through
+///        the whole volume, keeping the optical depth at every --shadowstep along each ray.
+///        A lookup is exact along the light (to the step) and bilinear across it, in optical
+///        depth: what per-sample shadow rays give, at the cost of one march per lattice ray
+///        (docs/numerics.md#shading-per-slab-sample).
+#pragma once
+
+#include "grid_source_impl.h"
+#include "optical_model.h"
+#include "progress.h"
+
+#include <vdb_ewa/render_settings.h>
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace vdb_ewa {
+namespace detail {
+
+/// 1 / (1 + x) for x >= 0 as a sum of exponentials sum_n a_n exp(-b_n x): the trapezoidal rule
+/// on 1 / (1 + x) = int exp(t - e^t (1 + x)) dt, exact to about 1e-6 relative on [0, xMax].
+/// vdb_render divides a shadow sample's extinction by 1 + gain s (s: its distance from the
+/// shaded point); as a sum of exponentials that weight becomes a recursive filter along a ray.
+struct ExponentialSum
+{
+    std::vector<double> a, b;
+    explicit ExponentialSum(double xMax);
+    double operator()(double x) const;
+};
+
+class LightMap
+{
+public:
+    /// March the lattice rays through @a grid's field. @a progress: one unit per lattice row;
+    /// throws Cancelled.
+    LightMap(const GridSource::Impl& grid, const RenderSettings& settings, Progress* progress = nullptr);
+
+    /// Map coordinates of a world point: across the light in lattice units (u, v), along it in
+    /// steps (w, increasing towards the light).
+    Vec3d coordinates(const Vec3d& pWorld) const { return mFromWorld * (pWorld - mOrigin); }
+    /// The map coordinates' change per world unit along a direction (linear: rays stay rays).
+    Vec3d direction(const Vec3d& dWorld) const { return mFromWorld * dWorld; }
+
+    /// Shadow-ray optical depth of unit-extinction density at map coordinates @a q (the
+    /// extinction of each channel multiplies it): bilinear across, linear along the light.
+    float densityDepth(const Vec3d& q) const;
+
+    /// The light's transmittance at map coordinates @a q, with vdb_render's early stop
+    /// (|T|^2 >= cutoff) as a floor.
+    std::array<float, 3> transmittance(const Vec3d& q) const { return transmittanceOfDepth(densityDepth(q)); }
+
+    /// The light's transmittance behind a unit-extinction optical depth @a depth (densityDepth),
+    /// per channel, with the same floor.
+    std::array<float, 3> transmittanceOfDepth(float depth) const;
+
+    std::uint64_t rays() const { return std::uint64_t(mNu) * std::uint64_t(mNv); }
+    std::uint64_t samples() const { return mSamples; }
+    std::uint64_t bytes() const;
+
+private:
+    float rayDepth(int i, int j, double w) const;
+
+    Mat3d mFromWorld{1.0}; ///< rows: e1 / h, e2 / h, l / step (world units)
+    Vec3d mOrigin{0.0};    ///< world position of map coordinates (0, 0, 0)
+    int mNu = 0, mNv = 0, mNw = 0;
+    struct Ray
+    {
+        std::uint64_t offset = 0; ///< first stored sample in mDepth
+        std::int32_t kLo = 0;     ///< sample index of the first stored sample
+        std::int32_t count = 0;   ///< stored samples; above them (towards the light) the depth is 0
+    };
+    std::vector<Ray> mRays; ///< [j * mNu + i]
+    std::vector<float> mDepth;
+    std::uint64_t mSamples = 0;
+    double mExtinction[3];
+    float mCutoff;
+    bool mUnlit;
+};
+
+} // namespace detail
+} // namespace vdb_ewa
