@@ -8,6 +8,10 @@
                                                          (a) --method raymarch at a fine step and
                                                          (b) vdb_render's converged image
   bench/bench.py plot TABLE.txt --plot OUT.png           redraw the Pareto plot from a saved tradeoff table
+  bench/bench.py ladder [--scenes all] [--res 960x540] [--cache DIR] [--plot OUT.png]
+                                                         issue 14's ladder: draft, default, high and
+                                                         vdb_render's settings on every scene, time and
+                                                         PSNR against vdb_render's converged image
   bench/bench.py targets --cache DIR [--scene smoke] [--res 1920x1080] [--repeat 5]
                                                          issue 3's targets: vdb_render's defaults and
                                                          the presets in interleaved rounds
@@ -231,6 +235,45 @@ def cmd_plot(args):
     plot([r for r in rows if r["psnr_conv"] == r["psnr_conv"]], args.plot)
 
 
+LADDER_EWA = [("quality draft", ["--quality", "draft"]), ("quality default", ["--quality", "default"]),
+              ("quality high", ["--quality", "high"]),
+              ("quality high --slab 0.25 --shadow-res 0.25", ["--quality", "high", "--slab", "0.25", "--shadow-res", "0.25"])]
+LADDER_VDB = VDB_CONFIGS + [("vdb_render -step 0.18 -shadowstep 0.5", ["-step", "0.18", "-shadowstep", "0.5"])]
+
+
+def cmd_ladder(args):
+    """Issue 14's figures: each preset and each vdb_render setting on every scene vdb_render can
+    read, timed in the same run (median of --repeat), PSNR (RGB) against vdb_render's converged
+    image (-step 0.125 -shadowstep 0.375, cached in --cache: it takes minutes)."""
+    tmp = tempfile.mkdtemp(prefix="vdb_ewa_ladder_")
+    wanted = None if args.scenes == "all" else args.scenes.split(",")
+    cache = args.cache or tmp
+    os.makedirs(cache, exist_ok=True)
+    print(f"# {args.res}: median of {args.repeat} runs a setting, {os.cpu_count()} cores; PSNR (dB) against vdb_render converged")
+    print("| scene | setting | time (s) | time / vdb_render defaults | PSNR (dB) | alpha RMSE |")
+    print("|---|---|---|---|---|---|")
+    rows = []
+    for label, path, cam in SCENES:
+        if (wanted and label.split()[0] not in wanted) or not os.path.exists(path):
+            continue
+        common = ["-res", args.res, *cam.split()]
+        conv, _ = reference_paths(cache, label, args.res)
+        if not os.path.exists(conv):
+            run(["vdb_render", path, conv, *common, "-step", "0.125", "-shadowstep", "0.375"])
+        out = os.path.join(tmp, "o.exr")
+        configs = [("vdb_render", l, ["vdb_render", path, out, *common, *a]) for l, a in LADDER_VDB]
+        configs += [("vdb_ewa", l, [*EWA_RENDER, path, out, *common, *a]) for l, a in LADDER_EWA]
+        base = None
+        for renderer, name, cmd in configs:
+            t = timed(cmd, args.repeat)
+            base = base or t
+            psnr, alpha = diff(out, conv)[1], diff(out, conv, "A")[0]
+            rows.append(dict(scene=label, res=args.res, renderer=renderer, config=name, time=t, psnr_conv=psnr))
+            print(f"| {label} | {name} | {t:.2f} | {t / base:.2f} | {psnr:.1f} | {alpha:.4f} |", flush=True)
+    if args.plot:
+        plot(rows, args.plot)
+
+
 def cmd_targets(args):
     """Issue 3's targets: vdb_render's defaults and the three presets, interleaved round by round
     so that the machine's drifting speed hits all of them alike; medians, ratios and PSNR."""
@@ -393,12 +436,18 @@ def main():
     sv.add_argument("--res", default="1920x1080")
     sv.add_argument("--shader", default="diffuse")
     sv.add_argument("--repeat", type=int, default=3)
+    sl = sub.add_parser("ladder")
+    sl.add_argument("--scenes", default="all")
+    sl.add_argument("--res", default="960x540")
+    sl.add_argument("--repeat", type=int, default=1)
+    sl.add_argument("--cache", default="", help="folder that keeps vdb_render's converged images between runs")
+    sl.add_argument("--plot", default="")
     sp2 = sub.add_parser("plot")
     sp2.add_argument("table", help="saved output of a tradeoff run")
     sp2.add_argument("--plot", required=True)
     a = ap.parse_args()
     {"speed": cmd_speed, "sigma": cmd_sigma, "tradeoff": cmd_tradeoff, "targets": cmd_targets,
-     "output": cmd_output, "surfaces": cmd_surfaces, "plot": cmd_plot}[a.cmd](a)
+     "output": cmd_output, "surfaces": cmd_surfaces, "plot": cmd_plot, "ladder": cmd_ladder}[a.cmd](a)
 
 
 if __name__ == "__main__":

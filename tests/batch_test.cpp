@@ -208,7 +208,7 @@ TEST_F(Batch, JobFileHoldsTheSettingsAndTheCommandLineOverridesIt)
     EXPECT_EQ(img.width, 32) << "the command line's --res wins";
     EXPECT_EQ(img.height, 16);
     EXPECT_NE(r.out.find("--translate 0,0,5"), std::string::npos) << r.out;
-    EXPECT_NE(r.out.find("--slab 2"), std::string::npos) << "draft from the job";
+    EXPECT_NE(r.out.find("--slab 4"), std::string::npos) << "draft from the job";
     EXPECT_NE(r.out.find("--aov shadow,emission"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("--exr-type float"), std::string::npos) << r.out;
     // Positionals on the command line win too; flags from the job apply (skip-existing).

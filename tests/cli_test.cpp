@@ -128,13 +128,13 @@ TEST_F(Cli, VerbosePrintsThePresetResolvedWithOverrides)
     const std::string out = mDir.file("out.exr");
     const CliRun draft = runCli(mDir, "render " + mGrid + " " + out + " --res 32x32 -translate 0,0,5 --quality draft -v");
     ASSERT_EQ(draft.code, 0) << draft.err;
-    for (const char* value : {"--cutoff-radius 2 ", "--slab 2 ", "--shadow-res 2", "--tile-spacing 8 ", "--lod 10 "}) {
+    for (const char* value : {"--cutoff-radius 2 ", "--slab 4 ", "--shadow-res 2", "--tile-spacing 8 ", "--lod 10 "}) {
         EXPECT_NE(draft.out.find(value), std::string::npos) << value << " in\n" << draft.out;
     }
     const CliRun over = runCli(mDir, "render " + mGrid + " " + out + " --res 32x32 -translate 0,0,5 --quality draft --lod 0 -v");
     ASSERT_EQ(over.code, 0) << over.err;
     EXPECT_NE(over.out.find("--lod 0 "), std::string::npos) << over.out;
-    EXPECT_NE(over.out.find("--slab 2 "), std::string::npos) << over.out;
+    EXPECT_NE(over.out.find("--slab 4 "), std::string::npos) << over.out;
 }
 
 TEST_F(Cli, ArgumentAndOutputErrors)

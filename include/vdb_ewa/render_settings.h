@@ -78,7 +78,7 @@ struct VDB_EWA_API RenderSettings
     bool renormalize = true;    ///< divide by the mass kept inside the cut-off, 1 - exp(-c^2/2)
     ExpEvaluation expEvaluation = ExpEvaluation::Incremental;
     bool doublePrecision = true; ///< world -> camera transform and covariances in double (false: float)
-    double slab = 1.0;          ///< image-aligned slab thickness in voxel lengths
+    double slab = 2.0;          ///< image-aligned slab thickness in voxel lengths
     int tileKernelSpacing = 4;  ///< largest kernel spacing (voxels) used to model active tiles
     double lodPixels = 2.0;     ///< level of detail: merge blocks of 2^L voxels into one kernel where
                                 ///< the block spacing projects to at most this many pixels; 0 = off

@@ -182,6 +182,17 @@ std::array<float, 3> LightMap::transmittanceOfDepth(float depth) const
     return t;
 }
 
+float LightMap::greyTransmittanceOfDepth(float depth) const
+{
+    // transmittanceOfDepth's arithmetic for channel 0, bit for bit, with three equal channels.
+    if (!(depth > 0.0f)) return 1.0f;
+    const double e = std::exp(-mExtinction[0] * double(depth));
+    double t2 = 0.0;
+    for (int c = 0; c < 3; ++c) t2 += e * e;
+    const double scale = t2 < double(mCutoff) ? (t2 > 1e-200 ? std::sqrt(double(mCutoff) / t2) : 0.0) : 1.0;
+    return scale > 0.0 ? float(e * scale) : std::sqrt(mCutoff / 3.0f);
+}
+
 std::uint64_t LightMap::bytes() const
 {
     return mDepth.size() * sizeof(float) + mRays.size() * sizeof(Ray);

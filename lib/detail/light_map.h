@@ -56,6 +56,8 @@ public:
     /// The light's transmittance behind a unit-extinction optical depth @a depth (densityDepth),
     /// per channel, with the same floor.
     std::array<float, 3> transmittanceOfDepth(float depth) const;
+    /// The same where every channel's extinction is the same (the grey fast path): one value.
+    float greyTransmittanceOfDepth(float depth) const;
 
     std::uint64_t rays() const { return std::uint64_t(mNu) * std::uint64_t(mNv); }
     std::uint64_t samples() const { return mSamples; }

@@ -342,11 +342,14 @@ private:
         }
     }
 
-    /// The light's transmittance on pixel p's ray at fraction @a u of @a slab's thickness.
+    /// The light's transmittance on pixel p's ray at fraction @a u of @a slab's thickness, for
+    /// the C channels carried.
     std::array<float, 3> lightAt(int p, std::int64_t slab, float u) const
     {
         const double z = mOptions.slabs.start(slab) + double(u) * mOptions.slabs.thickness;
-        return mOptions.light->transmittance(mRayBase[p] + z * mRayDir[p]);
+        const float depth = mOptions.light->densityDepth(mRayBase[p] + z * mRayDir[p]);
+        if (C == 1) return {mOptions.light->greyTransmittanceOfDepth(depth), 0.0f, 0.0f};
+        return mOptions.light->transmittanceOfDepth(depth);
     }
 
     void flush(std::int64_t slab)
