@@ -8,6 +8,10 @@
                                                          (a) --method raymarch at a fine step and
                                                          (b) vdb_render's converged image
   bench/bench.py plot TABLE.txt --plot OUT.png           redraw the Pareto plot from a saved tradeoff table
+  bench/bench.py analytic [--res 320x180]                 issue 14's analytic field: a sum of Gaussian blobs
+                                                         sampled onto a grid; the truth integrates the
+                                                         blobs themselves (closed-form shadows); the
+                                                         presets and vdb_render's settings against it
   bench/bench.py ladder [--scenes all] [--res 960x540] [--cache DIR] [--plot OUT.png]
                                                          issue 14's ladder: draft, default, high and
                                                          vdb_render's settings on every scene, time and
@@ -23,7 +27,8 @@
                                                          vdb_render's defaults in the same rounds
 
 Needs a Release build in build/ (scripts/setup.sh), vdb_render and the shared assets
-($VDB_EWA_ASSETS, default ../shared/grids); the Pareto plot needs python3-matplotlib.
+($VDB_EWA_ASSETS, default ../shared/grids); the Pareto plot needs python3-matplotlib, the
+analytic field python3-numpy and python3-openvdb (Debian's; run with /usr/bin/python3).
 Machines are noisy: compare ratios, not seconds.
 """
 import argparse
@@ -228,10 +233,14 @@ def cmd_plot(args):
     rows = []
     for line in open(args.table):
         c = [x.strip() for x in line.strip().strip("|").split("|")]
-        if not line.startswith("| ") or len(c) != 10:
+        if not line.startswith("| ") or len(c) not in (6, 10) or c[0] == "scene":
             continue
-        rows.append(dict(scene=c[0], res=c[1], config=c[2], time=float(c[3]), psnr_conv=float(c[7]),
-                         renderer="vdb_render" if c[2].startswith("vdb_render") else "vdb_ewa"))
+        if len(c) == 10:  # a tradeoff table
+            rows.append(dict(scene=c[0], res=c[1], config=c[2], time=float(c[3]), psnr_conv=float(c[7]),
+                             renderer="vdb_render" if c[2].startswith("vdb_render") else "vdb_ewa"))
+        else:  # a ladder table: scene, setting, time, ratio, PSNR, alpha RMSE
+            rows.append(dict(scene=c[0], res=args.res, config=c[1], time=float(c[2]), psnr_conv=float(c[4]),
+                             renderer="vdb_render" if c[1].startswith("vdb_render") else "vdb_ewa"))
     plot([r for r in rows if r["psnr_conv"] == r["psnr_conv"]], args.plot)
 
 
@@ -272,6 +281,105 @@ def cmd_ladder(args):
             print(f"| {label} | {name} | {t:.2f} | {t / base:.2f} | {psnr:.1f} | {alpha:.4f} |", flush=True)
     if args.plot:
         plot(rows, args.plot)
+
+
+# The analytic field: isotropic Gaussian blobs (centre x, y, z, std. deviation, peak density),
+# index = world (voxel size 1), 64^3 voxels.
+BLOBS = [(32, 30, 32, 9.0, 0.35), (22, 40, 28, 5.0, 0.6), (42, 24, 38, 6.0, 0.5), (36, 44, 22, 4.0, 0.8),
+         (20, 20, 40, 3.0, 1.2), (46, 38, 44, 3.5, 0.9), (30, 22, 20, 2.5, 1.5), (40, 32, 30, 2.0, 2.0)]
+
+
+def cmd_analytic(args):
+    """A smooth procedural density sampled onto a grid. The truth integrates the blobs
+    themselves: fine midpoint steps along each orthographic ray, the light's optical depth in
+    closed form (erfc). Gain and cutoff are 0 in every renderer, so all integrate the same
+    model; PSNR (RGB) of every setting against the truth, vdb_render's converged image first."""
+    import math
+    import numpy as np
+    import pyopenvdb as vdb
+    tmp = tempfile.mkdtemp(prefix="vdb_ewa_analytic_")
+    w, h = (int(x) for x in args.res.split("x"))
+    sigma_t, albedo, light_colour = 1.6, 1.5 / 1.6, 0.7
+    light = np.array([0.3, 0.3, 0.0]) / math.hypot(0.3, 0.3)
+    blobs = np.array(BLOBS, dtype=np.float64)
+
+    def density(p):  # p: (..., 3) world = index positions
+        d = np.zeros(p.shape[:-1])
+        for cx, cy, cz, s, a in blobs:
+            r2 = ((p - (cx, cy, cz)) ** 2).sum(-1)
+            d += a * np.exp(-0.5 * r2 / (s * s))
+        return d
+
+    def erfc(x):  # Abramowitz and Stegun 7.1.26 (1.5e-7 absolute), vectorised
+        a = np.abs(x)
+        t = 1.0 / (1.0 + 0.3275911 * a)
+        poly = t * (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429))))
+        e = poly * np.exp(-a * a)
+        return np.where(x >= 0, e, 2.0 - e)
+
+    def light_depth(p):  # int_0^inf density(p + s light) ds, closed form per blob
+        out = np.zeros(p.shape[:-1])
+        for cx, cy, cz, s, a in blobs:
+            v = np.array([cx, cy, cz]) - p
+            t0 = v @ light
+            perp2 = (v ** 2).sum(-1) - t0 ** 2
+            out += a * np.exp(-0.5 * perp2 / (s * s)) * s * math.sqrt(math.pi / 2) * erfc(-t0 / (s * math.sqrt(2)))
+        return out
+
+    # The grid: values at voxel centres, active where > 1e-3.
+    n = 64
+    idx = np.stack(np.meshgrid(np.arange(n), np.arange(n), np.arange(n), indexing="ij"), -1).astype(np.float64)
+    values = density(idx).astype(np.float32)
+    values[values < 1e-3] = 0.0
+    grid = vdb.FloatGrid()
+    grid.copyFromArray(values, ijk=(0, 0, 0), tolerance=0.0)
+    grid.name = "density"
+    grid.gridClass = vdb.GridClass.FOG_VOLUME
+    path = os.path.join(tmp, "blobs.vdb")
+    vdb.write(path, grids=[grid])
+
+    # The truth, orthographic camera down -z over [0, 64] x [14, 50] at z = 100 (vdb_render's
+    # pixel centres at +0.5, rows downwards).
+    frame, cx, cy = 64.0, 31.5, 31.5
+    fh = frame * h / w
+    xs = cx - frame / 2 + (np.arange(w) + 0.5) * frame / w
+    ys = cy + fh / 2 - (np.arange(h) + 0.5) * fh / h
+    X, Y = np.meshgrid(xs, ys)
+    step = 0.05
+    colour = np.zeros((h, w))
+    depth = np.zeros((h, w))
+    for z in np.arange(n + 2.0, -2.0, -step) - 0.5 * step:
+        p = np.stack([X, Y, np.full_like(X, z)], -1)
+        d = density(p)
+        live = d > 1e-6
+        if not live.any():
+            continue
+        tl = np.exp(-sigma_t * light_depth(p[live]))
+        tau = sigma_t * d[live] * step
+        colour[live] += np.exp(-depth[live]) * (-np.expm1(-tau)) * albedo * light_colour * tl
+        depth[live] += tau
+    # PFM (bottom row first) -> float EXR with oiiotool.
+    pfm = os.path.join(tmp, "truth.pfm")
+    rgb = np.repeat(colour[::-1, :, None], 3, axis=2).astype("<f4")
+    with open(pfm, "wb") as f:
+        f.write(f"PF\n{w} {h}\n-1.0\n".encode())
+        f.write(rgb.tobytes())
+    truth = os.path.join(tmp, "truth.exr")
+    run(["oiiotool", pfm, "-d", "float", "-o", truth])
+
+    common = ["-res", args.res, "-camera", "ortho", "-frame", str(frame), "-translate", f"{cx},{cy},100",
+              "-gain", "0", "-cutoff", "0"]
+    out = os.path.join(tmp, "o.exr")
+    configs = [("vdb_render converged (-step 0.125 -shadowstep 0.375)", ["vdb_render", path, out, *common, "-step", "0.125", "-shadowstep", "0.375"])]
+    configs += [(f"vdb_render {' '.join(a) or 'defaults'}", ["vdb_render", path, out, *common, *a]) for _, a in VDB_CONFIGS]
+    configs += [(l, [*EWA_RENDER, path, out, *common, *a]) for l, a in LADDER_EWA]
+    print(f"# analytic field ({len(BLOBS)} Gaussian blobs on 64^3 voxels), {args.res} orthographic, gain 0, cutoff 0; "
+          "PSNR (RGB) against the integral of the blobs themselves")
+    print("| setting | time (s) | PSNR against the truth (dB) |")
+    print("|---|---|---|")
+    for name, cmd in configs:
+        t = timed(cmd, 1)
+        print(f"| {name} | {t:.2f} | {diff(out, truth)[1]:.1f} |", flush=True)
 
 
 def cmd_targets(args):
@@ -442,12 +550,16 @@ def main():
     sl.add_argument("--repeat", type=int, default=1)
     sl.add_argument("--cache", default="", help="folder that keeps vdb_render's converged images between runs")
     sl.add_argument("--plot", default="")
+    sa = sub.add_parser("analytic")
+    sa.add_argument("--res", default="320x180")
     sp2 = sub.add_parser("plot")
     sp2.add_argument("table", help="saved output of a tradeoff run")
     sp2.add_argument("--plot", required=True)
+    sp2.add_argument("--res", default="960x540", help="the resolution of a ladder table")
     a = ap.parse_args()
     {"speed": cmd_speed, "sigma": cmd_sigma, "tradeoff": cmd_tradeoff, "targets": cmd_targets,
-     "output": cmd_output, "surfaces": cmd_surfaces, "plot": cmd_plot, "ladder": cmd_ladder}[a.cmd](a)
+     "output": cmd_output, "surfaces": cmd_surfaces, "plot": cmd_plot, "ladder": cmd_ladder,
+     "analytic": cmd_analytic}[a.cmd](a)
 
 
 if __name__ == "__main__":

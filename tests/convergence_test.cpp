@@ -60,20 +60,10 @@ TEST(Convergence, ReferenceLightsALinearRampAsItsNumericalIntegral)
     // tent profile in z; the pixel integrates the scattered light over z numerically here.
     const double h = 0.1, g = 0.02, sigma = 1.0;
     const int N = 16, D = 4;
-    auto grid = openvdb::FloatGrid::create(0.0f);
-    grid->setTransform(openvdb::math::Transform::createLinearTransform(h));
-    grid->setGridClass(openvdb::GRID_FOG_VOLUME);
-    auto acc = grid->getAccessor();
-    for (int i = 0; i < N; ++i)
-        for (int j = -20; j < 20; ++j)
-            for (int k = 0; k < D; ++k) acc.setValueOn(openvdb::Coord(i, j, k), float(g * (i + 1)));
-    RenderSettings s;
-    s.absorb = Vec3d(0.0);
-    s.scatter = Vec3d(sigma);
+    auto grid = makeFogGrid(openvdb::Coord(0, -20, 0), openvdb::Coord(N - 1, 19, D - 1),
+        [&](const openvdb::Coord& ijk) { return float(g * (ijk.x() + 1)); }, h);
+    RenderSettings s = scatteringSlabSettings(sigma);
     s.lightDir = Vec3d(1, 0, 0);
-    s.lightColor = Vec3d(1.0);
-    s.gain = 0.0;
-    s.cutoff = 0.0;
     s.shadowStep = 0.025;
     s.method = Method::RayMarch;
     s.step = 0.05;

@@ -34,9 +34,9 @@ private:
     std::string mPath;
 };
 
-/// Box of active voxels [lo, hi] (inclusive index bounds) of constant @a density.
-inline openvdb::FloatGrid::Ptr makeBoxGrid(const openvdb::Coord& lo, const openvdb::Coord& hi, float density,
-    double voxelSize)
+/// Fog volume with the active voxels [lo, hi] (inclusive index bounds) of value @a density(ijk).
+inline openvdb::FloatGrid::Ptr makeFogGrid(const openvdb::Coord& lo, const openvdb::Coord& hi,
+    const std::function<float(const openvdb::Coord&)>& density, double voxelSize)
 {
     auto grid = openvdb::FloatGrid::create(0.0f);
     grid->setTransform(openvdb::math::Transform::createLinearTransform(voxelSize));
@@ -45,8 +45,15 @@ inline openvdb::FloatGrid::Ptr makeBoxGrid(const openvdb::Coord& lo, const openv
     auto acc = grid->getAccessor();
     for (int i = lo.x(); i <= hi.x(); ++i)
         for (int j = lo.y(); j <= hi.y(); ++j)
-            for (int k = lo.z(); k <= hi.z(); ++k) acc.setValueOn(openvdb::Coord(i, j, k), density);
+            for (int k = lo.z(); k <= hi.z(); ++k) acc.setValueOn(openvdb::Coord(i, j, k), density(openvdb::Coord(i, j, k)));
     return grid;
+}
+
+/// Box of active voxels [lo, hi] (inclusive index bounds) of constant @a density.
+inline openvdb::FloatGrid::Ptr makeBoxGrid(const openvdb::Coord& lo, const openvdb::Coord& hi, float density,
+    double voxelSize)
+{
+    return makeFogGrid(lo, hi, [density](const openvdb::Coord&) { return density; }, voxelSize);
 }
 
 inline void writeGrid(const openvdb::GridBase::Ptr& grid, const std::string& path)

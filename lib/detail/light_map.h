@@ -22,7 +22,7 @@ namespace vdb_ewa {
 namespace detail {
 
 /// 1 / (1 + x) for x >= 0 as a sum of exponentials sum_n a_n exp(-b_n x): the trapezoidal rule
-/// on 1 / (1 + x) = int exp(t - e^t (1 + x)) dt, exact to about 1e-6 relative on [0, xMax].
+/// on 1 / (1 + x) = int exp(t - e^t (1 + x)) dt, exact to about 1e-4 relative on [0, xMax].
 /// vdb_render divides a shadow sample's extinction by 1 + gain s (s: its distance from the
 /// shaded point); as a sum of exponentials that weight becomes a recursive filter along a ray.
 struct ExponentialSum
