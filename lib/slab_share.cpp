@@ -30,7 +30,7 @@ int slabShares(const SlabGrid& slabs, double mu, double sd, double truncation,
     double z0 = lo, cdfLo = normalCdf((lo - mu) * invSd), pdfLo = pdf((lo - mu) * invSd);
     for (int i = 0; i < count; ++i) {
         const double z1 = std::min(slabs.start(first + i + 1), hi);
-        const double cdfHi = normalCdf((z1 - mu) * invSd), pdfHi = pdf((z1 - mu) * invSd);
+        const double cdfHi = normalCdf((z1 - mu) * invSd), pdfHi = moments ? pdf((z1 - mu) * invSd) : 0.0;
         const double p = cdfHi - cdfLo;
         shares[i] = float(p / mass);
         if (moments) {

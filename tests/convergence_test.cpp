@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <utility>
 
 using namespace vdb_ewa;
 using namespace vdb_ewa::test;
@@ -119,13 +120,15 @@ TEST(Convergence, ThinDenseSheetLitFromTheCameraMatchesTheClosedForm)
     // the Gaussian sum and its light the trilinear field's, and each slab's mass is modelled as
     // a uniform layer (the mean and variance of its position): at 8 optical depths a voxel
     // that leaves 7.6 % at slab 0.5 (docs/numerics.md#dense-faces).
+    // Measured 23, 13 and 7.6 %; the mass's centroid alone (no variance) gives 65, 59 and 2 %,
+    // the middle of the slab 74, 68 %.
     double previous = 1e30;
-    for (const double slab : {2.0, 1.0, 0.5}) {
+    for (const auto& [slab, bound] : {std::pair{2.0, 0.3}, std::pair{1.0, 0.2}, std::pair{0.5, 0.1}}) {
         const double e = error(Method::Splat, slab);
         EXPECT_LT(e, previous) << "slab " << slab;
+        EXPECT_LT(e, bound * expected) << "slab " << slab;
         previous = e;
     }
-    EXPECT_LT(previous, 0.1 * expected);
     // Shading once per kernel centre, the diagnostic march's method (the old splatter's), is
     // off by more than the whole closed form.
     EXPECT_GT(error(Method::RayMarchGaussian, 1.0), expected);

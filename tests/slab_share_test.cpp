@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -83,4 +84,33 @@ TEST(SlabShare, HomogeneousSlabUpdateIsExact)
     compositeSlab(1.0f, 0.4f, c2, t2);
     EXPECT_NEAR(c1, c2, 1e-6);
     EXPECT_NEAR(t1, t2, 1e-6);
+}
+
+TEST(SlabShare, MomentsAreThoseOfTheGaussianInItsSlab)
+{
+    // The mean and mean square of the position (in slab thicknesses from the slab's front) of
+    // the Gaussian restricted to each slab, against the midpoint rule on the density itself.
+    const SlabGrid g{0.25, 0.4};
+    for (const double mu : {0.0, 0.37, 1.9}) {
+        const double sd = 0.45, clipNear = mu - 0.5, clipFar = 1e9;
+        std::int64_t first = 0;
+        std::vector<float> s(64), m(128);
+        const int n = slabShares(g, mu, sd, 3.0, clipNear, clipFar, first, s.data(), 64, m.data());
+        ASSERT_GT(n, 2);
+        for (int i = 0; i < n; ++i) {
+            const double z0 = std::max(g.start(first + i), clipNear), z1 = std::min(g.start(first + i + 1), mu + 3.0 * sd);
+            double w = 0.0, m1 = 0.0, m2 = 0.0;
+            const int steps = 20000;
+            for (int k = 0; k < steps; ++k) {
+                const double z = z0 + (k + 0.5) * (z1 - z0) / steps;
+                const double d = std::exp(-0.5 * (z - mu) * (z - mu) / (sd * sd));
+                const double u = (z - g.start(first + i)) / g.thickness;
+                w += d;
+                m1 += d * u;
+                m2 += d * u * u;
+            }
+            EXPECT_NEAR(m[2 * i], m1 / w, 1e-4) << "mu " << mu << " slab " << i;
+            EXPECT_NEAR(m[2 * i + 1], m2 / w, 1e-4) << "mu " << mu << " slab " << i;
+        }
+    }
 }
