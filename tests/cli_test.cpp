@@ -128,12 +128,13 @@ TEST_F(Cli, VerbosePrintsThePresetResolvedWithOverrides)
     const std::string out = mDir.file("out.exr");
     const CliRun draft = runCli(mDir, "render " + mGrid + " " + out + " --res 32x32 -translate 0,0,5 --quality draft -v");
     ASSERT_EQ(draft.code, 0) << draft.err;
-    for (const char* value : {"--cutoff-radius 2 ", "--slab 4 ", "--shadow-res 2", "--tile-spacing 8 ", "--lod 10 "}) {
+    for (const char* value : {"--cutoff-radius 2 ", "--slab 4 ", "--shadow-res 2", "--tile-spacing 8 ", "--lod 10 ", "--prefilter on "}) {
         EXPECT_NE(draft.out.find(value), std::string::npos) << value << " in\n" << draft.out;
     }
-    const CliRun over = runCli(mDir, "render " + mGrid + " " + out + " --res 32x32 -translate 0,0,5 --quality draft --lod 0 -v");
+    const CliRun over = runCli(mDir, "render " + mGrid + " " + out + " --res 32x32 -translate 0,0,5 --quality draft --lod 0 --prefilter off -v");
     ASSERT_EQ(over.code, 0) << over.err;
     EXPECT_NE(over.out.find("--lod 0 "), std::string::npos) << over.out;
+    EXPECT_NE(over.out.find("--prefilter off "), std::string::npos) << over.out;
     EXPECT_NE(over.out.find("--slab 4 "), std::string::npos) << over.out;
 }
 
@@ -141,6 +142,7 @@ TEST_F(Cli, ArgumentAndOutputErrors)
 {
     const std::string out = mDir.file("out.exr");
     expectFailure("render " + mGrid + " " + out + " --res 0x10", 2, "--res");
+    expectFailure("render " + mGrid + " " + out + " --prefilter maybe", 2, "--prefilter");
     expectFailure("render " + mGrid + " " + out + " --translate 1,2", 2, "--translate");
     expectFailure("render " + mGrid + " " + out + " --lookat 0,0,0 --rotate 0,0,0", 2, "not both");
     expectFailure("render " + mGrid + " " + out + " --fov 30 --focal 50", 2, "not both");
@@ -182,7 +184,7 @@ TEST_F(Cli, HelpDocumentsEveryOptionWithItsDefault)
     for (const char* opt : {"--res", "--translate", "--rotate", "--lookat", "--up", "--camera", "--fov", "--focal",
              "--aperture", "--frame", "--near", "--far", "--name", "--absorb", "--scatter", "--light", "--gain",
              "--cutoff", "--shadowstep", "--step", "--kernel-sigma", "--lowpass", "--aa", "--cutoff-radius", "--slab",
-             "--quality", "--exp", "--renormalize", "--precision", "--tile-spacing", "--shadow-res", "--method",
+             "--quality", "--exp", "--renormalize", "--prefilter", "--precision", "--tile-spacing", "--shadow-res", "--method",
              "--lod", "--threads", "--verbose", "--emission", "--ocio-config", "--working-space", "--output-space",
              "--preview", "--display", "--view", "--exr-type", "--compression", "--aov", "--deep", "--isovalue",
              "--shader", "--samples", "--color", "--iso", "--iso-opacity"}) {

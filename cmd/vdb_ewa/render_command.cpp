@@ -85,7 +85,7 @@ public:
         mApp->add_option("--step", mStep, "primary-ray step in voxels for --method raymarch (default: " + fmt(rs.step) + "); the splatter has no primary rays and ignores it");
         mApp->add_option("--method", mMethod, "splat (EWA volume splatting), raymarch (the reference: ray-marches the trilinear field with a shadow ray per sample, as vdb_render; slow) or raymarch-gaussian (diagnostic: ray-marches the splatter's own Gaussian reconstruction and per-kernel shadows) (default: splat)");
         // EWA splatting.
-        mApp->add_option("--kernel-sigma", mKernelSigma, "reconstruction kernel std. deviation in voxels (default: " + fmt(rs.kernelSigma) + ")");
+        mApp->add_option("--kernel-sigma", mKernelSigma, "reconstruction kernel std. deviation in voxels, range [0.1, 4] (default: " + fmt(rs.kernelSigma) + ")");
         mApp->add_option("--surface-sigma", mSurfaceSigma, "level sets and --iso: surface kernel std. deviation along the surface in voxels, range [0.1, 4] (default: " + fmt(rs.surfaceSigma) + ")");
         mApp->add_option("--lowpass", mLowpass, "screen-space low-pass filter variance in pixels^2 (default: " + fmt(rs.lowpass) + ")");
         mApp->add_option("--aa", mAa, "anti-aliasing: floor (each footprint axis at least --lowpass wide), ewa (resampling filter, Eq. 33: always adds --lowpass), swan (uniform scaling) or none (default: floor)");

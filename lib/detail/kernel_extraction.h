@@ -22,7 +22,7 @@ namespace detail {
 struct Kernel
 {
     Vec3d pIndex;   ///< centre, index space
-    float density;  ///< sanitised voxel value (>= cutoff, <= kMaxDensity)
+    float density;  ///< sanitised voxel value (>= cutoff, <= kMaxDensity); after quasiInterpolate, the kernel's weight (halo kernels < 0)
     float spacing;  ///< lattice spacing in voxels: sigma = kernelSigmaVoxels(), weight x spacing^3
 };
 
