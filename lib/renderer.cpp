@@ -13,6 +13,7 @@
 #include "detail/shadow_transmittance.h"
 #include "detail/splat_projection.h"
 #include "detail/surface_extraction.h"
+#include "detail/surface_projection.h"
 #include "detail/surface_rasterizer.h"
 #include "detail/tile_rasterizer.h"
 

@@ -53,6 +53,8 @@ struct SplatSet
     std::vector<float> passSources;
 };
 
+/// Kernels end at +-3 standard deviations along the ray (99.73 %).
+constexpr double kDepthTruncation = 3.0;
 /// Most slabs one kernel may span; shares past it are dropped (counted in clippedSpan).
 constexpr int kMaxSlabSpan = 1024;
 /// The slab thickness is raised so that no kernel spans more than this many slabs.
@@ -65,9 +67,6 @@ ProjectionParams projectionParams(const Camera& camera, const RenderSettings& se
 /// false if empty.
 bool pixelBox(const Footprint& fp, int width, int height, int& x0, int& y0, int& x1, int& y1);
 
-/// Project every kernel through @a camera. One task per block of kernels.
-struct SurfaceSet;
-struct SurfaceKernel;
 
 /// Copy @a fp's centre and conic, and the cut-off radius^2, into a splat (Splat, SurfaceSplat).
 template <typename S>
@@ -81,27 +80,13 @@ void setFootprint(S& s, const Footprint& fp, double cutoffRadius)
     s.cutoff = float(cutoffRadius * cutoffRadius);
 }
 
-/// A surface kernel seen through @a camera: its camera-space centre @a t and normal, and its
-/// footprint (Eq. 35). False if it lies before the near plane or beyond the far plane, faces
-/// away from the eye (back faces are hidden by the front of the same surface), or does not
-/// project.
-bool projectSurface(const SurfaceKernel& kernel, double sigma, const Camera& camera, const ProjectionParams& params,
-    Vec3d& t, Vec3d& normal, Footprint& fp);
-
+/// Project every kernel through @a camera (one task per block of kernels).
 /// @a colors: each kernel's material colour, multiplied into the scattering weight (empty:
 /// white); the light's transmittance is applied by the compositor per slab sample. @a passes:
 /// the emission pass adds its source term to SplatSet::passSources (the shadow pass is lit per
 /// slab sample too). @a progress: one unit per kernel; throws Cancelled.
 SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels, const std::vector<Rgb>& colors,
     const Camera& camera, const RenderSettings& settings, const PassRequest& passes = {}, Progress* progress = nullptr);
-
-/// Fog volumes with an iso-surface (Sec. 6.4): append @a surfaces to @a set as thin splats of
-/// the slab compositor. Each covers its pixels with optical depth -ln(1 - settings.isoOpacity)
-/// (capped at 20) x area x footprint (the kernels sum to one over the surface), shaded
-/// Lambert from the light, times @a shadows (one per surface kernel) and the kernel's material
-/// colour; back faces are culled.
-void appendSurfaceSplats(SplatSet& set, const SurfaceSet& surfaces, const std::vector<Rgb>& shadows,
-    const Camera& camera, const RenderSettings& settings, double voxelLength, const PassRequest& passes);
 
 } // namespace detail
 } // namespace vdb_ewa

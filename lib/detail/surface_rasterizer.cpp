@@ -2,7 +2,7 @@
 #include "surface_rasterizer.h"
 
 #include "blank_frame.h"
-#include "splat_projection.h"
+#include "surface_projection.h"
 #include "tile_bins.h"
 
 #include <tbb/parallel_for.h>
