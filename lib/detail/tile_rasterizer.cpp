@@ -342,6 +342,28 @@ private:
         }
     }
 
+    /// The fraction of the slab at @a base in front of where pixel p's |T_rgb|^2 falls to the
+    /// cutoff (the slab's optical depth taken as uniform across it); 1 if it does not.
+    float terminationFraction(std::size_t base, int p) const
+    {
+        const auto t2At = [&](double u) {
+            double t2 = 0.0;
+            for (int c = 0; c < 3; ++c) {
+                const double t = mT[channel(c) * kTilePixels + p];
+                t2 += t * t * std::exp(-2.0 * u * double(mTau[base + std::size_t(channel(c)) * kTilePixels + std::size_t(p)]));
+            }
+            return t2;
+        };
+        const double cutoff = mCutoff;
+        if (!(t2At(1.0) < cutoff) || !(t2At(0.0) >= cutoff)) return 1.0f;
+        double lo = 0.0, hi = 1.0; // |T(u)|^2 falls with u: bisection to 2^-24
+        for (int n = 0; n < 24; ++n) {
+            const double mid = 0.5 * (lo + hi);
+            (t2At(mid) < cutoff ? hi : lo) = mid;
+        }
+        return float(hi);
+    }
+
     /// The light's transmittance on pixel p's ray at fraction @a u of @a slab's thickness, for
     /// the C channels carried.
     std::array<float, 3> lightAt(int p, std::int64_t slab, float u) const
@@ -392,6 +414,20 @@ private:
                             emission[c] += float(mOptions.model->scattered(c, 1.0, 1.0)) * lit[c];
                         }
                     }
+                    // vdb_render's ray termination: |T|^2 < cutoff (early termination, Sec. 5).
+                    // A ray stops where it crosses the threshold, so only the slab's part in
+                    // front of the crossing is composited: every stopped pixel keeps vdb_render's
+                    // residual (about sqrt(cutoff / 3)), whatever the slab thickness.
+                    const float u = terminationFraction(base, p);
+                    if (u < 1.0f) {
+                        for (int c = 0; c < C; ++c) {
+                            const std::size_t i = base + c * kTilePixels + std::size_t(p);
+                            mTau[i] *= u;
+                            emission[c] *= u;
+                            lit[c] *= u;
+                            for (int k = 0; k < mPassCount; ++k) mPassEmission[passIndex(slab, k, c) + std::size_t(p)] *= u;
+                        }
+                    }
                     float t2 = 0.0f; // |T|^2 over R, G, B
                     for (int c = 0; c < C; ++c) {
                         const std::size_t i = base + c * kTilePixels + std::size_t(p);
@@ -400,8 +436,7 @@ private:
                         t2 += t * t;
                     }
                     if (passes) flushPasses(slab, p, meanBefore, emission, lit);
-                    // vdb_render's ray termination: |T|^2 < cutoff (early termination, Sec. 5).
-                    if (t2 * float(3 / C) < mCutoff) {
+                    if (u < 1.0f || t2 * float(3 / C) < mCutoff) {
                         mAlive[p] = 0;
                         --mAliveCount;
                     }
