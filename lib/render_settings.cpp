@@ -53,6 +53,7 @@ RenderSettings RenderSettings::preset(Quality quality)
     case Quality::Draft:
         s.cutoffRadius = 2.0;
         s.slab = 4.0;
+        s.shadowStep = 1.0;
         s.shadowResolution = 2.0;
         s.tileKernelSpacing = 8;
         s.lodPixels = 10.0;

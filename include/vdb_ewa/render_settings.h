@@ -61,7 +61,7 @@ struct VDB_EWA_API RenderSettings
                                       ///< per unit optical length, like scatter x light colour); 0 = none
     double gain = 0.2;                ///< shadow-ray extinction falls as 1/(1 + gain * s), s in voxels
     double cutoff = 0.005;            ///< density cutoff; rays stop where |T|^2 < cutoff (RGB T)
-    double shadowStep = 0.75;         ///< shadow-ray step in voxels (vdb_render's default is 3)
+    double shadowStep = 0.5;          ///< shadow-ray step in voxels (vdb_render's default is 3)
     double shadowResolution = 1.0;    ///< light map: shadow rays every N voxel lengths across the light, bilinear
                                       ///< in between (docs/numerics.md#shading-per-slab-sample)
     double step = 1.0;                ///< primary-ray step in voxels (--method raymarch only)
