@@ -4,6 +4,8 @@
 ///        numerical integrals of it; the splatter's error falls as its knobs tighten.
 #include "fixtures.h"
 
+#include "detail/light_map.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -159,5 +161,19 @@ TEST(Convergence, SmallerShadowStepsNeverMoveAwayFromTheClosedForm)
         // The splatter's residual: its Gaussian view field against the trilinear light field at
         // the slab's faces (docs/numerics.md#dense-faces).
         EXPECT_LT(previous, (method == Method::RayMarch ? 0.01 : 0.025) * expected) << "method " << int(method);
+    }
+}
+
+TEST(Convergence, LightMapWeightIsASumOfExponentials)
+{
+    // vdb_render divides a shadow sample's extinction by 1 + gain s; the light map filters each
+    // term of 1 / (1 + x) ~ sum_n a_n exp(-b_n x) recursively along its rays: the fit's error
+    // against the closed form over [0, xMax], relative.
+    for (const double xMax : {10.0, 1000.0}) {
+        const detail::ExponentialSum sum(xMax);
+        double worst = 0.0;
+        for (double x = 0.0; x <= xMax; x += xMax / 4096.0) worst = std::max(worst, std::abs(sum(x) * (1.0 + x) - 1.0));
+        std::printf("1 / (1 + x) as %zu exponentials on [0, %g]: worst relative error %.2e\n", sum.a.size(), xMax, worst);
+        EXPECT_LT(worst, 1e-4);
     }
 }

@@ -139,7 +139,6 @@ LightMap::LightMap(const GridSource::Impl& grid, const RenderSettings& settings,
         std::copy(rows[std::size_t(j)].begin(), rows[std::size_t(j)].end(), mDepth.begin() + std::ptrdiff_t(rowStart[std::size_t(j)]));
         for (int i = 0; i < mNu; ++i) mRays[std::size_t(j) * std::size_t(mNu) + std::size_t(i)].offset += rowStart[std::size_t(j)];
     }
-    mSamples = std::uint64_t(mNu) * std::uint64_t(mNv) * std::uint64_t(mNw);
 }
 
 float LightMap::rayDepth(int i, int j, double w) const
@@ -191,11 +190,6 @@ float LightMap::greyTransmittanceOfDepth(float depth) const
     for (int c = 0; c < 3; ++c) t2 += e * e;
     const double scale = t2 < double(mCutoff) ? (t2 > 1e-200 ? std::sqrt(double(mCutoff) / t2) : 0.0) : 1.0;
     return scale > 0.0 ? float(e * scale) : std::sqrt(mCutoff / 3.0f);
-}
-
-std::uint64_t LightMap::bytes() const
-{
-    return mDepth.size() * sizeof(float) + mRays.size() * sizeof(Ray);
 }
 
 } // namespace detail

@@ -59,9 +59,6 @@ public:
     /// The same where every channel's extinction is the same (the grey fast path): one value.
     float greyTransmittanceOfDepth(float depth) const;
 
-    std::uint64_t rays() const { return std::uint64_t(mNu) * std::uint64_t(mNv); }
-    std::uint64_t samples() const { return mSamples; }
-    std::uint64_t bytes() const;
 
 private:
     float rayDepth(int i, int j, double w) const;
@@ -77,7 +74,6 @@ private:
     };
     std::vector<Ray> mRays; ///< [j * mNu + i]
     std::vector<float> mDepth;
-    std::uint64_t mSamples = 0;
     double mExtinction[3];
     float mCutoff;
     bool mUnlit;

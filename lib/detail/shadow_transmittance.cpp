@@ -111,11 +111,5 @@ std::vector<Rgb> shadowTransmittance(const GridSource::Impl& grid, const KernelS
     return marchAll(grid, centres, settings, progress);
 }
 
-Rgb shadowTransmittanceAt(const GridSource::Impl& grid, const Vec3d& pIndex, const RenderSettings& settings)
-{
-    ShadowMarcher marcher(grid, settings);
-    return marcher.march(pIndex);
-}
-
 } // namespace detail
 } // namespace vdb_ewa

@@ -47,8 +47,5 @@ private:
 std::vector<Rgb> shadowTransmittance(const GridSource::Impl& grid, const KernelSet& kernels,
     const RenderSettings& settings, Progress* progress = nullptr);
 
-/// The same march for one world-space point (used by tests and reference integrators).
-Rgb shadowTransmittanceAt(const GridSource::Impl& grid, const Vec3d& pIndex, const RenderSettings& settings);
-
 } // namespace detail
 } // namespace vdb_ewa

@@ -441,8 +441,7 @@ private:
                         --mAliveCount;
                     }
                 }
-                if (!mMoment.empty()) mMoment[slot(slab) * kTilePixels + std::size_t(p)] = 0.0f;
-                if (!mMoment2.empty()) mMoment2[slot(slab) * kTilePixels + std::size_t(p)] = 0.0f;
+                if (!mMoment.empty()) mMoment[slot(slab) * kTilePixels + std::size_t(p)] = mMoment2[slot(slab) * kTilePixels + std::size_t(p)] = 0.0f;
                 for (int c = 0; c < C; ++c) {
                     const std::size_t i = base + c * kTilePixels + std::size_t(p);
                     mTau[i] = 0.0f;
