@@ -114,3 +114,25 @@ TEST(SlabShare, MomentsAreThoseOfTheGaussianInItsSlab)
         }
     }
 }
+
+TEST(SlabShare, SlabLightTransmittanceIsTheLayersIntegral)
+{
+    // A uniform layer of optical depth tau, light falling log-linearly from front to back:
+    // compositeSlab(tau, S T_eff) must add what int_0^1 tau S T_L(u) e^(-tau u) du adds
+    // (midpoint rule, 20000 steps), from thin to opaque layers and with the light brighter
+    // at the back (light from behind the layer).
+    for (float tau : {0.0f, 1e-5f, 0.01f, 0.5f, 3.0f, 20.0f})
+        for (const auto& [front, back] : {std::pair{1.0f, 1.0f}, {0.9f, 0.2f}, {0.05f, 0.6f}, {1.0f, 1e-3f}}) {
+            const int n = 20000;
+            double integral = 0.0;
+            for (int i = 0; i < n; ++i) {
+                const double u = (i + 0.5) / n;
+                integral += std::pow(double(front), 1.0 - u) * std::pow(double(back), u) * std::exp(-double(tau) * u);
+            }
+            integral /= n;                                 // int T_L e^(-tau u) du
+            const double meanExp = tau > 0.0f ? -std::expm1(-double(tau)) / tau : 1.0; // int e^(-tau u) du
+            const double expected = integral / meanExp;
+            EXPECT_NEAR(slabLightTransmittance(tau, front, back), expected, 2e-6 * expected + 1e-9)
+                << "tau " << tau << " front " << front << " back " << back;
+        }
+}

@@ -55,12 +55,20 @@ VDB_EWA_API int slabShares(const SlabGrid& slabs, double mu, double sd, double t
 /// Exact front-to-back update of one homogeneous slab for one colour channel: optical depth
 /// @a tau, extinction-weighted emission @a emission (= sum of colour x optical depth).
 /// C += T (E / tau)(1 - exp(-tau)); T *= exp(-tau).
-inline void compositeSlab(float tau, float emission, float& colour, float& transmittance)
+/// The fraction of light a slab of optical depth @a tau absorbs, 1 - exp(-tau) (0 for tau <= 0).
+inline float slabAbsorbed(float tau) { return tau > 0.0f ? -std::expm1(-tau) : 0.0f; }
+
+/// compositeSlab with @a absorbed = slabAbsorbed(tau) already known.
+inline void compositeSlab(float tau, float absorbed, float emission, float& colour, float& transmittance)
 {
     if (!(tau > 0.0f)) return;
-    const float absorbed = -std::expm1(-tau);
     colour += transmittance * (tau > 1e-7f ? emission / tau * absorbed : emission);
     transmittance *= 1.0f - absorbed;
+}
+
+inline void compositeSlab(float tau, float emission, float& colour, float& transmittance)
+{
+    compositeSlab(tau, slabAbsorbed(tau), emission, colour, transmittance);
 }
 
 /// The light transmittance that, used as one value for the whole slab, lights a uniform layer
@@ -72,12 +80,21 @@ inline void compositeSlab(float tau, float emission, float& colour, float& trans
 /// returned is front E(tau + k) / E(tau): the light at the layer's front where it is optically
 /// thick (it is seen only there), the mean of the exponential where it is thin
 /// (docs/numerics.md#shading-per-slab-sample).
+/// In single precision (once per lit pixel and slab): 1e-6 relative. @a absorbed:
+/// slabAbsorbed(tau), which the compositor has at hand.
+inline float slabLightTransmittance(float tau, float absorbed, float front, float back)
+{
+    // E(x) = (1 - e^-x) / x; below |x| = 1e-3 its series to x^2 (error x^3 / 24 < 1e-10).
+    const auto series = [](float x) { return 1.0f - x * (0.5f - x / 6.0f); };
+    const auto meanOfExp = [&](float x) { return std::abs(x) < 1e-3f ? series(x) : -std::expm1(-x) / x; };
+    const float f = front > 1e-30f ? front : 1e-30f, b = back > 1e-30f ? back : 1e-30f;
+    const float t = tau > 0.0f ? tau : 0.0f;
+    return f * meanOfExp(t + std::log(f / b)) / (t < 1e-3f ? series(t) : absorbed / t);
+}
+
 inline float slabLightTransmittance(float tau, float front, float back)
 {
-    const auto meanOfExp = [](double x) { return std::abs(x) < 1e-6 ? 1.0 - 0.5 * x : -std::expm1(-x) / x; };
-    const double f = front > 1e-30f ? double(front) : 1e-30, b = back > 1e-30f ? double(back) : 1e-30;
-    const double t = tau > 0.0f ? double(tau) : 0.0;
-    return float(f * meanOfExp(t + std::log(f / b)) / meanOfExp(t));
+    return slabLightTransmittance(tau, slabAbsorbed(tau), front, back);
 }
 
 /// Where a homogeneous slab's mean transmittance, falling exponentially from @a before at its

@@ -53,7 +53,7 @@ KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& set
     std::vector<std::size_t> offsets(leaves.size() + 1, 0);
     for (std::size_t i = 0; i < leaves.size(); ++i) offsets[i + 1] = offsets[i] + leaves[i]->onVoxelCount();
     set.activeVoxels = offsets.back();
-    std::vector<Kernel> voxels(offsets.back(), Kernel{Vec3d(0.0), 0.0f, 1.0f});
+    LargeArray<Kernel> voxels(offsets.back(), Kernel{Vec3d(0.0), 0.0f, 1.0f});
     std::vector<std::uint64_t> counts(leaves.size() * 5, 0); // below cutoff, NaN, clamped, merged voxels, merged kernels
     setUnits(progress, leaves.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size()),
@@ -103,9 +103,10 @@ KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& set
         set.mergedVoxels += counts[5 * i + 3];
         set.mergedKernels += counts[5 * i + 4];
     }
-    set.kernels.reserve(voxels.size());
-    std::copy_if(voxels.begin(), voxels.end(), std::back_inserter(set.kernels),
-        [](const Kernel& k) { return k.density > 0.0f; });
+    // Compacted in place (stable: tree order), without a second array of kernels to touch.
+    voxels.erase(std::remove_if(voxels.begin(), voxels.end(), [](const Kernel& k) { return !(k.density > 0.0f); }),
+        voxels.end());
+    set.kernels = std::move(voxels);
 
     // Active tiles: a lattice of larger kernels (rule in docs/equations.md#active-tiles).
     // Collect them in tree order, then expand them in parallel into their own slot ranges.

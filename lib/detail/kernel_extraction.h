@@ -6,6 +6,7 @@
 #include <vdb_ewa/render_settings.h>
 
 #include "grid_source_impl.h"
+#include "huge_page_allocator.h"
 #include "level_of_detail.h"
 #include "progress.h"
 
@@ -41,7 +42,7 @@ inline double kernelSigmaVoxels(const Kernel& k, double kernelSigma)
 
 struct KernelSet
 {
-    std::vector<Kernel> kernels; ///< in tree order (deterministic)
+    LargeArray<Kernel> kernels; ///< in tree order (deterministic)
     std::uint64_t activeVoxels = 0;
     std::uint64_t activeTiles = 0;
     std::uint64_t belowCutoff = 0; ///< values < cutoff (including negative and -Inf): skipped

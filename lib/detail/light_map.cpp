@@ -35,7 +35,7 @@ LightMap::LightMap(const GridSource::Impl& grid, const RenderSettings& settings,
     : mCutoff(float(settings.cutoff))
 {
     const OpticalModel model(settings);
-    for (int c = 0; c < 3; ++c) mExtinction[c] = model.extinction(c);
+    for (int c = 0; c < 3; ++c) mExtinction[c] = float(model.extinction(c));
     mUnlit = model.unlit();
     const openvdb::CoordBBox box = grid.field->evalActiveVoxelBoundingBox();
     setUnits(progress, 0);
@@ -93,19 +93,13 @@ LightMap::LightMap(const GridSource::Impl& grid, const RenderSettings& settings,
     setUnits(progress, std::uint64_t(mNv));
     tbb::parallel_for(tbb::blocked_range<int>(0, mNv), [&](const tbb::blocked_range<int>& range) {
         EmptySpaceSkipper skipper(*grid.field, 0);
-        std::vector<float> depth(static_cast<std::size_t>(mNw));
+        std::vector<double> density(static_cast<std::size_t>(mNw));
         std::vector<double> f(static_cast<std::size_t>(terms));
         for (int j = range.begin(); j < range.end(); ++j) {
             std::vector<float>& row = rows[std::size_t(j)];
             for (int i = 0; i < mNu; ++i) {
-                std::fill(f.begin(), f.end(), 0.0);
                 int kTop = -1, kBottom = -1; // samples holding density
-                // March from the light side down: depth(k) = sum_n a_n F_n(k),
-                // F_n(k) = decay_n (F_n(k + 1) + d(k + 1) step).
                 for (int k = mNw - 1; k >= 0; --k) {
-                    double tau = 0.0;
-                    for (int n = 0; n < terms; ++n) tau += weight[n] * f[std::size_t(n)];
-                    depth[std::size_t(k)] = float(tau);
                     const Vec3d p = indexAt(i, j, k);
                     double d = 0.0;
                     if (!grid.linear || skipper.emptyExit(p, -dw) < 1.0) {
@@ -113,21 +107,32 @@ LightMap::LightMap(const GridSource::Impl& grid, const RenderSettings& settings,
                         openvdb::tools::BoxSampler::sample(skipper.accessor(), openvdb::Vec3d(p.x, p.y, p.z), v);
                         if (v >= settings.cutoff) d = v; // vdb_render skips samples below its cutoff
                     }
+                    density[std::size_t(k)] = d;
                     if (d > 0.0) {
                         if (kTop < 0) kTop = k;
                         kBottom = k;
                     }
-                    if (kTop < 0) continue;
-                    for (int n = 0; n < terms; ++n) f[std::size_t(n)] = decay[n] * (f[std::size_t(n)] + d * step);
                 }
                 Ray& ray = mRays[std::size_t(j) * std::size_t(mNu) + std::size_t(i)];
                 if (kTop < 0) continue;
                 // Stored: from a margin below the lowest density up to just below the highest
-                // (above it the depth is 0).
+                // (above it the depth is 0). Filtered from the light side down over that range
+                // only: depth(k) = sum_n a_n F_n(k), F_n(k) = decay_n (F_n(k + 1) + d(k + 1) step).
                 ray.kLo = std::max(0, kBottom - margin);
                 ray.count = std::max(0, kTop - ray.kLo);
                 ray.offset = row.size();
-                row.insert(row.end(), depth.begin() + ray.kLo, depth.begin() + ray.kLo + ray.count);
+                row.resize(row.size() + std::size_t(ray.count));
+                float* depth = row.data() + ray.offset;
+                std::fill(f.begin(), f.end(), 0.0);
+                for (int k = kTop; k >= ray.kLo; --k) {
+                    if (k < kTop) {
+                        double tau = 0.0;
+                        for (int n = 0; n < terms; ++n) tau += weight[n] * f[std::size_t(n)];
+                        depth[k - ray.kLo] = float(tau);
+                    }
+                    const double d = density[std::size_t(k)];
+                    for (int n = 0; n < terms; ++n) f[std::size_t(n)] = decay[n] * (f[std::size_t(n)] + d * step);
+                }
             }
             advance(progress);
         }
@@ -141,43 +146,76 @@ LightMap::LightMap(const GridSource::Impl& grid, const RenderSettings& settings,
     }
 }
 
-float LightMap::rayDepth(int i, int j, double w) const
+const LightMap::Ray* LightMap::ray(int i, int j) const
 {
-    if (i < 0 || j < 0 || i >= mNu || j >= mNv) return 0.0f;
-    const Ray& ray = mRays[std::size_t(j) * std::size_t(mNu) + std::size_t(i)];
-    if (ray.count == 0) return 0.0f;
-    const double x = std::max(w - double(ray.kLo), 0.0); // below the stored range: its first value
+    if (i < 0 || j < 0 || i >= mNu || j >= mNv) return nullptr;
+    const Ray& r = mRays[std::size_t(j) * std::size_t(mNu) + std::size_t(i)];
+    return r.count > 0 ? &r : nullptr;
+}
+
+float LightMap::depthOnRay(const Ray* ray, double w) const
+{
+    if (!ray) return 0.0f;
+    const double x = std::max(w - double(ray->kLo), 0.0); // below the stored range: its first value
     const int k = int(x);
-    if (k >= ray.count) return 0.0f;
-    const float* d = mDepth.data() + ray.offset;
-    const float next = k + 1 < ray.count ? d[k + 1] : 0.0f;
+    if (k >= ray->count) return 0.0f;
+    const float* d = mDepth.data() + ray->offset;
+    const float next = k + 1 < ray->count ? d[k + 1] : 0.0f;
     return d[k] + float(x - double(k)) * (next - d[k]);
+}
+
+LightMap::Cell LightMap::cell(const Vec3d& q) const
+{
+    const double fu = std::floor(q.x), fv = std::floor(q.y);
+    const int i = int(std::clamp(fu, -1.0, double(mNu))), j = int(std::clamp(fv, -1.0, double(mNv)));
+    return {{ray(i, j), ray(i + 1, j), ray(i, j + 1), ray(i + 1, j + 1)}, float(q.x - fu), float(q.y - fv)};
+}
+
+float LightMap::depthInCell(const Cell& c, double w) const
+{
+    const float d00 = depthOnRay(c.rays[0], w), d10 = depthOnRay(c.rays[1], w);
+    const float d01 = depthOnRay(c.rays[2], w), d11 = depthOnRay(c.rays[3], w);
+    return (1.0f - c.b) * ((1.0f - c.a) * d00 + c.a * d10) + c.b * ((1.0f - c.a) * d01 + c.a * d11);
 }
 
 float LightMap::densityDepth(const Vec3d& q) const
 {
     if (mRays.empty()) return 0.0f;
-    const double fu = std::floor(q.x), fv = std::floor(q.y);
-    const int i = int(std::clamp(fu, -1.0, double(mNu))), j = int(std::clamp(fv, -1.0, double(mNv)));
-    const float a = float(q.x - fu), b = float(q.y - fv);
-    const float d00 = rayDepth(i, j, q.z), d10 = rayDepth(i + 1, j, q.z);
-    const float d01 = rayDepth(i, j + 1, q.z), d11 = rayDepth(i + 1, j + 1, q.z);
-    return (1.0f - b) * ((1.0f - a) * d00 + a * d10) + b * ((1.0f - a) * d01 + a * d11);
+    return depthInCell(cell(q), q.z);
+}
+
+void LightMap::densityDepths(const Vec3d& q0, const Vec3d& q1, float& d0, float& d1) const
+{
+    if (mRays.empty()) {
+        d0 = d1 = 0.0f;
+        return;
+    }
+    Cell c = cell(q0);
+    d0 = depthInCell(c, q0.z);
+    if (std::floor(q0.x) == std::floor(q1.x) && std::floor(q0.y) == std::floor(q1.y)) {
+        c.a = float(q1.x - std::floor(q1.x));
+        c.b = float(q1.y - std::floor(q1.y));
+    } else {
+        c = cell(q1);
+    }
+    d1 = depthInCell(c, q1.z);
 }
 
 std::array<float, 3> LightMap::transmittanceOfDepth(float depth) const
 {
     std::array<float, 3> t{1.0f, 1.0f, 1.0f};
     if (!(depth > 0.0f)) return t;
-    double e[3], t2 = 0.0;
+    float t2 = 0.0f;
     for (int c = 0; c < 3; ++c) {
-        e[c] = std::exp(-mExtinction[c] * double(depth));
-        t2 += e[c] * e[c];
+        t[std::size_t(c)] = std::exp(-mExtinction[c] * depth);
+        t2 += t[std::size_t(c)] * t[std::size_t(c)];
     }
     // vdb_render stops a shadow ray once |T|^2 < cutoff: the transmittance it keeps is about
     // that threshold, never darker.
-    const double scale = t2 < double(mCutoff) ? (t2 > 1e-200 ? std::sqrt(double(mCutoff) / t2) : 0.0) : 1.0;
-    for (int c = 0; c < 3; ++c) t[c] = scale > 0.0 ? float(e[c] * scale) : std::sqrt(mCutoff / 3.0f);
+    if (t2 < mCutoff) {
+        const float scale = t2 > 1e-30f ? std::sqrt(mCutoff / t2) : 0.0f;
+        for (float& v : t) v = scale > 0.0f ? v * scale : std::sqrt(mCutoff / 3.0f);
+    }
     return t;
 }
 
@@ -185,11 +223,12 @@ float LightMap::greyTransmittanceOfDepth(float depth) const
 {
     // transmittanceOfDepth's arithmetic for channel 0, bit for bit, with three equal channels.
     if (!(depth > 0.0f)) return 1.0f;
-    const double e = std::exp(-mExtinction[0] * double(depth));
-    double t2 = 0.0;
+    const float e = std::exp(-mExtinction[0] * depth);
+    float t2 = 0.0f;
     for (int c = 0; c < 3; ++c) t2 += e * e;
-    const double scale = t2 < double(mCutoff) ? (t2 > 1e-200 ? std::sqrt(double(mCutoff) / t2) : 0.0) : 1.0;
-    return scale > 0.0 ? float(e * scale) : std::sqrt(mCutoff / 3.0f);
+    if (!(t2 < mCutoff)) return e;
+    const float scale = t2 > 1e-30f ? std::sqrt(mCutoff / t2) : 0.0f;
+    return scale > 0.0f ? e * scale : std::sqrt(mCutoff / 3.0f);
 }
 
 } // namespace detail

@@ -9,6 +9,7 @@
 #pragma once
 
 #include "grid_source_impl.h"
+#include "huge_page_allocator.h"
 #include "optical_model.h"
 #include "progress.h"
 
@@ -48,6 +49,9 @@ public:
     /// Shadow-ray optical depth of unit-extinction density at map coordinates @a q (the
     /// extinction of each channel multiplies it): bilinear across, linear along the light.
     float densityDepth(const Vec3d& q) const;
+    /// densityDepth at two points, sharing the lattice rays when both lie in one cell (the
+    /// front and back of a layer on a pixel's ray).
+    void densityDepths(const Vec3d& q0, const Vec3d& q1, float& d0, float& d1) const;
 
     /// The light's transmittance at map coordinates @a q, with vdb_render's early stop
     /// (|T|^2 >= cutoff) as a floor.
@@ -61,20 +65,31 @@ public:
 
 
 private:
-    float rayDepth(int i, int j, double w) const;
-
-    Mat3d mFromWorld{1.0}; ///< rows: e1 / h, e2 / h, l / step (world units)
-    Vec3d mOrigin{0.0};    ///< world position of map coordinates (0, 0, 0)
-    int mNu = 0, mNv = 0, mNw = 0;
     struct Ray
     {
         std::uint64_t offset = 0; ///< first stored sample in mDepth
         std::int32_t kLo = 0;     ///< sample index of the first stored sample
         std::int32_t count = 0;   ///< stored samples; above them (towards the light) the depth is 0
     };
+    /// The lattice ray (i, j), null outside the lattice or where it holds no density.
+    const Ray* ray(int i, int j) const;
+    /// Optical depth on @a ray (or 0 if null) at @a w steps along the light.
+    float depthOnRay(const Ray* ray, double w) const;
+    /// The four lattice rays around (u, v), bilinear weights a, b: the cell densityDepth reads.
+    struct Cell
+    {
+        const Ray* rays[4];
+        float a, b;
+    };
+    Cell cell(const Vec3d& q) const;
+    float depthInCell(const Cell& cell, double w) const;
+
+    Mat3d mFromWorld{1.0}; ///< rows: e1 / h, e2 / h, l / step (world units)
+    Vec3d mOrigin{0.0};    ///< world position of map coordinates (0, 0, 0)
+    int mNu = 0, mNv = 0, mNw = 0;
     std::vector<Ray> mRays; ///< [j * mNu + i]
-    std::vector<float> mDepth;
-    double mExtinction[3];
+    LargeArray<float> mDepth;
+    float mExtinction[3];
     float mCutoff;
     bool mUnlit;
 };

@@ -40,7 +40,7 @@ double quasiInterpolationAlpha(double sigma)
 std::uint64_t quasiInterpolate(const GridSource::Impl& grid, double alpha, KernelSet& set)
 {
     if (!(alpha > 0.0)) return 0;
-    std::vector<Kernel>& kernels = set.kernels;
+    LargeArray<Kernel>& kernels = set.kernels;
     // Where the unit kernels are.
     openvdb::MaskGrid mask(false);
     {

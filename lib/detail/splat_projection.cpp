@@ -84,11 +84,11 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels, c
 
     const std::size_t n = kernels.kernels.size();
     const int passCount = int(passes.shadow) + int(passes.emission);
-    std::vector<float> passSources(n * std::size_t(passCount) * 3);
-    std::vector<std::uint8_t> visible(n, 0);
-    std::vector<Splat> splats(n);
-    std::vector<DepthExtent> extents(n);
-    std::vector<std::uint8_t> flags(n, 0); // 1: before near, 2: clamped near, 4: clamped grazing
+    LargeArray<float> passSources(n * std::size_t(passCount) * 3);
+    LargeArray<std::uint8_t> visible(n, 0);
+    LargeArray<Splat> splats(n);
+    LargeArray<DepthExtent> extents(n);
+    LargeArray<std::uint8_t> flags(n, 0); // 1: before near, 2: clamped near, 4: clamped grazing
 
     // Pass 1: footprints, culling and depth extents.
     setUnits(progress, n);
@@ -195,16 +195,21 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels, c
                     out.shareMoments.data() + 2 * splats[i].shareOffset);
             }
         });
-    out.splats.reserve(std::size_t(std::count(visible.begin(), visible.end(), 1)));
-    out.passSourceCount = passCount;
-    out.passSources.reserve(out.splats.capacity() * std::size_t(passCount) * 3);
+    // Compacted in place, in kernel order (no second array of splats to touch).
+    const std::size_t passFloats = std::size_t(passCount) * 3;
+    std::size_t kept = 0;
     for (std::size_t i = 0; i < n; ++i) {
         if (!visible[i]) continue;
-        out.splats.push_back(splats[i]);
-        const float* pass = passSources.data() + i * std::size_t(passCount) * 3;
-        out.passSources.insert(out.passSources.end(), pass, pass + passCount * 3);
+        splats[kept] = splats[i];
+        std::copy_n(passSources.data() + i * passFloats, passFloats, passSources.data() + kept * passFloats);
+        ++kept;
     }
-    out.culled = n - out.splats.size();
+    splats.resize(kept);
+    passSources.resize(kept * passFloats);
+    out.splats = std::move(splats);
+    out.passSourceCount = passCount;
+    out.passSources = std::move(passSources);
+    out.culled = n - kept;
     return out;
 }
 

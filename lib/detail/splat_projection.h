@@ -35,11 +35,11 @@ struct Splat
 
 struct SplatSet
 {
-    std::vector<Splat> splats; ///< in kernel order (deterministic)
-    std::vector<float> shares; ///< slab shares of all splats
+    LargeArray<Splat> splats; ///< in kernel order (deterministic)
+    LargeArray<float> shares; ///< slab shares of all splats
     /// Where each share's mass lies in its slab: the mean and mean square of its position,
     /// 0 at the slab's front and 1 at its back; two floats per share.
-    std::vector<float> shareMoments;
+    LargeArray<float> shareMoments;
     SlabGrid slabs;
     std::uint64_t culled = 0;     ///< outside the frustum or behind the eye
     std::uint64_t beforeNear = 0; ///< centre before the near plane: dropped
@@ -50,7 +50,7 @@ struct SplatSet
     /// Extra source terms for the shadow and emission passes, like Splat::emission (peak
     /// optical depth x source colour), passSourceCount x RGB per splat, in splat order.
     int passSourceCount = 0;
-    std::vector<float> passSources;
+    LargeArray<float> passSources;
 };
 
 /// Kernels end at +-3 standard deviations along the ray (99.73 %).

@@ -3,6 +3,8 @@
 ///        in splat order, so every tile lists its splats deterministically).
 #pragma once
 
+#include "huge_page_allocator.h"
+
 #include <cstdint>
 #include <vector>
 
@@ -16,19 +18,19 @@ struct TileBins
 {
     int tilesX = 0, tilesY = 0;
     std::vector<std::uint64_t> offsets; ///< tilesX * tilesY + 1
-    std::vector<std::uint32_t> indices; ///< splat indices, tile by tile, in splat order
+    LargeArray<std::uint32_t> indices; ///< splat indices, tile by tile, in splat order
 };
 
-/// @tparam S a splat with an inclusive pixel box x0, y0, x1, y1 inside the image.
-template <typename S>
-TileBins binSplats(const std::vector<S>& splats, int width, int height)
+/// @tparam Splats an array of splats, each with an inclusive pixel box x0, y0, x1, y1 inside the image.
+template <typename Splats>
+TileBins binSplats(const Splats& splats, int width, int height)
 {
     TileBins bins;
     bins.tilesX = (width + kTileSize - 1) / kTileSize;
     bins.tilesY = (height + kTileSize - 1) / kTileSize;
     const std::size_t tiles = std::size_t(bins.tilesX) * bins.tilesY;
     bins.offsets.assign(tiles + 1, 0);
-    for (const S& s : splats) {
+    for (const auto& s : splats) {
         for (int ty = s.y0 / kTileSize; ty <= s.y1 / kTileSize; ++ty)
             for (int tx = s.x0 / kTileSize; tx <= s.x1 / kTileSize; ++tx) ++bins.offsets[std::size_t(ty) * bins.tilesX + tx + 1];
     }
@@ -36,7 +38,7 @@ TileBins binSplats(const std::vector<S>& splats, int width, int height)
     bins.indices.resize(bins.offsets.back());
     std::vector<std::uint64_t> cursor(bins.offsets.begin(), bins.offsets.end() - 1);
     for (std::uint32_t i = 0; i < splats.size(); ++i) {
-        const S& s = splats[i];
+        const auto& s = splats[i];
         for (int ty = s.y0 / kTileSize; ty <= s.y1 / kTileSize; ++ty)
             for (int tx = s.x0 / kTileSize; tx <= s.x1 / kTileSize; ++tx) bins.indices[cursor[std::size_t(ty) * bins.tilesX + tx]++] = i;
     }

@@ -54,6 +54,7 @@ struct CompositeOptions
     const OpticalModel* model = nullptr;
     const Camera* camera = nullptr;
     bool tinted = false; ///< scattering weights differ from optical depths (material colours)
+    bool emissive = true; ///< some splat has a pre-shaded source term (Splat::emission)
 };
 
 /// A tile's deep samples, grouped by tile pixel in depth order (depths still along the ray).
@@ -77,7 +78,7 @@ public:
         : mX0(x0), mY0(y0), mW(w), mH(h), mMask(ringSize - 1), mCutoff(options.cutoff), mExp(options.exp),
           mTable(options.table), mOptions(options), mPassCount(options.passSources),
           mTau(std::size_t(ringSize) * C * kTilePixels, 0.0f),
-          mEmission(std::size_t(ringSize) * C * kTilePixels, 0.0f),
+          mEmission(options.emissive ? std::size_t(ringSize) * C * kTilePixels : 0, 0.0f),
           mPassEmission(std::size_t(ringSize) * std::size_t(mPassCount) * C * kTilePixels, 0.0f),
           mPassC(std::size_t(mPassCount) * C * kTilePixels, 0.0f),
           mScatter(options.tinted ? std::size_t(ringSize) * C * kTilePixels : 0, 0.0f),
@@ -98,6 +99,7 @@ public:
                     mRayDir[ly * kTileSize + lx] = options.light->direction(dir);
                 }
         }
+        for (int c = 0; c < C; ++c) mLightScale[c] = float(options.model->scattered(c, 1.0, 1.0));
         std::fill(std::begin(mT), std::end(mT), 1.0f);
         std::fill(std::begin(mC), std::end(mC), 0.0f);
         std::fill(std::begin(mZ), std::end(mZ), std::numeric_limits<float>::infinity());
@@ -197,10 +199,10 @@ public:
                 for (int c = 0; c < C; ++c) {
                     const float wt = shares[j] * s.tau[c], we = shares[j] * s.emission[c];
                     float* tau = &mTau[base + std::size_t(c) * kTilePixels];
-                    float* em = &mEmission[base + std::size_t(c) * kTilePixels];
-                    for (int i = 0; i < n; ++i) {
-                        tau[i] += weights[i] * wt;
-                        em[i] += weights[i] * we;
+                    for (int i = 0; i < n; ++i) tau[i] += weights[i] * wt;
+                    if (!mEmission.empty()) {
+                        float* em = &mEmission[base + std::size_t(c) * kTilePixels];
+                        for (int i = 0; i < n; ++i) em[i] += weights[i] * we;
                     }
                     if (!mScatter.empty()) {
                         const float ws = shares[j] * s.scatter[c];
@@ -348,11 +350,11 @@ private:
     {
         const auto t2At = [&](double u) {
             double t2 = 0.0;
-            for (int c = 0; c < 3; ++c) {
-                const double t = mT[channel(c) * kTilePixels + p];
-                t2 += t * t * std::exp(-2.0 * u * double(mTau[base + std::size_t(channel(c)) * kTilePixels + std::size_t(p)]));
+            for (int c = 0; c < C; ++c) {
+                const double t = mT[c * kTilePixels + p];
+                t2 += t * t * std::exp(-2.0 * u * double(mTau[base + std::size_t(c) * kTilePixels + std::size_t(p)]));
             }
-            return t2;
+            return t2 * double(3 / C); // C == 1: the three equal channels (3 t2 == t2 + t2 + t2)
         };
         const double cutoff = mCutoff;
         if (!(t2At(1.0) < cutoff) || !(t2At(0.0) >= cutoff)) return 1.0f;
@@ -364,14 +366,21 @@ private:
         return float(hi);
     }
 
-    /// The light's transmittance on pixel p's ray at fraction @a u of @a slab's thickness, for
-    /// the C channels carried.
-    std::array<float, 3> lightAt(int p, std::int64_t slab, float u) const
+    /// The light's transmittance on pixel p's ray at fractions @a u0 and @a u1 of @a slab's
+    /// thickness, for the C channels carried.
+    void lightAt(int p, std::int64_t slab, float u0, float u1, std::array<float, 3>& t0, std::array<float, 3>& t1) const
     {
-        const double z = mOptions.slabs.start(slab) + double(u) * mOptions.slabs.thickness;
-        const float depth = mOptions.light->densityDepth(mRayBase[p] + z * mRayDir[p]);
-        if (C == 1) return {mOptions.light->greyTransmittanceOfDepth(depth), 0.0f, 0.0f};
-        return mOptions.light->transmittanceOfDepth(depth);
+        const double z = mOptions.slabs.start(slab);
+        const double z0 = z + double(u0) * mOptions.slabs.thickness, z1 = z + double(u1) * mOptions.slabs.thickness;
+        float d0, d1;
+        mOptions.light->densityDepths(mRayBase[p] + z0 * mRayDir[p], mRayBase[p] + z1 * mRayDir[p], d0, d1);
+        if (C == 1) {
+            t0[0] = mOptions.light->greyTransmittanceOfDepth(d0);
+            t1[0] = mOptions.light->greyTransmittanceOfDepth(d1);
+        } else {
+            t0 = mOptions.light->transmittanceOfDepth(d0);
+            t1 = mOptions.light->transmittanceOfDepth(d1);
+        }
     }
 
     void flush(std::int64_t slab)
@@ -392,11 +401,13 @@ private:
                     for (int c = 0; c < C; ++c) {
                         const std::size_t i = base + c * kTilePixels + std::size_t(p);
                         // Halo kernels (--prefilter) weigh negative: a slab's sums stay >= 0.
-                        emission[c] = std::max(mEmission[i], 0.0f);
+                        emission[c] = mEmission.empty() ? 0.0f : std::max(mEmission[i], 0.0f);
                         lit[c] = 0.0f;
                     }
                     float mass = 0.0f; // the slab's optical depth summed over R, G, B (as in add())
                     for (int c = 0; c < 3; ++c) mass += mTau[base + std::size_t(channel(c)) * kTilePixels + std::size_t(p)];
+                    float absorbed[C]; // 1 - exp(-tau), once per channel for light, termination, composite
+                    for (int c = 0; c < C; ++c) absorbed[c] = slabAbsorbed(mTau[base + c * kTilePixels + std::size_t(p)]);
                     if (mOptions.light && mass > 0.0f) {
                         // Shading per slab sample (docs/numerics.md#shading-per-slab-sample): the
                         // slab's mass, as a uniform layer with the mean and variance of its
@@ -405,24 +416,32 @@ private:
                         const std::size_t m = slot(slab) * kTilePixels + std::size_t(p);
                         const float mean = std::clamp(mMoment[m] / mass, 0.0f, 1.0f);
                         const float half = std::sqrt(3.0f * std::max(mMoment2[m] / mass - mean * mean, 0.0f));
-                        const std::array<float, 3> front = lightAt(p, slab, std::max(mean - half, 0.0f));
-                        const std::array<float, 3> back = lightAt(p, slab, std::min(mean + half, 1.0f));
+                        std::array<float, 3> front, back;
+                        lightAt(p, slab, std::max(mean - half, 0.0f), std::min(mean + half, 1.0f), front, back);
                         for (int c = 0; c < C; ++c) {
                             const std::size_t i = base + c * kTilePixels + std::size_t(p);
-                            const float tl = slabLightTransmittance(mTau[i], front[std::size_t(c)], back[std::size_t(c)]);
+                            const float tl = slabLightTransmittance(mTau[i], absorbed[c], front[std::size_t(c)], back[std::size_t(c)]);
                             lit[c] = std::max(mScatter.empty() ? mTau[i] : mScatter[i], 0.0f) * tl;
-                            emission[c] += float(mOptions.model->scattered(c, 1.0, 1.0)) * lit[c];
+                            emission[c] += mLightScale[c] * lit[c];
                         }
                     }
                     // vdb_render's ray termination: |T|^2 < cutoff (early termination, Sec. 5).
                     // A ray stops where it crosses the threshold, so only the slab's part in
                     // front of the crossing is composited: every stopped pixel keeps vdb_render's
                     // residual (about sqrt(cutoff / 3)), whatever the slab thickness.
-                    const float u = terminationFraction(base, p);
+                    // (No optical depth: the ray goes on, and terminationFraction would say so.)
+                    // The exact crossing (in double) only where the slab's back is below the cutoff.
+                    float t2After = 0.0f;
+                    for (int c = 0; c < C; ++c) {
+                        const float t = mT[c * kTilePixels + p] * (1.0f - absorbed[c]);
+                        t2After += t * t;
+                    }
+                    const float u = mass > 0.0f && t2After * float(3 / C) < mCutoff ? terminationFraction(base, p) : 1.0f;
                     if (u < 1.0f) {
                         for (int c = 0; c < C; ++c) {
                             const std::size_t i = base + c * kTilePixels + std::size_t(p);
                             mTau[i] *= u;
+                            absorbed[c] = slabAbsorbed(mTau[i]);
                             emission[c] *= u;
                             lit[c] *= u;
                             for (int k = 0; k < mPassCount; ++k) mPassEmission[passIndex(slab, k, c) + std::size_t(p)] *= u;
@@ -432,7 +451,7 @@ private:
                     for (int c = 0; c < C; ++c) {
                         const std::size_t i = base + c * kTilePixels + std::size_t(p);
                         float& t = mT[c * kTilePixels + p];
-                        compositeSlab(mTau[i], emission[c], mC[c * kTilePixels + p], t);
+                        compositeSlab(mTau[i], absorbed[c], emission[c], mC[c * kTilePixels + p], t);
                         t2 += t * t;
                     }
                     if (passes) flushPasses(slab, p, meanBefore, emission, lit);
@@ -445,7 +464,7 @@ private:
                 for (int c = 0; c < C; ++c) {
                     const std::size_t i = base + c * kTilePixels + std::size_t(p);
                     mTau[i] = 0.0f;
-                    mEmission[i] = 0.0f;
+                    if (!mEmission.empty()) mEmission[i] = 0.0f;
                     if (!mScatter.empty()) mScatter[i] = 0.0f;
                     for (int k = 0; k < mPassCount; ++k) mPassEmission[passIndex(slab, k, c) + std::size_t(p)] = 0.0f;
                 }
@@ -460,7 +479,7 @@ private:
     const ExpTable* mTable;
     const CompositeOptions& mOptions;
     int mPassCount;
-    std::vector<float> mTau, mEmission; ///< [slot][channel][pixel]
+    std::vector<float> mTau, mEmission; ///< [slot][channel][pixel]; mEmission empty unless emissive
     std::vector<float> mPassEmission;   ///< [slot][pass][channel][pixel]
     std::vector<float> mPassC;          ///< [pass][channel][pixel]
     std::vector<float> mScatter;        ///< [slot][channel][pixel] scattering weights (tinted only)
@@ -470,6 +489,7 @@ private:
     Vec3d mRayBase[kTilePixels], mRayDir[kTilePixels]; ///< pixel rays in light-map coordinates
     float mZ[kTilePixels];              ///< Z pass along the ray, +inf until alpha reaches 0.5
     float mTBefore[C];
+    float mLightScale[C]; ///< the light's colour x scattering coefficient per unit scattering weight
     std::vector<std::pair<std::uint16_t, DeepSample>> mDeep;
     std::vector<Dirty> mDirty;
     std::vector<std::int64_t> mPending; ///< slabs holding contributions, not yet composited
@@ -620,6 +640,8 @@ Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSet
     options.model = &model;
     options.camera = &camera;
     options.tinted = tinted && options.light;
+    options.emissive = std::any_of(set.splats.begin(), set.splats.end(),
+        [](const Splat& s) { return s.emission[0] != 0.0f || s.emission[1] != 0.0f || s.emission[2] != 0.0f; });
     const std::vector<float> depthScale = (passes.depth || passes.deep) ? depthScales(camera) : std::vector<float>{};
     std::vector<TileDeep> deep(passes.deep ? std::size_t(tiles) : 0);
     setUnits(progress, std::uint64_t(bins.tilesX) * std::uint64_t(bins.tilesY));
