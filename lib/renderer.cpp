@@ -4,18 +4,12 @@
 
 #include <vdb_ewa/error.h>
 
-#include "detail/grid_source_impl.h"
-#include "detail/kernel_extraction.h"
-#include "detail/material_color.h"
-#include "detail/progress.h"
-#include "detail/quasi_interpolation.h"
-#include "detail/reference_integrator.h"
-#include "detail/shadow_transmittance.h"
-#include "detail/splat_projection.h"
-#include "detail/surface_extraction.h"
-#include "detail/surface_projection.h"
-#include "detail/surface_rasterizer.h"
-#include "detail/tile_rasterizer.h"
+#include "projection/projection.h"
+#include "raster/raster.h"
+#include "reference/reference.h"
+#include "shading/shading.h"
+#include "source/source.h"
+#include "support/progress.h"
 
 #include <tbb/task_arena.h>
 

@@ -4,7 +4,7 @@
 ///        numerical integrals of it; the splatter's error falls as its knobs tighten.
 #include "fixtures.h"
 
-#include "detail/light_map.h"
+#include "shading/shading.h"
 
 #include <gtest/gtest.h>
 

@@ -4,7 +4,7 @@
 ///        that fail without touching an existing file.
 #include "fixtures.h"
 
-#include "detail/atomic_write.h"
+#include "output/atomic_write.h"
 
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfDeepFrameBuffer.h>

@@ -2,7 +2,7 @@
 /// @brief Analytic grids built in code, temporary folders, image metrics, external tools.
 #pragma once
 
-#include "detail/grid_source_impl.h"
+#include "source/source.h"
 
 #include <vdb_ewa/openvdb_grid.h>
 #include <vdb_ewa/vdb_ewa.h>

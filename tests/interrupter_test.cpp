@@ -3,13 +3,11 @@
 ///        process.
 #include "fixtures.h"
 
-#include "detail/kernel_extraction.h"
-#include "detail/progress.h"
-#include "detail/light_map.h"
-#include "detail/splat_projection.h"
-#include "detail/surface_extraction.h"
-#include "detail/surface_rasterizer.h"
-#include "detail/tile_rasterizer.h"
+#include "projection/projection.h"
+#include "raster/raster.h"
+#include "shading/shading.h"
+#include "source/source.h"
+#include "support/progress.h"
 
 #include <gtest/gtest.h>
 

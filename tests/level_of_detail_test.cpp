@@ -3,8 +3,7 @@
 ///        unchanged, and the error of merging sub-pixel voxels.
 #include "fixtures.h"
 
-#include "detail/kernel_extraction.h"
-#include "detail/level_of_detail.h"
+#include "source/source.h"
 
 #include <gtest/gtest.h>
 

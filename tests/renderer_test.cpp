@@ -3,7 +3,7 @@
 ///        unity, tiles, anisotropic, sheared and frustum maps, thread-count independence.
 #include "fixtures.h"
 
-#include "detail/kernel_extraction.h"
+#include "source/source.h"
 
 #include <gtest/gtest.h>
 
@@ -216,7 +216,6 @@ TEST(Renderer, PartitionOfUnityRippleShrinksWithKernelSigma)
         }
     }
 }
-
 
 TEST(Renderer, ThreadCountDoesNotChangeTheImage)
 {

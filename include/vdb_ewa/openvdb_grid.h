@@ -6,7 +6,7 @@
 
 // OpenVDB declarations keep the default visibility libopenvdb was built with, also in code
 // compiled with -fvisibility=hidden: its templates share statics across modules (hidden copies
-// crash openvdb::initialize(); lib/detail/openvdb.h explains).
+// crash openvdb::initialize(); lib/support/openvdb.h explains).
 #pragma GCC visibility push(default)
 #include <openvdb/Grid.h>
 #pragma GCC visibility pop

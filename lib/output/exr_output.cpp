@@ -1,0 +1,275 @@
+/// @file exr_output.cpp
+/// @brief OpenEXR I/O (docs/output.md). Writes go through detail::writeAtomically.
+#include <vdb_ewa/exr_output.h>
+
+#include "output/atomic_write.h"
+
+#include <vdb_ewa/error.h>
+
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfDeepFrameBuffer.h>
+#include <OpenEXR/ImfDeepScanLineOutputFile.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfInputFile.h>
+#include <OpenEXR/ImfOutputFile.h>
+#include <OpenEXR/ImfPartType.h>
+#include <OpenEXR/ImfStandardAttributes.h>
+#include <OpenEXR/ImfStringAttribute.h>
+#include <OpenEXR/ImfThreading.h>
+#include <Imath/half.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <deque>
+#include <thread>
+
+namespace vdb_ewa {
+namespace {
+
+Imf::Compression imfCompression(ExrCompression c)
+{
+    switch (c) {
+    case ExrCompression::None: return Imf::NO_COMPRESSION;
+    case ExrCompression::Rle: return Imf::RLE_COMPRESSION;
+    case ExrCompression::Zip: return Imf::ZIP_COMPRESSION;
+    case ExrCompression::Zips: return Imf::ZIPS_COMPRESSION;
+    case ExrCompression::Piz: return Imf::PIZ_COMPRESSION;
+    case ExrCompression::Dwaa: return Imf::DWAA_COMPRESSION;
+    case ExrCompression::Dwab: return Imf::DWAB_COMPRESSION;
+    }
+    return Imf::ZIP_COMPRESSION;
+}
+
+Imf::PixelType imfType(ExrPixelType t) { return t == ExrPixelType::Half ? Imf::HALF : Imf::FLOAT; }
+
+/// float -> half, finite values beyond the half range clamped to +-65504 instead of becoming inf.
+half toHalf(float v)
+{
+    return half(std::isfinite(v) ? std::clamp(v, -float(HALF_MAX), float(HALF_MAX)) : v);
+}
+
+/// 4x4 matrix (column-vector convention, rows given) -> Imath's row-vector M44f (transpose).
+Imath::M44f rowVectorMatrix(const double m[4][4])
+{
+    Imath::M44f out;
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) out[i][j] = float(m[j][i]);
+    return out;
+}
+
+/// worldToCamera, worldToNDC and the screen window (OpenEXR's definitions: camera space
+/// x right, y up, z forward; NDC (0, 0) top left, (1, 1) bottom right of the display window).
+void addCameraAttributes(Imf::Header& header, const Camera& camera)
+{
+    const Mat3d& R = camera.cameraFromWorld(); // rows: right, down, forward
+    const Vec3d eye = camera.eye();
+    double view[4][4] = {}; // our camera space t = R (p - eye), as a 4x4
+    for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) view[r][c] = R[c][r];
+        const Vec3d row(R[0][r], R[1][r], R[2][r]);
+        view[r][3] = -glm::dot(row, eye);
+    }
+    view[3][3] = 1.0;
+
+    double toNdc[4][4] = {};
+    const double w = camera.width(), h = camera.height(), s = camera.focalPixels();
+    if (camera.projection() == Projection::Perspective) {
+        // (s t0 / t2 + w / 2) / w, (s t1 / t2 + h / 2) / h, z = 1 / t2 (homogeneous w = t2).
+        const double p[4][4] = {{s / w, 0, 0.5, 0}, {0, s / h, 0.5, 0}, {0, 0, 0, 1}, {0, 0, 1, 0}};
+        std::copy(&p[0][0], &p[0][0] + 16, &toNdc[0][0]);
+        header.screenWindowWidth() = float(w / s); // image width on the plane z = 1
+    } else {
+        const double p[4][4] = {{s / w, 0, 0, 0.5}, {0, s / h, 0, 0.5}, {0, 0, 1, 0}, {0, 0, 0, 1}};
+        std::copy(&p[0][0], &p[0][0] + 16, &toNdc[0][0]);
+        header.screenWindowWidth() = float(w / s); // frame width in world units
+    }
+    header.screenWindowCenter() = Imath::V2f(0.0f, 0.0f);
+    double ndc[4][4] = {}, cam[4][4] = {};
+    const double flip[3] = {1.0, -1.0, 1.0}; // our t1 points down, OpenEXR's y up
+    for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c) {
+            cam[r][c] = (r < 3 ? flip[r] : 1.0) * view[r][c];
+            for (int k = 0; k < 4; ++k) ndc[r][c] += toNdc[r][k] * view[k][c];
+        }
+    Imf::addWorldToCamera(header, rowVectorMatrix(cam));
+    Imf::addWorldToNDC(header, rowVectorMatrix(ndc));
+}
+
+Imf::Header makeHeader(int width, int height, const ExrOptions& options)
+{
+    Imf::Header header(width, height);
+    header.compression() = imfCompression(options.compression);
+    if (options.chromaticities) {
+        const Chromaticities& c = *options.chromaticities;
+        auto v = [](const Vec2d& p) { return Imath::V2f(float(p.x), float(p.y)); };
+        Imf::addChromaticities(header, Imf::Chromaticities(v(c.red), v(c.green), v(c.blue), v(c.white)));
+    }
+    if (options.camera) addCameraAttributes(header, *options.camera);
+    for (const auto& [key, value] : options.attributes) header.insert(key, Imf::StringAttribute(value));
+    return header;
+}
+
+/// Frame buffers for a flat file: float planes are written as they are, half planes are
+/// converted into buffers owned here (OpenEXR's OutputFile does not convert pixel types).
+class FlatChannels
+{
+public:
+    FlatChannels(Imf::Header& header, int width) : mHeader(header), mWidth(std::size_t(width)) {}
+
+    /// A plane of @a count floats with @a channels interleaved values per pixel, as @a names.
+    void add(const float* data, std::size_t count, int channels, const std::vector<std::string>& names, Imf::PixelType type)
+    {
+        const std::size_t size = type == Imf::HALF ? sizeof(half) : sizeof(float);
+        const std::size_t xStride = std::size_t(channels) * size, yStride = xStride * mWidth;
+        char* base = reinterpret_cast<char*>(const_cast<float*>(data));
+        if (type == Imf::HALF) {
+            std::vector<half>& h = mHalves.emplace_back(count);
+            std::transform(data, data + count, h.begin(), toHalf);
+            base = reinterpret_cast<char*>(h.data());
+        }
+        for (std::size_t c = 0; c < names.size(); ++c) {
+            mHeader.channels().insert(names[c], Imf::Channel(type));
+            mFrameBuffer.insert(names[c], Imf::Slice(type, base + c * size, xStride, yStride));
+        }
+    }
+
+    const Imf::FrameBuffer& frameBuffer() const { return mFrameBuffer; }
+
+private:
+    Imf::Header& mHeader;
+    std::size_t mWidth;
+    Imf::FrameBuffer mFrameBuffer;
+    std::deque<std::vector<half>> mHalves;
+};
+
+} // namespace
+
+bool validForDeep(ExrCompression c)
+{
+    // OpenEXR 3.1 rejects ZIP (16-line blocks) for deep scanline files; ZIPS is per line.
+    return c == ExrCompression::None || c == ExrCompression::Rle || c == ExrCompression::Zips;
+}
+
+void writeExr(const Frame& frame, const std::string& path, const ExrOptions& options)
+{
+    const Image& beauty = frame.beauty;
+    detail::writeAtomically(path, "EXR", [&](const std::string& tmp) {
+        Imf::Header header = makeHeader(beauty.width, beauty.height, options);
+        FlatChannels channels(header, beauty.width);
+        const Imf::PixelType colour = imfType(options.colorType);
+        channels.add(beauty.rgba.data(), beauty.rgba.size(), 4, {"R", "G", "B", "A"}, colour);
+        if (!frame.depth.empty()) channels.add(frame.depth.data(), frame.depth.size(), 1, {"Z"}, Imf::FLOAT);
+        const std::pair<const char*, const std::vector<float>*> passes[] = {
+            {"transmittance", &frame.transmittance}, {"shadow", &frame.shadow}, {"emission", &frame.emission}};
+        for (const auto& [layer, values] : passes) {
+            if (values->empty()) continue;
+            const std::string l(layer);
+            channels.add(values->data(), values->size(), 3, {l + ".R", l + ".G", l + ".B"}, colour);
+        }
+        Imf::OutputFile file(tmp.c_str(), header);
+        file.setFrameBuffer(channels.frameBuffer());
+        file.writePixels(beauty.height);
+    });
+}
+
+void writeDeepExr(const DeepImage& deep, const std::string& path, const ExrOptions& options)
+{
+    if (!validForDeep(options.compression)) {
+        throw ValueError(path + ": deep EXR files take none, rle, zips or zip compression only");
+    }
+    detail::writeAtomically(path, "deep EXR", [&](const std::string& tmp) {
+        Imf::Header header = makeHeader(deep.width, deep.height, options);
+        header.setType(Imf::DEEPSCANLINE);
+        Imf::addDeepImageState(header, Imf::DIS_TIDY);
+        const std::size_t pixels = std::size_t(deep.width) * std::size_t(deep.height);
+        std::vector<unsigned> counts(pixels);
+        for (std::size_t i = 0; i < pixels; ++i) counts[i] = unsigned(deep.offsets[i + 1] - deep.offsets[i]);
+        Imf::DeepFrameBuffer fb;
+        fb.insertSampleCountSlice(Imf::Slice(Imf::UINT, reinterpret_cast<char*>(counts.data()), sizeof(unsigned),
+            sizeof(unsigned) * std::size_t(deep.width)));
+        // Colour as half RGBA per sample when asked (OpenEXR does not convert pixel types).
+        const Imf::PixelType colour = imfType(options.colorType);
+        std::vector<half> halves;
+        if (colour == Imf::HALF) {
+            halves.resize(deep.samples.size() * 4);
+            for (std::size_t i = 0; i < deep.samples.size(); ++i) {
+                const DeepSample& d = deep.samples[i];
+                const float v[4] = {d.r, d.g, d.b, d.a};
+                std::transform(v, v + 4, &halves[4 * i], toHalf);
+            }
+        }
+        // One array of per-pixel pointers per channel, each at the pixel's first sample.
+        struct Channel
+        {
+            const char* name;
+            Imf::PixelType type;
+            char* base;             ///< the channel's value in sample 0
+            std::size_t sampleStride;
+        };
+        char* samples = reinterpret_cast<char*>(const_cast<DeepSample*>(deep.samples.data()));
+        char* rgba = reinterpret_cast<char*>(halves.data());
+        std::vector<Channel> channels = {{"Z", Imf::FLOAT, samples + offsetof(DeepSample, z), sizeof(DeepSample)},
+            {"ZBack", Imf::FLOAT, samples + offsetof(DeepSample, zBack), sizeof(DeepSample)}};
+        // R, G, B, A: the half copy (4 per sample), or DeepSample's consecutive floats r, g, b, a.
+        static_assert(offsetof(DeepSample, a) == offsetof(DeepSample, r) + 3 * sizeof(float));
+        const char* colourNames[4] = {"R", "G", "B", "A"};
+        for (std::size_t c = 0; c < 4; ++c) {
+            channels.push_back(colour == Imf::HALF
+                    ? Channel{colourNames[c], colour, rgba + c * sizeof(half), 4 * sizeof(half)}
+                    : Channel{colourNames[c], colour, samples + offsetof(DeepSample, r) + c * sizeof(float), sizeof(DeepSample)});
+        }
+        std::vector<std::vector<char*>> pointers;
+        for (const Channel& c : channels) {
+            header.channels().insert(c.name, Imf::Channel(c.type));
+            std::vector<char*>& p = pointers.emplace_back(pixels);
+            for (std::size_t i = 0; i < pixels; ++i) p[i] = c.base + deep.offsets[i] * c.sampleStride;
+            fb.insert(c.name, Imf::DeepSlice(c.type, reinterpret_cast<char*>(p.data()), sizeof(char*),
+                                  sizeof(char*) * std::size_t(deep.width), c.sampleStride));
+        }
+        Imf::DeepScanLineOutputFile file(tmp.c_str(), header);
+        file.setFrameBuffer(fb);
+        file.writePixels(deep.height);
+    });
+}
+
+void writeExr(const Image& image, const std::string& path,
+    const std::vector<std::pair<std::string, std::string>>& attributes)
+{
+    Frame frame;
+    frame.beauty = image; // a copy; this overload serves tests and tools, not the render path
+    ExrOptions options;
+    options.colorType = ExrPixelType::Float;
+    options.attributes = attributes;
+    writeExr(frame, path, options);
+}
+
+void setExrThreadsProcessWide(int threads)
+{
+    Imf::setGlobalThreadCount(threads > 0 ? threads : int(std::max(1u, std::thread::hardware_concurrency())));
+}
+
+Image readExr(const std::string& path)
+{
+    try {
+        Imf::InputFile file(path.c_str());
+        const Imath::Box2i dw = file.header().dataWindow();
+        Image image(dw.max.x - dw.min.x + 1, dw.max.y - dw.min.y + 1);
+        const std::size_t xStride = 4 * sizeof(float), yStride = xStride * std::size_t(image.width);
+        char* base = reinterpret_cast<char*>(image.rgba.data()) -
+                     (std::ptrdiff_t(dw.min.x) * std::ptrdiff_t(xStride) + std::ptrdiff_t(dw.min.y) * std::ptrdiff_t(yStride));
+        const char* names[4] = {"R", "G", "B", "A"};
+        Imf::FrameBuffer fb;
+        for (int c = 0; c < 4; ++c) {
+            fb.insert(names[c], Imf::Slice(Imf::FLOAT, base + c * sizeof(float), xStride, yStride, 1, 1, c == 3 ? 1.0 : 0.0));
+        }
+        file.setFrameBuffer(fb);
+        file.readPixels(dw.min.y, dw.max.y);
+        return image;
+    } catch (const std::exception& e) {
+        throw IoError(path + ": cannot read EXR (" + std::string(e.what()) + ")");
+    }
+}
+
+} // namespace vdb_ewa

@@ -1,0 +1,9 @@
+/// @file projection.h
+/// @brief Projection stage: kernels -> screen-space splats through the local affine approximation
+///        of the perspective map (Eq. 29-33), with their slab shares (Sec. 5).
+///        The stage's door: other stages and the renderer include this header only
+///        (docs/architecture.md).
+#pragma once
+
+#include "projection/splat_projection.h"
+#include "projection/surface_projection.h"

@@ -1,0 +1,217 @@
+/// @file splat_projection.cpp
+#include "projection/splat_projection.h"
+
+#include "shading/shading.h"
+#include "source/source.h"
+
+#include <vdb_ewa/ewa_kernel.h>
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace vdb_ewa {
+namespace detail {
+namespace {
+
+/// --precision float: the world -> camera transform in single precision, as a float
+/// pipeline would do it (world positions and the eye rounded to float before subtracting).
+Vec3d cameraFromWorldFloat(const Camera& camera, const Vec3d& pWorld)
+{
+    const glm::vec3 d = glm::vec3(pWorld) - glm::vec3(camera.eye());
+    return Vec3d(glm::mat3(camera.cameraFromWorld()) * d);
+}
+
+/// Where a kernel lies along its viewing ray; slabShares() turns it into shares twice
+/// (once to count, once to fill), with identical results.
+struct DepthExtent
+{
+    double mu, sd, clipNear, clipFar;
+};
+
+} // namespace
+
+ProjectionParams projectionParams(const Camera& camera, const RenderSettings& settings)
+{
+    ProjectionParams p;
+    p.perspective = camera.projection() == Projection::Perspective;
+    p.focalPixels = camera.focalPixels();
+    p.principalPoint = camera.principalPoint();
+    p.maxTanX = 1.3 * 0.5 * camera.width() / camera.focalPixels();
+    p.maxTanY = 1.3 * 0.5 * camera.height() / camera.focalPixels();
+    p.antiAliasing = settings.antiAliasing;
+    p.lowpass = settings.lowpass;
+    p.cutoffRadius = settings.cutoffRadius;
+    p.renormalize = settings.renormalize;
+    return p;
+}
+
+bool pixelBox(const Footprint& fp, int width, int height, int& x0, int& y0, int& x1, int& y1)
+{
+    // Pixels whose centre (i + 0.5) lies within the cut-off box.
+    const double bx0 = std::ceil(fp.centre.x - fp.halfExtent.x - 0.5);
+    const double bx1 = std::floor(fp.centre.x + fp.halfExtent.x - 0.5);
+    const double by0 = std::ceil(fp.centre.y - fp.halfExtent.y - 0.5);
+    const double by1 = std::floor(fp.centre.y + fp.halfExtent.y - 0.5);
+    if (bx1 < 0.0 || by1 < 0.0 || bx0 > width - 1 || by0 > height - 1 || bx0 > bx1 || by0 > by1) return false;
+    x0 = int(std::max(bx0, 0.0));
+    x1 = int(std::min(bx1, double(width - 1)));
+    y0 = int(std::max(by0, 0.0));
+    y1 = int(std::min(by1, double(height - 1)));
+    return true;
+}
+
+SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels, const std::vector<Rgb>& colors,
+    const Camera& camera, const RenderSettings& settings, const PassRequest& passes, Progress* progress)
+{
+    SplatSet out;
+    const ProjectionParams params = projectionParams(camera, settings);
+    const bool perspective = params.perspective;
+    const Mat3d R = camera.cameraFromWorld();
+    const double ell = grid.voxelLength;
+    out.slabs.zBase = perspective ? 0.0 : camera.near();
+    out.slabs.thickness = settings.slab * ell;
+
+    // Affine grids: camera-space covariance of a unit kernel, formed once per frame (Eq. 31).
+    const Mat3d RA = R * grid.indexToWorldLinear;
+    const Mat3d covUnit = RA * glm::transpose(RA);
+    const double volumeUnit = std::abs(glm::determinant(grid.indexToWorldLinear));
+
+    const OpticalModel model(settings);
+    const int width = camera.width(), height = camera.height();
+    const auto& xform = grid.grid->transform();
+
+    const std::size_t n = kernels.kernels.size();
+    const int passCount = int(passes.shadow) + int(passes.emission);
+    LargeArray<float> passSources(n * std::size_t(passCount) * 3);
+    LargeArray<std::uint8_t> visible(n, 0);
+    LargeArray<Splat> splats(n);
+    LargeArray<DepthExtent> extents(n);
+    LargeArray<std::uint8_t> flags(n, 0); // 1: before near, 2: clamped near, 4: clamped grazing
+
+    // Pass 1: footprints, culling and depth extents.
+    setUnits(progress, n);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096),
+        [&](const tbb::blocked_range<std::size_t>& range) {
+            for (std::size_t i = range.begin(); i < range.end(); ++i) {
+                const Kernel& k = kernels.kernels[i];
+                const Vec3d pWorld = grid.indexToWorld(k.pIndex);
+                Mat3d cov;
+                double volume;
+                if (grid.linear) {
+                    cov = covUnit;
+                    volume = volumeUnit;
+                } else {
+                    const Mat3d a = R * indexToWorldJacobian(xform, openvdb::Vec3d(k.pIndex.x, k.pIndex.y, k.pIndex.z));
+                    cov = a * glm::transpose(a);
+                    volume = std::abs(glm::determinant(a));
+                }
+                const double s = k.spacing, sigma = kernelSigmaVoxels(k, settings.kernelSigma);
+                cov *= sigma * sigma;
+                const Vec3d t = settings.doublePrecision ? camera.cameraFromWorldPoint(pWorld)
+                                                         : cameraFromWorldFloat(camera, pWorld);
+                if (!settings.doublePrecision) cov = Mat3d(glm::mat3(cov));
+                if (perspective && !(t.z > camera.near())) { // centre before the near plane
+                    flags[i] = 1;
+                    continue;
+                }
+                const Footprint fp = projectKernel(t, cov, params);
+                if (!fp.valid) continue;
+                flags[i] = std::uint8_t((fp.clampedNear ? 2 : 0) | (fp.clampedGrazing ? 4 : 0));
+
+                Splat& sp = splats[i];
+                if (!pixelBox(fp, width, height, sp.x0, sp.y0, sp.x1, sp.y1)) continue;
+
+                // Near/far planes clip the kernel's depth integral (perspective: the plane depth
+                // converted to distance along the ray through the centre).
+                const double toRay = perspective ? glm::length(t) / t.z : 1.0;
+                const DepthExtent extent{fp.depth, fp.depthSd, camera.near() * toRay, camera.far() * toRay};
+                double lo, hi;
+                if (!clippedDepthRange(extent.mu, extent.sd, kDepthTruncation, extent.clipNear, extent.clipFar, lo, hi)) {
+                    continue; // wholly before the near plane or beyond the far plane
+                }
+                extents[i] = extent;
+
+                setFootprint(sp, fp, params.cutoffRadius);
+                // Weight w_k = density x voxel volume / voxel length (Eq. 8 with extinction
+                // per voxel length), times the footprint peak (Eq. 32, 33): the peak optical
+                // depth in voxel lengths of unit density.
+                const double weight = double(k.density) * volume * s * s * s / ell * fp.peak;
+                // Source terms: the self-emission (optical depth x emission per unit optical
+                // depth) and the scattering weight, lit by the compositor per slab sample.
+                float* pass = passSources.data() + i * std::size_t(passCount) * 3;
+                for (int c = 0; c < 3; ++c) {
+                    const double tau = model.opticalDepth(c, weight, 1.0);
+                    sp.tau[c] = float(tau);
+                    const double color = colors.empty() ? 1.0 : double(colors[i][c]);
+                    sp.emission[c] = float(tau * model.emitted(c));
+                    sp.scatter[c] = float(tau * color);
+                    int j = 0;
+                    if (passes.shadow) pass[3 * j++ + c] = 0.0f; // lit per slab sample
+                    if (passes.emission) pass[3 * j++ + c] = float(tau * model.emitted(c));
+                }
+                visible[i] = 1;
+            }
+            advance(progress, range.size());
+        });
+
+    // Slab thickness: --slab voxel lengths, raised where a kernel is so long along the ray
+    // (1000:1 voxels, frustum maps) that it would span more than kSlabSpanTarget slabs.
+    double maxSd = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+        if (visible[i]) maxSd = std::max(maxSd, extents[i].sd);
+    }
+    const double minThickness = 2.0 * kDepthTruncation * maxSd / double(kSlabSpanTarget);
+    if (minThickness > out.slabs.thickness) {
+        out.requestedThickness = out.slabs.thickness;
+        out.slabs.thickness = minThickness;
+    }
+
+    // Pass 2: slab spans, compaction in kernel order, and the layout of the shares.
+    std::uint64_t total = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        out.beforeNear += (flags[i] & 1);
+        if (!visible[i]) continue;
+        const DepthExtent& e = extents[i];
+        const std::int64_t span = slabSpan(out.slabs, e.mu, e.sd, kDepthTruncation, e.clipNear, e.clipFar, splats[i].firstSlab);
+        out.clippedSpan += (span > kMaxSlabSpan);
+        out.clampedNear += (flags[i] >> 1) & 1;
+        out.clampedGrazing += (flags[i] >> 2) & 1;
+        splats[i].shareOffset = total;
+        splats[i].slabCount = std::uint32_t(std::min<std::int64_t>(span, kMaxSlabSpan));
+        total += splats[i].slabCount;
+    }
+    out.shares.resize(total);
+    out.shareMoments.resize(2 * total);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096),
+        [&](const tbb::blocked_range<std::size_t>& range) {
+            for (std::size_t i = range.begin(); i < range.end(); ++i) {
+                if (!visible[i]) continue;
+                const DepthExtent& e = extents[i];
+                std::int64_t first = 0;
+                slabShares(out.slabs, e.mu, e.sd, kDepthTruncation, e.clipNear, e.clipFar, first,
+                    out.shares.data() + splats[i].shareOffset, int(splats[i].slabCount),
+                    out.shareMoments.data() + 2 * splats[i].shareOffset);
+            }
+        });
+    // Compacted in place, in kernel order (no second array of splats to touch).
+    const std::size_t passFloats = std::size_t(passCount) * 3;
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        if (!visible[i]) continue;
+        splats[kept] = splats[i];
+        std::copy_n(passSources.data() + i * passFloats, passFloats, passSources.data() + kept * passFloats);
+        ++kept;
+    }
+    splats.resize(kept);
+    passSources.resize(kept * passFloats);
+    out.splats = std::move(splats);
+    out.passSourceCount = passCount;
+    out.passSources = std::move(passSources);
+    out.culled = n - kept;
+    return out;
+}
+
+} // namespace detail
+} // namespace vdb_ewa

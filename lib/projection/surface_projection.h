@@ -1,0 +1,30 @@
+/// @file surface_projection.h
+/// @brief Surface kernels -> screen-space footprints (Sec. 6.4, Eq. 35): for the level-set
+///        rasteriser, and as thin splats of the volume's slab compositor (fog iso-surfaces).
+#pragma once
+
+#include "projection/splat_projection.h"
+#include "source/source.h"
+
+#include <vector>
+
+namespace vdb_ewa {
+namespace detail {
+
+/// A surface kernel seen through @a camera: its camera-space centre @a t and normal, and its
+/// footprint (Eq. 35). False if it lies before the near plane or beyond the far plane, faces
+/// away from the eye (back faces are hidden by the front of the same surface), or does not
+/// project.
+bool projectSurface(const SurfaceKernel& kernel, double sigma, const Camera& camera, const ProjectionParams& params,
+    Vec3d& t, Vec3d& normal, Footprint& fp);
+
+/// Fog volumes with an iso-surface (Sec. 6.4): append @a surfaces to @a set as thin splats of
+/// the slab compositor. Each covers its pixels with optical depth -ln(1 - settings.isoOpacity)
+/// (capped at 20) x area x footprint (the kernels sum to one over the surface), shaded
+/// Lambert from the light, times @a shadows (one per surface kernel) and the kernel's material
+/// colour; back faces are culled.
+void appendSurfaceSplats(SplatSet& set, const SurfaceSet& surfaces, const std::vector<Rgb>& shadows,
+    const Camera& camera, const RenderSettings& settings, double voxelLength, const PassRequest& passes);
+
+} // namespace detail
+} // namespace vdb_ewa

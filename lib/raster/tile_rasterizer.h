@@ -1,0 +1,35 @@
+/// @file tile_rasterizer.h
+/// @brief Splats -> image: bin splats to 16x16 screen tiles, then per tile sweep the
+///        image-aligned slabs front to back (Sec. 7.1; Mueller & Crawfis sheet buffers).
+#pragma once
+
+#include "projection/projection.h"
+#include "raster/tile_bins.h"
+#include "shading/shading.h"
+
+#include <vdb_ewa/frame.h>
+
+namespace vdb_ewa {
+namespace detail {
+
+struct RasterStats
+{
+    std::uint64_t splatTilePairs = 0;
+    std::uint64_t tiles = 0;
+    std::uint64_t tilesOpaque = 0;  ///< tiles that turned opaque before their last splat
+    std::uint64_t pairsSkipped = 0; ///< pairs skipped in those tiles
+};
+
+/// Composite @a set into the camera's image (premultiplied RGB, A = 1 - mean T) and the
+/// requested passes (include/vdb_ewa/frame.h, docs/output.md). Each tile is owned by one task
+/// and processes its splats in (first slab, kernel) order, so the result does not depend on
+/// the thread count.
+/// @a light: the light map that lights the splats' scattering weights at every (pixel, slab)
+/// sample (null: unlit); @a tinted: the splats' scattering weights carry material colours.
+/// @a progress: one unit per screen tile; throws Cancelled.
+Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSettings& settings,
+    const PassRequest& passes, RasterStats& stats, const LightMap* light = nullptr, bool tinted = false,
+    Progress* progress = nullptr);
+
+} // namespace detail
+} // namespace vdb_ewa

@@ -1,0 +1,8 @@
+/// @file reference.h
+/// @brief Reference stage: ray-marching integrators (the trilinear field with a shadow ray per
+///        sample, as vdb_render; and the splatter's own Gaussian field, a diagnostic).
+///        The stage's door: other stages and the renderer include this header only
+///        (docs/architecture.md).
+#pragma once
+
+#include "reference/reference_integrator.h"

@@ -1,0 +1,305 @@
+/// @file reference_integrator.cpp
+#include "reference/reference_integrator.h"
+
+#include "shading/shading.h"
+#include "source/source.h"
+#include "support/blank_frame.h"
+#include "support/empty_space.h"
+#include "support/openvdb_tools.h"
+
+#include <vdb_ewa/error.h>
+#include <vdb_ewa/slab_share.h>
+
+#include <tbb/parallel_for.h>
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+namespace vdb_ewa {
+namespace detail {
+namespace {
+
+using Vec3fGrid = openvdb::Vec3SGrid;
+
+/// The reconstruction's inputs per voxel: density (sanitised as for kernels) and density x
+/// source colour (albedo x material colour x light x shadow transmittance + emission /
+/// extinction), on the
+/// same topology.
+struct ReferenceVolume
+{
+    openvdb::FloatGrid::Ptr density;
+    Vec3fGrid::Ptr emission;
+};
+
+ReferenceVolume buildVolume(const GridSource::Impl& grid, const RenderSettings& settings, RenderStats& stats,
+    Progress* progress)
+{
+    auto t0 = std::chrono::steady_clock::now();
+    // Unit-spaced kernels everywhere: voxelise the tiles of a copy.
+    auto voxels = openvdb::gridPtrCast<openvdb::FloatGrid>(grid.grid->deepCopyGrid());
+    voxels->tree().voxelizeActiveTiles();
+    auto impl = std::make_shared<GridSource::Impl>(grid);
+    impl->grid = voxels;
+    RenderSettings unit = settings;
+    unit.tileKernelSpacing = 1;
+    KernelSet kernels = extractKernels(*impl, unit);
+    if (settings.prefilter) quasiInterpolate(*impl, quasiInterpolationAlpha(settings.kernelSigma), kernels);
+    stats.activeVoxels = kernels.activeVoxels;
+    stats.kernels = kernels.kernels.size();
+    stats.kernelsSkipped = kernels.belowCutoff + kernels.notANumber;
+    const double t1 = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const std::vector<Rgb> shadows = shadowTransmittance(*impl, kernels, settings, progress);
+    const std::vector<Rgb> colors = kernelColors(*impl, kernels);
+    stats.kernelSeconds = t1;
+    stats.shadowSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() - t1;
+
+    const OpticalModel model(settings);
+    ReferenceVolume v;
+    v.density = openvdb::FloatGrid::create(0.0f);
+    v.density->setTransform(grid.grid->transform().copy());
+    v.emission = Vec3fGrid::create(openvdb::Vec3s(0.0f));
+    auto dAcc = v.density->getAccessor();
+    auto eAcc = v.emission->getAccessor();
+    for (std::size_t i = 0; i < kernels.kernels.size(); ++i) {
+        const Kernel& k = kernels.kernels[i];
+        const openvdb::Coord ijk(int(std::lround(k.pIndex.x)), int(std::lround(k.pIndex.y)), int(std::lround(k.pIndex.z)));
+        dAcc.setValueOn(ijk, k.density);
+        openvdb::Vec3s source;
+        for (int c = 0; c < 3; ++c) {
+            const double color = colors.empty() ? 1.0 : double(colors[i][c]);
+            source[c] = float(k.density * model.source(c, shadows[i][c], color));
+        }
+        eAcc.setValueOn(ijk, source);
+    }
+    return v;
+}
+
+/// Samples sum_n v_n G_sigma(p - n) over voxels n within the truncation radius (index space,
+/// unit-integral Gaussian: |det A| G_world = G_index, Eq. 19). One per thread.
+class KernelSum
+{
+public:
+    KernelSum(const ReferenceVolume& v, double sigma)
+        : mDensity(v.density->tree()), mEmission(v.emission->tree()), mSigma(sigma),
+          mRadius(int(std::ceil(kReferenceTruncation * sigma)))
+    {
+        mNorm = 1.0 / (std::sqrt(2.0 * 3.14159265358979323846) * sigma);
+    }
+
+    int radius() const { return mRadius; }
+
+    void sample(const Vec3d& p, double& density, Vec3d& emission)
+    {
+        int lo[3];
+        double w[3][40];
+        int n[3];
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = int(std::ceil(p[a] - kReferenceTruncation * mSigma));
+            const int hi = int(std::floor(p[a] + kReferenceTruncation * mSigma));
+            n[a] = std::min(hi - lo[a] + 1, 40);
+            for (int i = 0; i < n[a]; ++i) {
+                const double d = p[a] - double(lo[a] + i);
+                w[a][i] = mNorm * std::exp(-0.5 * d * d / (mSigma * mSigma));
+            }
+        }
+        density = 0.0;
+        emission = Vec3d(0.0);
+        for (int i = 0; i < n[0]; ++i)
+            for (int j = 0; j < n[1]; ++j) {
+                const double wij = w[0][i] * w[1][j];
+                for (int k = 0; k < n[2]; ++k) {
+                    const openvdb::Coord c(lo[0] + i, lo[1] + j, lo[2] + k);
+                    const float v = mDensity.getValue(c);
+                    if (v == 0.0f) continue;
+                    const double wt = wij * w[2][k];
+                    density += wt * double(v);
+                    const openvdb::Vec3s e = mEmission.getValue(c);
+                    emission += wt * Vec3d(e.x(), e.y(), e.z());
+                }
+            }
+    }
+
+private:
+    openvdb::FloatGrid::ConstAccessor mDensity;
+    Vec3fGrid::ConstAccessor mEmission;
+    double mSigma, mNorm;
+    int mRadius;
+};
+
+/// The Gaussian sum's sampler: density and source per unit optical depth from the pre-shaded
+/// kernels (shadows at kernel centres). One per thread.
+class GaussianSumSampler
+{
+public:
+    GaussianSumSampler(const ReferenceVolume& v, double sigma) : mSum(v, sigma) {}
+    bool sample(const Vec3d& pIndex, double& density, double source[3])
+    {
+        Vec3d sourceSum;
+        mSum.sample(pIndex, density, sourceSum);
+        if (!(density > 0.0)) return false;
+        for (int c = 0; c < 3; ++c) source[c] = sourceSum[c] / density;
+        return true;
+    }
+
+private:
+    KernelSum mSum;
+};
+
+/// The field's sampler: trilinear density, and the source from a shadow ray marched from the
+/// sample itself and the material colour there. One per thread.
+class TrilinearSampler
+{
+public:
+    TrilinearSampler(const GridSource::Impl& grid, const RenderSettings& settings)
+        : mGrid(grid), mAccessor(grid.field->getConstAccessor()), mShadows(grid, settings), mColor(grid),
+          mModel(settings), mCutoff(settings.cutoff), mLit(!mModel.unlit()), mTinted(bool(grid.color))
+    {
+    }
+    bool sample(const Vec3d& pIndex, double& density, double source[3])
+    {
+        float d = 0.0f;
+        openvdb::tools::BoxSampler::sample(mAccessor, openvdb::Vec3d(pIndex.x, pIndex.y, pIndex.z), d);
+        density = d;
+        if (!(density >= mCutoff) || !(density > 0.0)) return false; // vdb_render skips samples below its cutoff
+        const Rgb shadow = mLit ? mShadows.march(pIndex) : Rgb{1.0f, 1.0f, 1.0f};
+        const Vec3d color = mTinted ? mColor.at(mGrid.indexToWorld(pIndex)) : Vec3d(1.0);
+        for (int c = 0; c < 3; ++c) source[c] = mModel.source(c, shadow[c], color[c]);
+        return true;
+    }
+
+private:
+    const GridSource::Impl& mGrid;
+    openvdb::FloatGrid::ConstAccessor mAccessor;
+    ShadowMarcher mShadows;
+    MaterialColor mColor;
+    OpticalModel mModel;
+    double mCutoff;
+    bool mLit, mTinted;
+};
+
+void checkMarchable(const GridSource::Impl& grid, const PassRequest& passes, const char* method)
+{
+    if (!grid.linear) throw ValueError(std::string("--method ") + method + " needs an affine grid transform (this grid has a frustum map)");
+    if (passes.shadow || passes.emission || passes.deep) {
+        throw ValueError(std::string("--method ") + method + " renders the beauty, Z and transmittance only (shadow, emission and deep passes need --method splat)");
+    }
+}
+
+/// March every pixel's centre ray through the index-space box [boxLo, boxHi] in steps of
+/// settings.step voxel lengths, sampling at step midpoints (@a makeSampler() gives one
+/// sampler per thread) and compositing each step with the exact homogeneous update.
+/// Empty nodes of @a occupancy are skipped with @a skipMargin. Progress: one unit per row.
+template <typename MakeSampler>
+Frame marchRays(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings,
+    const PassRequest& passes, const openvdb::FloatGrid& occupancy, int skipMargin, const Vec3d& boxLo,
+    const Vec3d& boxHi, MakeSampler makeSampler, Progress* progress)
+{
+    const OpticalModel model(settings);
+    const Mat3d indexFromWorld = glm::inverse(grid.indexToWorldLinear);
+    const double ell = grid.voxelLength;
+    const double step = settings.step; // voxel lengths
+    const float cutoff = float(settings.cutoff);
+    const int width = camera.width(), height = camera.height();
+    Frame frame = blankFrame(width, height, passes);
+    const Vec3d forward = glm::transpose(camera.cameraFromWorld())[2];
+
+    setUnits(progress, std::uint64_t(height));
+    tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
+        auto sampler = makeSampler();
+        EmptySpaceSkipper skipper(occupancy, skipMargin);
+        for (int y = rows.begin(); y < rows.end(); ++y) {
+            advance(progress); // per row: a cancel stops within one row's time
+            for (int x = 0; x < width; ++x) {
+                Vec3d origin, dir;
+                camera.worldRay(x + 0.5, y + 0.5, origin, dir);
+                // Parameter s: world distance from the near-plane origin; far plane likewise.
+                const double sFar = camera.projection() == Projection::Perspective
+                    ? (camera.far() - camera.near()) / glm::dot(dir, forward)
+                    : camera.far() - camera.near();
+                const Vec3d oIndex = indexFromWorld * (origin - grid.indexToWorldOffset);
+                const Vec3d dIndex = indexFromWorld * dir; // index units per world unit
+                double s0, s1;
+                float T[3] = {1.0f, 1.0f, 1.0f}, C[3] = {0.0f, 0.0f, 0.0f};
+                float z = std::numeric_limits<float>::infinity();
+                if (boxClip(oIndex, dIndex, boxLo, boxHi, s0, s1)) {
+                    s0 = std::max(s0, 0.0);
+                    s1 = std::min(s1, sFar);
+                    const double ds = step * ell;
+                    // Steps are anchored at the near plane, so neighbouring rays sample alike.
+                    for (double s = ds * std::floor(s0 / ds); s < s1; s += ds) {
+                        const Vec3d p = oIndex + (s + 0.5 * ds) * dIndex;
+                        const double jump = skipper.emptyExit(p, dIndex);
+                        if (jump > ds) {
+                            s += ds * std::floor(jump / ds) - ds;
+                            continue;
+                        }
+                        double density, source[3];
+                        if (!sampler.sample(p, density, source)) continue;
+                        const float before = (T[0] + T[1] + T[2]) / 3.0f;
+                        for (int c = 0; c < 3; ++c) {
+                            const float tau = float(model.opticalDepth(c, density, step));
+                            compositeSlab(tau, float(tau * source[c]), C[c], T[c]);
+                        }
+                        if (passes.depth && before > 0.5f && !std::isfinite(z)) {
+                            const double u = halfAlphaFraction(before, (T[0] + T[1] + T[2]) / 3.0f);
+                            if (u <= 1.0) z = float(camera.near() + (s + u * ds) * glm::dot(dir, forward));
+                        }
+                        if (T[0] * T[0] + T[1] * T[1] + T[2] * T[2] < cutoff) break;
+                    }
+                }
+                float* px = frame.beauty.pixel(x, y);
+                for (int c = 0; c < 3; ++c) px[c] = C[c];
+                px[3] = 1.0f - (T[0] + T[1] + T[2]) / 3.0f;
+                const std::size_t i = std::size_t(y) * std::size_t(width) + std::size_t(x);
+                if (passes.depth) frame.depth[i] = z;
+                if (passes.transmittance) std::copy(T, T + 3, &frame.transmittance[3 * i]);
+            }
+        }
+    });
+    return frame;
+}
+
+} // namespace
+
+Frame rayMarchReference(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings,
+    const PassRequest& passes, RenderStats& stats, Progress* progress)
+{
+    checkMarchable(grid, passes, "raymarch");
+    const auto t0 = std::chrono::steady_clock::now();
+    stats.activeVoxels = grid.activeVoxels;
+    stats.activeTiles = grid.activeTiles;
+    const openvdb::CoordBBox box = grid.field->evalActiveVoxelBoundingBox();
+    if (box.empty()) return blankFrame(camera.width(), camera.height(), passes);
+    // Trilinear support: one voxel beyond the active ones.
+    const Vec3d boxLo = Vec3d(box.min().x(), box.min().y(), box.min().z()) - 1.0;
+    const Vec3d boxHi = Vec3d(box.max().x(), box.max().y(), box.max().z()) + 1.0;
+    if (progress) progress->stage(0, 100);
+    Frame frame = marchRays(grid, camera, settings, passes, *grid.field, 0, boxLo, boxHi,
+        [&] { return TrilinearSampler(grid, settings); }, progress);
+    stats.rasterSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return frame;
+}
+
+Frame rayMarchGaussianSum(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings,
+    const PassRequest& passes, RenderStats& stats, Progress* progress)
+{
+    checkMarchable(grid, passes, "raymarch-gaussian");
+    if (progress) progress->stage(0, 15); // kernels and shadows, then the rays
+    const ReferenceVolume volume = buildVolume(grid, settings, stats, progress);
+    const auto t0 = std::chrono::steady_clock::now();
+    const openvdb::CoordBBox box = volume.density->evalActiveVoxelBoundingBox();
+    if (box.empty()) return blankFrame(camera.width(), camera.height(), passes);
+    const double pad = kReferenceTruncation * settings.kernelSigma + 1.0;
+    const Vec3d boxLo = Vec3d(box.min().x(), box.min().y(), box.min().z()) - pad;
+    const Vec3d boxHi = Vec3d(box.max().x(), box.max().y(), box.max().z()) + pad;
+    if (progress) progress->stage(15, 100);
+    const int radius = int(std::ceil(kReferenceTruncation * settings.kernelSigma));
+    Frame frame = marchRays(grid, camera, settings, passes, *volume.density, radius, boxLo, boxHi,
+        [&] { return GaussianSumSampler(volume, settings.kernelSigma); }, progress);
+    stats.rasterSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return frame;
+}
+
+} // namespace detail
+} // namespace vdb_ewa

@@ -1,0 +1,235 @@
+/// @file light_map.cpp
+#include "shading/light_map.h"
+
+#include "support/empty_space.h"
+#include "support/openvdb_tools.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace vdb_ewa {
+namespace detail {
+
+ExponentialSum::ExponentialSum(double xMax)
+{
+    // Nodes t_k every eta from where exp(t)(1 + xMax) is e^-12 (the integrand's mass left out
+    // below, relative) to where exp(-e^t) vanishes: 1e-4 relative or better on [0, xMax].
+    const double eta = 0.8;
+    const double t0 = -std::log1p(std::max(xMax, 0.0)) - 12.0, t1 = 3.6;
+    for (double t = t0; t <= t1; t += eta) {
+        a.push_back(eta * std::exp(t - std::exp(t)));
+        b.push_back(std::exp(t));
+    }
+}
+
+double ExponentialSum::operator()(double x) const
+{
+    double f = 0.0;
+    for (std::size_t n = 0; n < a.size(); ++n) f += a[n] * std::exp(-b[n] * x);
+    return f;
+}
+
+LightMap::LightMap(const GridSource::Impl& grid, const RenderSettings& settings, Progress* progress)
+    : mCutoff(float(settings.cutoff))
+{
+    const OpticalModel model(settings);
+    for (int c = 0; c < 3; ++c) mExtinction[c] = float(model.extinction(c));
+    mUnlit = model.unlit();
+    const openvdb::CoordBBox box = grid.field->evalActiveVoxelBoundingBox();
+    setUnits(progress, 0);
+    if (mUnlit || box.empty()) return;
+
+    // Frame: e1, e2 across the light, l towards it; units h across, the step along (world
+    // lengths in voxel lengths, as vdb_render's steps).
+    const double ell = grid.voxelLength, h = settings.shadowResolution, step = settings.shadowStep;
+    const Vec3d l = glm::normalize(settings.lightDir);
+    const Vec3d e1 = glm::normalize(glm::cross(l, std::abs(l.x) < 0.6 ? Vec3d(1, 0, 0) : Vec3d(0, 1, 0)));
+    const Vec3d e2 = glm::cross(l, e1);
+    mFromWorld = glm::transpose(Mat3d(e1 / (h * ell), e2 / (h * ell), l / (step * ell)));
+
+    // The padded active box (trilinear support) in map coordinates; lattice from its corner.
+    Vec3d lo(1e300), hi(-1e300);
+    for (int c = 0; c < 8; ++c) {
+        const Vec3d p((c & 1 ? box.max().x() + 1 : box.min().x() - 1), (c & 2 ? box.max().y() + 1 : box.min().y() - 1),
+            (c & 4 ? box.max().z() + 1 : box.min().z() - 1));
+        const Vec3d q = mFromWorld * grid.indexToWorld(p);
+        lo = glm::min(lo, q);
+        hi = glm::max(hi, q);
+    }
+    // Anchored at the box's corner, not at world multiples: the lattice moves with the grid,
+    // so the image does not depend on where in the world the scene is.
+    hi = lo + glm::ceil(hi - lo);
+    const Mat3d worldFromMap = glm::inverse(mFromWorld);
+    mOrigin = worldFromMap * lo;
+    mNu = int(hi.x - lo.x) + 1;
+    mNv = int(hi.y - lo.y) + 1;
+    mNw = int(hi.z - lo.z) + 1;
+
+    // vdb_render weighs a shadow sample s voxel lengths away by 1 / (1 + gain s): as a sum of
+    // exponentials, each term a first-order recursive filter along the ray (ExponentialSum).
+    std::vector<double> weight{1.0}, decay{1.0};
+    if (settings.gain > 0.0) {
+        const ExponentialSum sum(settings.gain * step * double(mNw));
+        weight = sum.a;
+        decay.resize(sum.b.size());
+        for (std::size_t n = 0; n < decay.size(); ++n) decay[n] = std::exp(-sum.b[n] * settings.gain * step);
+    }
+    const int terms = int(weight.size());
+    const int margin = int(std::ceil(2.0 / step)); // kept below a ray's lowest density
+    // Index position of lattice point (i, j, k): affine grids p0 + i du + j dv + k dw.
+    const Vec3d p0 = grid.worldToIndex(mOrigin);
+    const Vec3d du = grid.worldToIndex(mOrigin + worldFromMap[0]) - p0;
+    const Vec3d dv = grid.worldToIndex(mOrigin + worldFromMap[1]) - p0;
+    const Vec3d dw = grid.worldToIndex(mOrigin + worldFromMap[2]) - p0;
+    const auto indexAt = [&](int i, int j, int k) {
+        return grid.linear ? p0 + double(i) * du + double(j) * dv + double(k) * dw
+                           : grid.worldToIndex(mOrigin + worldFromMap * Vec3d(i, j, k));
+    };
+
+    std::vector<std::vector<float>> rows(static_cast<std::size_t>(mNv));
+    mRays.resize(std::size_t(mNu) * std::size_t(mNv));
+    setUnits(progress, std::uint64_t(mNv));
+    tbb::parallel_for(tbb::blocked_range<int>(0, mNv), [&](const tbb::blocked_range<int>& range) {
+        EmptySpaceSkipper skipper(*grid.field, 0);
+        std::vector<double> density(static_cast<std::size_t>(mNw));
+        std::vector<double> f(static_cast<std::size_t>(terms));
+        for (int j = range.begin(); j < range.end(); ++j) {
+            std::vector<float>& row = rows[std::size_t(j)];
+            for (int i = 0; i < mNu; ++i) {
+                int kTop = -1, kBottom = -1; // samples holding density
+                for (int k = mNw - 1; k >= 0; --k) {
+                    const Vec3d p = indexAt(i, j, k);
+                    double d = 0.0;
+                    if (!grid.linear || skipper.emptyExit(p, -dw) < 1.0) {
+                        float v = 0.0f;
+                        openvdb::tools::BoxSampler::sample(skipper.accessor(), openvdb::Vec3d(p.x, p.y, p.z), v);
+                        if (v >= settings.cutoff) d = v; // vdb_render skips samples below its cutoff
+                    }
+                    density[std::size_t(k)] = d;
+                    if (d > 0.0) {
+                        if (kTop < 0) kTop = k;
+                        kBottom = k;
+                    }
+                }
+                Ray& ray = mRays[std::size_t(j) * std::size_t(mNu) + std::size_t(i)];
+                if (kTop < 0) continue;
+                // Stored: from a margin below the lowest density up to just below the highest
+                // (above it the depth is 0). Filtered from the light side down over that range
+                // only: depth(k) = sum_n a_n F_n(k), F_n(k) = decay_n (F_n(k + 1) + d(k + 1) step).
+                ray.kLo = std::max(0, kBottom - margin);
+                ray.count = std::max(0, kTop - ray.kLo);
+                ray.offset = row.size();
+                row.resize(row.size() + std::size_t(ray.count));
+                float* depth = row.data() + ray.offset;
+                std::fill(f.begin(), f.end(), 0.0);
+                for (int k = kTop; k >= ray.kLo; --k) {
+                    if (k < kTop) {
+                        double tau = 0.0;
+                        for (int n = 0; n < terms; ++n) tau += weight[n] * f[std::size_t(n)];
+                        depth[k - ray.kLo] = float(tau);
+                    }
+                    const double d = density[std::size_t(k)];
+                    for (int n = 0; n < terms; ++n) f[std::size_t(n)] = decay[n] * (f[std::size_t(n)] + d * step);
+                }
+            }
+            advance(progress);
+        }
+    });
+    std::vector<std::uint64_t> rowStart(std::size_t(mNv) + 1, 0);
+    for (int j = 0; j < mNv; ++j) rowStart[std::size_t(j) + 1] = rowStart[std::size_t(j)] + rows[std::size_t(j)].size();
+    mDepth.resize(rowStart.back());
+    for (int j = 0; j < mNv; ++j) {
+        std::copy(rows[std::size_t(j)].begin(), rows[std::size_t(j)].end(), mDepth.begin() + std::ptrdiff_t(rowStart[std::size_t(j)]));
+        for (int i = 0; i < mNu; ++i) mRays[std::size_t(j) * std::size_t(mNu) + std::size_t(i)].offset += rowStart[std::size_t(j)];
+    }
+}
+
+const LightMap::Ray* LightMap::ray(int i, int j) const
+{
+    if (i < 0 || j < 0 || i >= mNu || j >= mNv) return nullptr;
+    const Ray& r = mRays[std::size_t(j) * std::size_t(mNu) + std::size_t(i)];
+    return r.count > 0 ? &r : nullptr;
+}
+
+float LightMap::depthOnRay(const Ray* ray, double w) const
+{
+    if (!ray) return 0.0f;
+    const double x = std::max(w - double(ray->kLo), 0.0); // below the stored range: its first value
+    const int k = int(x);
+    if (k >= ray->count) return 0.0f;
+    const float* d = mDepth.data() + ray->offset;
+    const float next = k + 1 < ray->count ? d[k + 1] : 0.0f;
+    return d[k] + float(x - double(k)) * (next - d[k]);
+}
+
+LightMap::Cell LightMap::cell(const Vec3d& q) const
+{
+    const double fu = std::floor(q.x), fv = std::floor(q.y);
+    const int i = int(std::clamp(fu, -1.0, double(mNu))), j = int(std::clamp(fv, -1.0, double(mNv)));
+    return {{ray(i, j), ray(i + 1, j), ray(i, j + 1), ray(i + 1, j + 1)}, float(q.x - fu), float(q.y - fv)};
+}
+
+float LightMap::depthInCell(const Cell& c, double w) const
+{
+    const float d00 = depthOnRay(c.rays[0], w), d10 = depthOnRay(c.rays[1], w);
+    const float d01 = depthOnRay(c.rays[2], w), d11 = depthOnRay(c.rays[3], w);
+    return (1.0f - c.b) * ((1.0f - c.a) * d00 + c.a * d10) + c.b * ((1.0f - c.a) * d01 + c.a * d11);
+}
+
+float LightMap::densityDepth(const Vec3d& q) const
+{
+    if (mRays.empty()) return 0.0f;
+    return depthInCell(cell(q), q.z);
+}
+
+void LightMap::densityDepths(const Vec3d& q0, const Vec3d& q1, float& d0, float& d1) const
+{
+    if (mRays.empty()) {
+        d0 = d1 = 0.0f;
+        return;
+    }
+    Cell c = cell(q0);
+    d0 = depthInCell(c, q0.z);
+    if (std::floor(q0.x) == std::floor(q1.x) && std::floor(q0.y) == std::floor(q1.y)) {
+        c.a = float(q1.x - std::floor(q1.x));
+        c.b = float(q1.y - std::floor(q1.y));
+    } else {
+        c = cell(q1);
+    }
+    d1 = depthInCell(c, q1.z);
+}
+
+std::array<float, 3> LightMap::transmittanceOfDepth(float depth) const
+{
+    std::array<float, 3> t{1.0f, 1.0f, 1.0f};
+    if (!(depth > 0.0f)) return t;
+    float t2 = 0.0f;
+    for (int c = 0; c < 3; ++c) {
+        t[std::size_t(c)] = std::exp(-mExtinction[c] * depth);
+        t2 += t[std::size_t(c)] * t[std::size_t(c)];
+    }
+    // vdb_render stops a shadow ray once |T|^2 < cutoff: the transmittance it keeps is about
+    // that threshold, never darker.
+    if (t2 < mCutoff) {
+        const float scale = t2 > 1e-30f ? std::sqrt(mCutoff / t2) : 0.0f;
+        for (float& v : t) v = scale > 0.0f ? v * scale : std::sqrt(mCutoff / 3.0f);
+    }
+    return t;
+}
+
+float LightMap::greyTransmittanceOfDepth(float depth) const
+{
+    // transmittanceOfDepth's arithmetic for channel 0, bit for bit, with three equal channels.
+    if (!(depth > 0.0f)) return 1.0f;
+    const float e = std::exp(-mExtinction[0] * depth);
+    float t2 = 0.0f;
+    for (int c = 0; c < 3; ++c) t2 += e * e;
+    if (!(t2 < mCutoff)) return e;
+    const float scale = t2 > 1e-30f ? std::sqrt(mCutoff / t2) : 0.0f;
+    return scale > 0.0f ? e * scale : std::sqrt(mCutoff / 3.0f);
+}
+
+} // namespace detail
+} // namespace vdb_ewa

@@ -1,0 +1,97 @@
+/// @file light_map.h
+/// @brief The light's transmittance anywhere in the volume: a deep shadow map for the
+///        directional light (Lokovic and Veach 2000). Shadow rays are marched once, from a
+///        lattice of points spaced --shadow-res voxel lengths apart across the light, through
+///        the whole volume, keeping the optical depth at every --shadowstep along each ray.
+///        A lookup is exact along the light (to the step) and bilinear across it, in optical
+///        depth: what per-sample shadow rays give, at the cost of one march per lattice ray
+///        (docs/numerics.md#shading-per-slab-sample).
+#pragma once
+
+#include "shading/optical_model.h"
+#include "source/source.h"
+#include "support/huge_page_allocator.h"
+#include "support/progress.h"
+
+#include <vdb_ewa/render_settings.h>
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace vdb_ewa {
+namespace detail {
+
+/// 1 / (1 + x) for x >= 0 as a sum of exponentials sum_n a_n exp(-b_n x): the trapezoidal rule
+/// on 1 / (1 + x) = int exp(t - e^t (1 + x)) dt, exact to about 1e-4 relative on [0, xMax].
+/// vdb_render divides a shadow sample's extinction by 1 + gain s (s: its distance from the
+/// shaded point); as a sum of exponentials that weight becomes a recursive filter along a ray.
+struct ExponentialSum
+{
+    std::vector<double> a, b;
+    explicit ExponentialSum(double xMax);
+    double operator()(double x) const;
+};
+
+class LightMap
+{
+public:
+    /// March the lattice rays through @a grid's field. @a progress: one unit per lattice row;
+    /// throws Cancelled.
+    LightMap(const GridSource::Impl& grid, const RenderSettings& settings, Progress* progress = nullptr);
+
+    /// Map coordinates of a world point: across the light in lattice units (u, v), along it in
+    /// steps (w, increasing towards the light).
+    Vec3d coordinates(const Vec3d& pWorld) const { return mFromWorld * (pWorld - mOrigin); }
+    /// The map coordinates' change per world unit along a direction (linear: rays stay rays).
+    Vec3d direction(const Vec3d& dWorld) const { return mFromWorld * dWorld; }
+
+    /// Shadow-ray optical depth of unit-extinction density at map coordinates @a q (the
+    /// extinction of each channel multiplies it): bilinear across, linear along the light.
+    float densityDepth(const Vec3d& q) const;
+    /// densityDepth at two points, sharing the lattice rays when both lie in one cell (the
+    /// front and back of a layer on a pixel's ray).
+    void densityDepths(const Vec3d& q0, const Vec3d& q1, float& d0, float& d1) const;
+
+    /// The light's transmittance at map coordinates @a q, with vdb_render's early stop
+    /// (|T|^2 >= cutoff) as a floor.
+    std::array<float, 3> transmittance(const Vec3d& q) const { return transmittanceOfDepth(densityDepth(q)); }
+
+    /// The light's transmittance behind a unit-extinction optical depth @a depth (densityDepth),
+    /// per channel, with the same floor.
+    std::array<float, 3> transmittanceOfDepth(float depth) const;
+    /// The same where every channel's extinction is the same (the grey fast path): one value.
+    float greyTransmittanceOfDepth(float depth) const;
+
+private:
+    struct Ray
+    {
+        std::uint64_t offset = 0; ///< first stored sample in mDepth
+        std::int32_t kLo = 0;     ///< sample index of the first stored sample
+        std::int32_t count = 0;   ///< stored samples; above them (towards the light) the depth is 0
+    };
+    /// The lattice ray (i, j), null outside the lattice or where it holds no density.
+    const Ray* ray(int i, int j) const;
+    /// Optical depth on @a ray (or 0 if null) at @a w steps along the light.
+    float depthOnRay(const Ray* ray, double w) const;
+    /// The four lattice rays around (u, v), bilinear weights a, b: the cell densityDepth reads.
+    struct Cell
+    {
+        const Ray* rays[4];
+        float a, b;
+    };
+    Cell cell(const Vec3d& q) const;
+    float depthInCell(const Cell& cell, double w) const;
+
+    Mat3d mFromWorld{1.0}; ///< rows: e1 / h, e2 / h, l / step (world units)
+    Vec3d mOrigin{0.0};    ///< world position of map coordinates (0, 0, 0)
+    int mNu = 0, mNv = 0, mNw = 0;
+    std::vector<Ray> mRays; ///< [j * mNu + i]
+    LargeArray<float> mDepth;
+    float mExtinction[3];
+    float mCutoff;
+    bool mUnlit;
+};
+
+} // namespace detail
+} // namespace vdb_ewa

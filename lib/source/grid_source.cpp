@@ -1,0 +1,243 @@
+/// @file grid_source.cpp
+/// @brief Reading grids from .vdb files and from host applications.
+#include "source/grid_source_impl.h"
+
+#include <vdb_ewa/error.h>
+#include <vdb_ewa/openvdb_grid.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+
+namespace vdb_ewa {
+namespace detail {
+
+Mat3d indexToWorldJacobian(const openvdb::math::Transform& xform, const openvdb::Vec3d& pIndex)
+{
+    const auto& map = *xform.baseMap();
+    Mat3d a;
+    for (int i = 0; i < 3; ++i) {
+        openvdb::Vec3d e(0.0);
+        e[i] = 1.0;
+        const openvdb::Vec3d w = map.isLinear() ? map.applyJacobian(e) : map.applyJacobian(e, pIndex);
+        a[i] = Vec3d(w.x(), w.y(), w.z());
+    }
+    return a;
+}
+
+} // namespace detail
+
+namespace {
+
+void initializeOpenVDB()
+{
+    static std::once_flag once;
+    std::call_once(once, [] { openvdb::initialize(); });
+}
+
+bool isScalarFloatType(const std::string& type) { return type == "float" || type == "double"; }
+
+/// Convert any supported grid to the float grid the renderer works on.
+openvdb::FloatGrid::ConstPtr asFloatGrid(const openvdb::GridBase::ConstPtr& base, std::string& storedType)
+{
+    if (auto f = openvdb::GridBase::constGrid<openvdb::FloatGrid>(base)) {
+        storedType = f->saveFloatAsHalf() ? "half" : "float";
+        return f;
+    }
+    if (auto d = openvdb::GridBase::constGrid<openvdb::DoubleGrid>(base)) {
+        storedType = "double";
+        auto tree = std::make_shared<openvdb::FloatTree>(d->tree());
+        auto f = openvdb::FloatGrid::create(tree);
+        f->setTransform(d->transform().copy());
+        f->setName(d->getName());
+        f->setGridClass(d->getGridClass());
+        return f;
+    }
+    return nullptr;
+}
+
+GridSource makeSource(openvdb::GridBase::ConstPtr base, const std::string& path)
+{
+    const std::string where = path.empty() ? std::string("host grid") : path;
+    if (!base) throw InputError(where + ": null grid");
+    auto impl = std::make_shared<GridSource::Impl>();
+    impl->grid = asFloatGrid(base, impl->storedType);
+    if (!impl->grid) {
+        throw InputError(where + ": grid '" + base->getName() + "' holds " + base->valueType() +
+                         " values; vdb_ewa renders scalar float or double grids");
+    }
+    impl->name = base->getName();
+    impl->path = path;
+    impl->derive();
+    return GridSource(impl);
+}
+
+} // namespace
+
+namespace {
+
+/// The value the field reads for a stored voxel value (NaN and negative: 0; clamped above).
+float fieldValue(float v)
+{
+    if (!(v > 0.0f)) return 0.0f;
+    return std::min(v, detail::kMaxDensity);
+}
+
+/// @a grid itself if every value already reads as the field does, else a sanitised copy.
+openvdb::FloatGrid::ConstPtr sanitisedField(const openvdb::FloatGrid::ConstPtr& grid)
+{
+    bool clean = grid->background() == 0.0f;
+    for (auto it = grid->cbeginValueAll(); clean && it; ++it) {
+        const float v = *it;
+        if (it.isValueOn() ? fieldValue(v) != v : v != 0.0f) clean = false;
+    }
+    if (clean) return grid;
+    openvdb::FloatGrid::Ptr copy = openvdb::FloatGrid::create(0.0f);
+    copy->setTransform(grid->transform().copy());
+    copy->tree().topologyUnion(grid->tree());
+    auto acc = grid->getConstAccessor();
+    for (auto it = copy->beginValueOn(); it; ++it) it.setValue(fieldValue(acc.getValue(it.getCoord())));
+    return copy;
+}
+
+} // namespace
+
+void GridSource::Impl::derive()
+{
+    // Level sets are rendered as surfaces: no density field.
+    field = grid->getGridClass() == openvdb::GRID_LEVEL_SET ? grid : sanitisedField(grid);
+    const auto& xform = grid->transform();
+    linear = xform.isLinear();
+    activeVoxels = grid->tree().activeLeafVoxelCount();
+    activeTiles = grid->tree().activeTileCount();
+    const openvdb::CoordBBox bbox = grid->evalActiveVoxelBoundingBox();
+    const openvdb::Vec3d cIndex = bbox.empty() ? openvdb::Vec3d(0.0) : bbox.getCenter();
+    const openvdb::Vec3d cWorld = xform.indexToWorld(cIndex);
+    worldCentre = Vec3d(cWorld.x(), cWorld.y(), cWorld.z());
+    indexToWorldLinear = detail::indexToWorldJacobian(xform, cIndex);
+    const openvdb::Vec3d o = xform.indexToWorld(openvdb::Vec3d(0.0));
+    indexToWorldOffset = Vec3d(o.x(), o.y(), o.z());
+    voxelLength = std::cbrt(std::abs(glm::determinant(indexToWorldLinear)));
+    if (!(voxelLength > 0.0) || !std::isfinite(voxelLength)) {
+        throw InputError((path.empty() ? std::string("host grid") : path) + ": grid '" + name +
+                         "' has a singular or non-finite transform");
+    }
+}
+
+Vec3d GridSource::Impl::indexToWorld(const Vec3d& p) const
+{
+    if (linear) return indexToWorldOffset + indexToWorldLinear * p;
+    const openvdb::Vec3d w = grid->transform().indexToWorld(openvdb::Vec3d(p.x, p.y, p.z));
+    return Vec3d(w.x(), w.y(), w.z());
+}
+
+Vec3d GridSource::Impl::worldToIndex(const Vec3d& w) const
+{
+    if (linear) return glm::inverse(indexToWorldLinear) * (w - indexToWorldOffset);
+    const openvdb::Vec3d p = grid->transform().worldToIndex(openvdb::Vec3d(w.x, w.y, w.z));
+    return Vec3d(p.x(), p.y(), p.z());
+}
+
+namespace {
+
+/// Check that @a path is a readable file. @throw IoError
+void checkReadable(const std::string& path)
+{
+    std::error_code ec;
+    if (!std::filesystem::exists(path, ec)) throw IoError(path + ": no such file");
+    if (std::filesystem::is_directory(path, ec)) throw IoError(path + ": is a directory, not a .vdb file");
+    if (!std::ifstream(path, std::ios::binary)) throw IoError(path + ": cannot be read (permission denied?)");
+}
+
+/// Read grid @a name of @a path, or when @a name is empty the first grid whose value type
+/// @a accepts (@a what names those for the error). @throw IoError, InputError
+openvdb::GridBase::Ptr readGrid(const std::string& path, std::string name, bool (*accepts)(const std::string&),
+    const std::string& what)
+{
+    initializeOpenVDB();
+    checkReadable(path);
+    try {
+        openvdb::io::File file(path);
+        file.open(/*delayLoad=*/false); // read everything now, so truncation is caught here
+        if (name.empty()) {
+            const openvdb::GridPtrVecPtr metas = file.readAllGridMetadata();
+            for (const auto& meta : *metas) {
+                if (accepts(meta->valueType())) {
+                    name = meta->getName();
+                    break;
+                }
+            }
+            if (name.empty()) {
+                file.close();
+                throw InputError(path + ": no " + what + " grid in the file");
+            }
+        } else if (!file.hasGrid(name)) {
+            std::string names;
+            for (auto it = file.beginName(); it != file.endName(); ++it) {
+                names += (names.empty() ? "" : ", ") + ("'" + *it + "'");
+            }
+            file.close();
+            throw InputError(path + ": no grid named '" + name + "' (grids: " +
+                             (names.empty() ? "none" : names) + ")");
+        }
+        openvdb::GridBase::Ptr base = file.readGrid(name);
+        file.close();
+        return base;
+    } catch (const Error&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw IoError(path + ": cannot read VDB file (" + std::string(e.what()) + ")");
+    }
+}
+
+GridSource attachColor(const GridSource::Impl& impl, const openvdb::GridBase::ConstPtr& grid, const std::string& where)
+{
+    if (!grid) throw InputError(where + ": null colour grid");
+    auto color = openvdb::GridBase::constGrid<openvdb::Vec3SGrid>(grid);
+    if (!color) {
+        throw InputError(where + ": colour grid '" + grid->getName() + "' holds " + grid->valueType() +
+                         " values; --color needs a vec3s grid");
+    }
+    auto copy = std::make_shared<GridSource::Impl>(impl);
+    copy->color = color;
+    return GridSource(copy);
+}
+
+} // namespace
+
+GridSource GridSource::open(const std::string& path, const std::string& gridName)
+{
+    return makeSource(readGrid(path, gridName, isScalarFloatType, "scalar floating-point"), path);
+}
+
+GridSource GridSource::withColorGrid(const std::string& colorName) const
+{
+    if (mImpl->path.empty()) throw InputError("host grid: withColorGrid needs a file; use vdb_ewa::withColorGrid with the host's grid");
+    return attachColor(*mImpl, readGrid(mImpl->path, colorName, [](const std::string&) { return false; }, "colour"), mImpl->path);
+}
+
+bool GridSource::hasColorGrid() const { return bool(mImpl->color); }
+
+GridSource withColorGrid(const GridSource& source, openvdb::GridBase::ConstPtr colorGrid)
+{
+    return attachColor(source.impl(), colorGrid, "host grid");
+}
+
+GridSource gridSourceFromOpenVDB(openvdb::GridBase::ConstPtr grid)
+{
+    initializeOpenVDB();
+    return makeSource(std::move(grid), "");
+}
+
+const std::string& GridSource::name() const { return mImpl->name; }
+const std::string& GridSource::path() const { return mImpl->path; }
+const std::string& GridSource::storedType() const { return mImpl->storedType; }
+bool GridSource::isLevelSet() const { return mImpl->grid->getGridClass() == openvdb::GRID_LEVEL_SET; }
+bool GridSource::isLinear() const { return mImpl->linear; }
+std::uint64_t GridSource::activeVoxelCount() const { return mImpl->activeVoxels; }
+std::uint64_t GridSource::activeTileCount() const { return mImpl->activeTiles; }
+Vec3d GridSource::worldCentre() const { return mImpl->worldCentre; }
+
+} // namespace vdb_ewa

@@ -1,0 +1,57 @@
+/// @file grid_source_impl.h
+/// @brief The OpenVDB side of GridSource (private).
+#pragma once
+
+#include <vdb_ewa/grid_source.h>
+
+#include "support/openvdb.h"
+
+namespace vdb_ewa {
+namespace detail {
+
+/// Densities above this are clamped: a voxel this dense is opaque at any sane setting.
+constexpr float kMaxDensity = 1.0e6f;
+
+} // namespace detail
+
+struct VDB_EWA_LOCAL GridSource::Impl
+{
+    /// Always a float grid: double grids are converted on load (densities need no more).
+    openvdb::FloatGrid::ConstPtr grid;
+    std::string name;
+    std::string path;
+    std::string storedType; ///< "float", "half" or "double"
+    bool linear = true;
+    Mat3d indexToWorldLinear{1.0};   ///< A: linear part of the index-to-world map (affine grids)
+    Vec3d indexToWorldOffset{0.0};   ///< world position of index (0, 0, 0) (affine grids)
+    double voxelLength = 1.0;        ///< cbrt|det A|: the length "per voxel" densities refer to
+    std::uint64_t activeVoxels = 0;  ///< active voxels in leaf nodes
+    std::uint64_t activeTiles = 0;
+    Vec3d worldCentre{0.0};
+    /// Material colours for level-set shaders (vdb_render -color), or null.
+    openvdb::Vec3SGrid::ConstPtr color;
+    /// The voxel values of the continuous field every integrator reconstructs (its trilinear
+    /// interpolation, OpenVDB's BoxSampler; docs/equations.md#the-field): @c grid with NaN,
+    /// negative values and inactive values read as 0 and values above kMaxDensity clamped. The
+    /// same pointer as @c grid when no value needs that (fog volumes as written by DCCs) and for
+    /// level sets.
+    openvdb::FloatGrid::ConstPtr field;
+
+    /// Fill the derived fields from @a grid.
+    void derive();
+
+    /// World position of an index-space point: A p + offset for affine grids, the grid's
+    /// transform otherwise.
+    Vec3d indexToWorld(const Vec3d& pIndex) const;
+    /// The inverse of indexToWorld.
+    Vec3d worldToIndex(const Vec3d& pWorld) const;
+};
+
+namespace detail {
+
+/// Jacobian of the index-to-world map at an index position (columns: world image of the
+/// index axes).
+Mat3d indexToWorldJacobian(const openvdb::math::Transform& xform, const openvdb::Vec3d& pIndex);
+
+} // namespace detail
+} // namespace vdb_ewa

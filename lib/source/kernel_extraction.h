@@ -1,0 +1,68 @@
+/// @file kernel_extraction.h
+/// @brief Active voxels and active tiles -> Gaussian reconstruction kernels (Eq. 1, 8, 19).
+#pragma once
+
+#include <vdb_ewa/grid_source.h>
+#include <vdb_ewa/render_settings.h>
+
+#include "source/grid_source_impl.h"
+#include "source/level_of_detail.h"
+#include "support/huge_page_allocator.h"
+#include "support/progress.h"
+
+#include <cstdint>
+#include <algorithm>
+#include <vector>
+
+namespace vdb_ewa {
+namespace detail {
+
+/// One reconstruction kernel r_k = G_V(u - u_k): a voxel (spacing 1), a block of s^3 voxels
+/// merged for level of detail, or one kernel of the lattice that models an active tile
+/// (spacing s > 1: sigma and weight scale with s).
+struct Kernel
+{
+    Vec3d pIndex;   ///< centre, index space
+    float density;  ///< sanitised voxel value (>= cutoff, <= kMaxDensity); after quasiInterpolate, the kernel's weight (halo kernels < 0)
+    float spacing;  ///< lattice spacing in voxels: sigma = kernelSigmaVoxels(), weight x spacing^3
+};
+
+/// Standard deviation of kernels on a lattice coarser than the voxels (active tiles, level of
+/// detail): large enough that their sum over a uniform region is flat (partition of unity to
+/// 1.5 %, docs/numerics.md#kernel-standard-deviation), since such regions are uniform or
+/// already smoothed; voxel kernels keep --kernel-sigma, sharper for thin dense media.
+inline constexpr double kCoarseKernelSigma = 0.6;
+
+/// The standard deviation of kernel @a k in voxel lengths (Eq. 19, V = sigma^2 I in index space).
+inline double kernelSigmaVoxels(const Kernel& k, double kernelSigma)
+{
+    const double s = double(k.spacing);
+    return (s > 1.0 ? std::max(kernelSigma, kCoarseKernelSigma) : kernelSigma) * s;
+}
+
+struct KernelSet
+{
+    LargeArray<Kernel> kernels; ///< in tree order (deterministic)
+    std::uint64_t activeVoxels = 0;
+    std::uint64_t activeTiles = 0;
+    std::uint64_t belowCutoff = 0; ///< values < cutoff (including negative and -Inf): skipped
+    std::uint64_t notANumber = 0;  ///< NaN values: skipped
+    std::uint64_t clamped = 0;     ///< values > kMaxDensity (including +Inf): clamped
+    std::uint64_t mergedVoxels = 0; ///< active voxels merged into level-of-detail kernels
+    std::uint64_t mergedKernels = 0; ///< level-of-detail kernels they became
+};
+
+/// Lattice spacing (voxels) used for an active tile of @a tileDim voxels a side: the largest
+/// power of two <= min(tileDim, maxSpacing), but coarse enough that a tile yields at most
+/// 64^3 kernels. See docs/equations.md#active-tiles.
+int tileLatticeSpacing(int tileDim, int maxSpacing);
+
+/// Build the kernels of every active voxel and tile, one TBB task per leaf node. With @a lod,
+/// a leaf node whose voxels project small enough becomes blocks of merged kernels (the
+/// block's mean density at the block's centre, spacing = block size: mass is kept).
+/// @a progress: one unit per leaf node; throws Cancelled.
+KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& settings,
+    const LevelOfDetail* lod = nullptr, Progress* progress = nullptr);
+
+} // namespace detail
+} // namespace vdb_ewa

@@ -1,0 +1,96 @@
+/// @file quasi_interpolation.cpp
+#include "source/quasi_interpolation.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace vdb_ewa {
+namespace detail {
+namespace {
+
+const openvdb::Coord kFaceNeighbours[6] = {openvdb::Coord(-1, 0, 0), openvdb::Coord(1, 0, 0), openvdb::Coord(0, -1, 0),
+    openvdb::Coord(0, 1, 0), openvdb::Coord(0, 0, -1), openvdb::Coord(0, 0, 1)};
+
+bool isUnitKernel(const Kernel& k) { return k.spacing == 1.0f; }
+
+openvdb::Coord coordOf(const Kernel& k)
+{
+    return openvdb::Coord(int(std::lround(k.pIndex.x)), int(std::lround(k.pIndex.y)), int(std::lround(k.pIndex.z)));
+}
+
+/// c = v + alpha sum_axes (2 v - v_- - v_+) at @a ijk, values from the field.
+template <typename Accessor>
+float prefiltered(Accessor& field, const openvdb::Coord& ijk, double alpha)
+{
+    const double v = double(field.getValue(ijk));
+    double laplacian = 0.0;
+    for (const openvdb::Coord& d : kFaceNeighbours) laplacian += v - double(field.getValue(ijk + d));
+    return float(v + alpha * laplacian);
+}
+
+} // namespace
+
+double quasiInterpolationAlpha(double sigma)
+{
+    return std::max(0.0, 0.5 * sigma * sigma - 1.0 / 12.0);
+}
+
+std::uint64_t quasiInterpolate(const GridSource::Impl& grid, double alpha, KernelSet& set)
+{
+    if (!(alpha > 0.0)) return 0;
+    LargeArray<Kernel>& kernels = set.kernels;
+    // Where the unit kernels are.
+    openvdb::MaskGrid mask(false);
+    {
+        auto acc = mask.getAccessor();
+        for (const Kernel& k : kernels) {
+            if (isUnitKernel(k)) acc.setValueOn(coordOf(k));
+        }
+    }
+    const std::size_t n = kernels.size();
+    const std::size_t grain = 4096, chunks = (n + grain - 1) / grain;
+    std::vector<std::vector<Kernel>> halos(chunks);
+    std::vector<float> weights(n);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1), [&](const tbb::blocked_range<std::size_t>& range) {
+        auto field = grid.field->getConstAccessor();
+        auto active = grid.grid->getConstAccessor();
+        auto inMask = mask.getConstAccessor();
+        for (std::size_t c = range.begin(); c < range.end(); ++c) {
+            for (std::size_t i = c * grain; i < std::min(n, (c + 1) * grain); ++i) {
+                const Kernel& k = kernels[i];
+                weights[i] = k.density;
+                if (!isUnitKernel(k)) continue;
+                const openvdb::Coord ijk = coordOf(k);
+                weights[i] = prefiltered(field, ijk, alpha);
+                for (const openvdb::Coord& d : kFaceNeighbours) {
+                    const openvdb::Coord h = ijk + d;
+                    // A halo voxel: inactive (active ones have kernels of their own: voxels,
+                    // merged blocks, tiles), added once, by its first unit-kernel neighbour.
+                    if (inMask.isValueOn(h) || active.isValueOn(h)) continue;
+                    openvdb::Coord first = ijk;
+                    for (const openvdb::Coord& e : kFaceNeighbours) {
+                        if (inMask.isValueOn(h + e)) {
+                            first = h + e;
+                            break;
+                        }
+                    }
+                    if (first != ijk) continue;
+                    const float w = prefiltered(field, h, alpha);
+                    if (w != 0.0f) halos[c].push_back({Vec3d(h.x(), h.y(), h.z()), w, 1.0f});
+                }
+            }
+        }
+    });
+    for (std::size_t i = 0; i < n; ++i) kernels[i].density = weights[i];
+    std::uint64_t added = 0;
+    for (const auto& h : halos) {
+        kernels.insert(kernels.end(), h.begin(), h.end());
+        added += h.size();
+    }
+    return added;
+}
+
+} // namespace detail
+} // namespace vdb_ewa

@@ -1,0 +1,47 @@
+/// @file surface_extraction.h
+/// @brief Level-set voxels next to the iso-surface -> flattened (surface) kernels
+///        (Zwicker et al. 2002, Sec. 6.3, 6.4; docs/equations.md#surface-kernels).
+#pragma once
+
+#include "source/grid_source_impl.h"
+#include "support/progress.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace vdb_ewa {
+namespace detail {
+
+/// A 2D Gaussian in the tangent plane of the iso-surface (the limit of Eq. 37).
+struct SurfaceKernel
+{
+    Vec3d pWorld;   ///< centre on the iso-surface (a Newton step from the voxel centre)
+    Vec3d normal;   ///< unit world normal, the gradient direction (outwards for level sets)
+    double area;    ///< surface area the kernel stands for, world^2 (its weight)
+    Vec3d albedo{1.0}; ///< material colour: the colour grid at pWorld (trilinear), else white
+};
+
+struct SurfaceSet
+{
+    std::vector<SurfaceKernel> kernels; ///< in tree order (deterministic)
+    double sigma = 0;                   ///< tangential std. deviation, world units
+    Vec3d boundsMin{0.0}, boundsMax{0.0}; ///< world box of the active voxels (position shader)
+    std::uint64_t activeVoxels = 0;
+};
+
+/// One kernel for every active voxel whose 6-neighbourhood crosses @a isovalue and whose
+/// projection onto the surface value == @a isovalue
+/// (x - (f(x) - iso) grad / |grad|^2, central differences) lies within one voxel of its
+/// centre along each index axis; its area is the inverse of the kernels' density around it
+/// on the surface, so that the kernels sum to one over the surface; tangential sigma =
+/// @a kernelSigma voxel lengths. Anisotropic voxels use the voxel length cbrt|det A|. Voxels
+/// farther than 2 voxels from the surface by the estimate |f - iso| / |grad f| are skipped, as
+/// are NaN values.
+/// @a outwardDecreasing: the surface's outside is where values fall (fog volumes: the normal
+/// is minus the gradient); level sets grow outwards (the normal is the gradient).
+/// @a progress: one unit per leaf node; throws Cancelled.
+SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, double isovalue, double kernelSigma,
+    bool outwardDecreasing = false, Progress* progress = nullptr);
+
+} // namespace detail
+} // namespace vdb_ewa
