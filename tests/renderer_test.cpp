@@ -149,6 +149,30 @@ TEST(Renderer, StoppedRaysKeepVdbRendersResidualAtAnySlabThickness)
     }
 }
 
+TEST(Renderer, StoppedColouredRaysKeepTheCutoffTransmittance)
+{
+    // With a different extinction per channel, the crossing of |T_rgb|^2 = cutoff inside a slab
+    // has no closed form (terminationFraction's Newton steps): every stopped pixel of a uniform
+    // coloured absorber must keep |T_rgb|^2 = cutoff, at any slab thickness.
+    for (const double slab : {0.5, 2.0, 4.0}) {
+        RenderSettings s;
+        s.absorb = Vec3d(0.3, 0.8, 2.0);
+        s.scatter = Vec3d(0.0);
+        s.slab = slab;
+        PassRequest passes;
+        passes.transmittance = true;
+        const auto grid = makeBoxGrid(openvdb::Coord(-20, -20, 0), openvdb::Coord(19, 19, 15), 1.0f, 0.1);
+        const GridSource source = gridSourceFromOpenVDB(grid);
+        const Frame frame = Renderer(s).renderFrame(source, Camera(orthoDownZ(-0.05, -0.05, 5.0, 2.0, 16), source.worldCentre()), passes);
+        for (std::size_t i = 0; i < frame.transmittance.size(); i += 3) {
+            const double t2 = std::pow(frame.transmittance[i], 2) + std::pow(frame.transmittance[i + 1], 2) +
+                              std::pow(frame.transmittance[i + 2], 2);
+            ASSERT_NEAR(t2, s.cutoff, 1e-4 * s.cutoff) << "slab " << slab << " pixel " << i / 3;
+            ASSERT_GT(frame.transmittance[i], 10.0 * frame.transmittance[i + 2]) << "red passes, blue is absorbed";
+        }
+    }
+}
+
 TEST(Renderer, SingleVoxelImageIntegral)
 {
     // Sum over pixels of the optical depth = sigma rho |det A| / l * |det J| f^2 (Eq. 32, 33):

@@ -82,14 +82,34 @@ inline void compositeSlab(float tau, float emission, float& colour, float& trans
 /// (docs/numerics.md#shading-per-slab-sample).
 /// In single precision (once per lit pixel and slab): 1e-6 relative. @a absorbed:
 /// slabAbsorbed(tau), which the compositor has at hand.
-inline float slabLightTransmittance(float tau, float absorbed, float front, float back)
+inline float slabLightTransmittance(float tau, float absorbed, float front, float back);
+
+/// slabLightTransmittance with the light's change across the layer given as @a logRatio =
+/// ln(front / back), the light's optical depth between the layer's back and front (known
+/// without a log where the light's optical depth is: lightLogRatio). Values of the light
+/// below 1e-30 count as 1e-30, in @a front and in both logarithms behind @a logRatio.
+inline float slabLightTransmittanceOfLogRatio(float tau, float absorbed, float front, float logRatio)
 {
     // E(x) = (1 - e^-x) / x; below |x| = 1e-3 its series to x^2 (error x^3 / 24 < 1e-10).
     const auto series = [](float x) { return 1.0f - x * (0.5f - x / 6.0f); };
     const auto meanOfExp = [&](float x) { return std::abs(x) < 1e-3f ? series(x) : -std::expm1(-x) / x; };
-    const float f = front > 1e-30f ? front : 1e-30f, b = back > 1e-30f ? back : 1e-30f;
+    const float f = front > 1e-30f ? front : 1e-30f;
     const float t = tau > 0.0f ? tau : 0.0f;
-    return f * meanOfExp(t + std::log(f / b)) / (t < 1e-3f ? series(t) : absorbed / t);
+    return f * meanOfExp(t + logRatio) / (t < 1e-3f ? series(t) : absorbed / t);
+}
+
+/// ln(front / back) for slabLightTransmittanceOfLogRatio from the logarithms of the light's
+/// transmittance at the layer's front and back (each floored at ln 1e-30).
+inline float lightLogRatio(float logFront, float logBack)
+{
+    constexpr float kLogFloor = -69.0775528f; // ln 1e-30
+    return (logFront > kLogFloor ? logFront : kLogFloor) - (logBack > kLogFloor ? logBack : kLogFloor);
+}
+
+inline float slabLightTransmittance(float tau, float absorbed, float front, float back)
+{
+    const float f = front > 1e-30f ? front : 1e-30f, b = back > 1e-30f ? back : 1e-30f;
+    return slabLightTransmittanceOfLogRatio(tau, absorbed, f, std::log(f / b));
 }
 
 inline float slabLightTransmittance(float tau, float front, float back)

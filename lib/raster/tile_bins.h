@@ -1,10 +1,13 @@
 /// @file tile_bins.h
 /// @brief Screen tiles of kTileSize^2 pixels and the splats that overlap each (counting sort
-///        in splat order, so every tile lists its splats deterministically).
+///        in a given order of the splats, so every tile lists its splats deterministically).
 #pragma once
 
 #include "support/huge_page_allocator.h"
 
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -18,31 +21,72 @@ struct TileBins
 {
     int tilesX = 0, tilesY = 0;
     std::vector<std::uint64_t> offsets; ///< tilesX * tilesY + 1
-    LargeArray<std::uint32_t> indices; ///< splat indices, tile by tile, in splat order
+    LargeArray<std::uint32_t> indices; ///< splat indices, tile by tile, in the binning order
+    std::vector<std::uint32_t> maxSpan; ///< per tile, the largest span(splat) of its splats (0 if none)
 };
 
+/// Bins splats[order(0)], splats[order(1)], ... (n of them): every tile lists its splats in
+/// that order (a counting sort, stable, in parallel over fixed chunks of the order: the same
+/// lists for any thread count), and keeps the largest span(splat) of its splats.
 /// @tparam Splats an array of splats, each with an inclusive pixel box x0, y0, x1, y1 inside the image.
-template <typename Splats>
-TileBins binSplats(const Splats& splats, int width, int height)
+template <typename Splats, typename Order, typename Span>
+TileBins binSplatsInOrder(const Splats& splats, std::size_t n, const Order& order, const Span& span, int width, int height)
 {
     TileBins bins;
     bins.tilesX = (width + kTileSize - 1) / kTileSize;
     bins.tilesY = (height + kTileSize - 1) / kTileSize;
     const std::size_t tiles = std::size_t(bins.tilesX) * bins.tilesY;
+    const auto forEachTile = [&](const auto& s, const auto& f) {
+        for (int ty = s.y0 / kTileSize; ty <= s.y1 / kTileSize; ++ty)
+            for (int tx = s.x0 / kTileSize; tx <= s.x1 / kTileSize; ++tx) f(std::size_t(ty) * std::size_t(bins.tilesX) + std::size_t(tx));
+    };
+    // Chunks of the order: each counts its pairs per tile, then writes them from its own cursor.
+    constexpr std::size_t kChunks = 32;
+    const std::size_t chunk = (n + kChunks - 1) / kChunks;
+    std::vector<std::uint64_t> cursor(kChunks * tiles, 0); // [chunk][tile]: count, then position
+    std::vector<std::uint32_t> chunkSpan(kChunks * tiles, 0);
+    tbb::parallel_for(std::size_t(0), kChunks, [&](std::size_t c) {
+        std::uint64_t* count = cursor.data() + c * tiles;
+        std::uint32_t* most = chunkSpan.data() + c * tiles;
+        for (std::size_t k = c * chunk; k < std::min(n, (c + 1) * chunk); ++k) {
+            const auto& s = splats[order(k)];
+            const std::uint32_t sp = span(s);
+            forEachTile(s, [&](std::size_t t) {
+                ++count[t];
+                most[t] = std::max(most[t], sp);
+            });
+        }
+    });
     bins.offsets.assign(tiles + 1, 0);
-    for (const auto& s : splats) {
-        for (int ty = s.y0 / kTileSize; ty <= s.y1 / kTileSize; ++ty)
-            for (int tx = s.x0 / kTileSize; tx <= s.x1 / kTileSize; ++tx) ++bins.offsets[std::size_t(ty) * bins.tilesX + tx + 1];
+    bins.maxSpan.assign(tiles, 0);
+    std::uint64_t next = 0;
+    for (std::size_t t = 0; t < tiles; ++t) {
+        bins.offsets[t] = next;
+        for (std::size_t c = 0; c < kChunks; ++c) {
+            const std::uint64_t count = cursor[c * tiles + t];
+            cursor[c * tiles + t] = next;
+            next += count;
+            bins.maxSpan[t] = std::max(bins.maxSpan[t], chunkSpan[c * tiles + t]);
+        }
     }
-    for (std::size_t t = 0; t < tiles; ++t) bins.offsets[t + 1] += bins.offsets[t];
-    bins.indices.resize(bins.offsets.back());
-    std::vector<std::uint64_t> cursor(bins.offsets.begin(), bins.offsets.end() - 1);
-    for (std::uint32_t i = 0; i < splats.size(); ++i) {
-        const auto& s = splats[i];
-        for (int ty = s.y0 / kTileSize; ty <= s.y1 / kTileSize; ++ty)
-            for (int tx = s.x0 / kTileSize; tx <= s.x1 / kTileSize; ++tx) bins.indices[cursor[std::size_t(ty) * bins.tilesX + tx]++] = i;
-    }
+    bins.offsets[tiles] = next;
+    bins.indices.resize(next);
+    tbb::parallel_for(std::size_t(0), kChunks, [&](std::size_t c) {
+        std::uint64_t* position = cursor.data() + c * tiles;
+        for (std::size_t k = c * chunk; k < std::min(n, (c + 1) * chunk); ++k) {
+            const std::uint32_t i = order(k);
+            forEachTile(splats[i], [&](std::size_t t) { bins.indices[position[t]++] = i; });
+        }
+    });
     return bins;
+}
+
+/// Bins splats in their own order.
+template <typename Splats>
+TileBins binSplats(const Splats& splats, int width, int height)
+{
+    return binSplatsInOrder(
+        splats, splats.size(), [](std::size_t k) { return std::uint32_t(k); }, [](const auto&) { return std::uint32_t(1); }, width, height);
 }
 
 } // namespace detail

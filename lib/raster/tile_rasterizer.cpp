@@ -6,6 +6,7 @@
 #include "support/blank_frame.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <cmath>
@@ -347,38 +348,60 @@ private:
     /// cutoff (the slab's optical depth taken as uniform across it); 1 if it does not.
     float terminationFraction(std::size_t base, int p) const
     {
-        const auto t2At = [&](double u) {
-            double t2 = 0.0;
-            for (int c = 0; c < C; ++c) {
-                const double t = mT[c * kTilePixels + p];
-                t2 += t * t * std::exp(-2.0 * u * double(mTau[base + std::size_t(c) * kTilePixels + std::size_t(p)]));
-            }
-            return t2 * double(3 / C); // C == 1: the three equal channels (3 t2 == t2 + t2 + t2)
-        };
-        const double cutoff = mCutoff;
-        if (!(t2At(1.0) < cutoff) || !(t2At(0.0) >= cutoff)) return 1.0f;
-        double lo = 0.0, hi = 1.0; // |T(u)|^2 falls with u: bisection to 2^-24
-        for (int n = 0; n < 24; ++n) {
-            const double mid = 0.5 * (lo + hi);
-            (t2At(mid) < cutoff ? hi : lo) = mid;
+        // |T(u)|^2 = sum_c T_c^2 exp(-2 u tau_c): its logarithm falls with u and is convex (a
+        // log-sum-exp of lines), so Newton's method on ln|T(u)|^2 - ln cutoff from u = 0 climbs
+        // to the crossing from below without overshooting, quadratically; one exact step when
+        // the channels are equal (C == 1: a line).
+        double t2[C], tau[C];
+        for (int c = 0; c < C; ++c) {
+            const double t = mT[c * kTilePixels + p];
+            t2[c] = t * t * double(3 / C); // C == 1: the three equal channels
+            tau[c] = double(mTau[base + std::size_t(c) * kTilePixels + std::size_t(p)]);
         }
-        return float(hi);
+        const auto t2At = [&](double u, double* slope) {
+            double f = 0.0, df = 0.0;
+            for (int c = 0; c < C; ++c) {
+                const double e = t2[c] * std::exp(-2.0 * u * tau[c]);
+                f += e;
+                df -= 2.0 * tau[c] * e;
+            }
+            if (slope) *slope = df;
+            return f;
+        };
+        const double logCutoff = std::log(double(mCutoff));
+        if (!(t2At(1.0, nullptr) < double(mCutoff)) || !(t2At(0.0, nullptr) >= double(mCutoff))) return 1.0f;
+        double u = 0.0;
+        for (int n = 0; n < 32; ++n) {
+            double slope;
+            const double f = t2At(u, &slope);
+            const double step = (std::log(f) - logCutoff) * f / -slope;
+            if (!(step > 1e-9)) break;
+            u += step;
+            if (C == 1) break;
+        }
+        return float(std::min(u, 1.0));
     }
 
-    /// The light's transmittance on pixel p's ray at fractions @a u0 and @a u1 of @a slab's
-    /// thickness, for the C channels carried.
-    void lightAt(int p, std::int64_t slab, float u0, float u1, std::array<float, 3>& t0, std::array<float, 3>& t1) const
+    /// The light on pixel p's ray across the layer from fraction @a u0 to @a u1 of @a slab's
+    /// thickness, for the C channels carried: its transmittance at the front, and ln(front /
+    /// back) (slabLightTransmittanceOfLogRatio).
+    void lightAt(int p, std::int64_t slab, float u0, float u1, std::array<float, 3>& front, std::array<float, 3>& logRatio) const
     {
         const double z = mOptions.slabs.start(slab);
         const double z0 = z + double(u0) * mOptions.slabs.thickness, z1 = z + double(u1) * mOptions.slabs.thickness;
         float d0, d1;
         mOptions.light->densityDepths(mRayBase[p] + z0 * mRayDir[p], mRayBase[p] + z1 * mRayDir[p], d0, d1);
         if (C == 1) {
-            t0[0] = mOptions.light->greyTransmittanceOfDepth(d0);
-            t1[0] = mOptions.light->greyTransmittanceOfDepth(d1);
+            const float log0 = mOptions.light->greyLogTransmittanceOfDepth(d0);
+            front[0] = std::exp(log0);
+            logRatio[0] = lightLogRatio(log0, mOptions.light->greyLogTransmittanceOfDepth(d1));
         } else {
-            t0 = mOptions.light->transmittanceOfDepth(d0);
-            t1 = mOptions.light->transmittanceOfDepth(d1);
+            const std::array<float, 3> log0 = mOptions.light->logTransmittanceOfDepth(d0);
+            const std::array<float, 3> log1 = mOptions.light->logTransmittanceOfDepth(d1);
+            for (std::size_t c = 0; c < 3; ++c) {
+                front[c] = std::exp(log0[c]);
+                logRatio[c] = lightLogRatio(log0[c], log1[c]);
+            }
         }
     }
 
@@ -415,11 +438,11 @@ private:
                         const std::size_t m = slot(slab) * kTilePixels + std::size_t(p);
                         const float mean = std::clamp(mMoment[m] / mass, 0.0f, 1.0f);
                         const float half = std::sqrt(3.0f * std::max(mMoment2[m] / mass - mean * mean, 0.0f));
-                        std::array<float, 3> front, back;
-                        lightAt(p, slab, std::max(mean - half, 0.0f), std::min(mean + half, 1.0f), front, back);
+                        std::array<float, 3> front, logRatio;
+                        lightAt(p, slab, std::max(mean - half, 0.0f), std::min(mean + half, 1.0f), front, logRatio);
                         for (int c = 0; c < C; ++c) {
                             const std::size_t i = base + c * kTilePixels + std::size_t(p);
-                            const float tl = slabLightTransmittance(mTau[i], absorbed[c], front[std::size_t(c)], back[std::size_t(c)]);
+                            const float tl = slabLightTransmittanceOfLogRatio(mTau[i], absorbed[c], front[std::size_t(c)], logRatio[std::size_t(c)]);
                             lit[c] = std::max(mScatter.empty() ? mTau[i] : mScatter[i], 0.0f) * tl;
                             emission[c] += mLightScale[c] * lit[c];
                         }
@@ -522,6 +545,19 @@ bool allGrey(const SplatSet& set, const OpticalModel& model)
     return true;
 }
 
+/// The order in which every tile sweeps its splats: by first slab, ties in kernel order (a
+/// tile's list, binned in this order, needs no sort of its own).
+std::vector<std::uint32_t> sweepOrder(const SplatSet& set)
+{
+    std::vector<std::uint32_t> order(set.splats.size());
+    for (std::uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+    tbb::parallel_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+        const std::int64_t sa = set.splats[a].firstSlab, sb = set.splats[b].firstSlab;
+        return sa < sb || (sa == sb && a < b);
+    });
+    return order;
+}
+
 /// Composite every tile with a C-channel compositor.
 template <int C>
 void compositeTiles(const SplatSet& set, const TileBins& bins, const CompositeOptions& options,
@@ -531,28 +567,22 @@ void compositeTiles(const SplatSet& set, const TileBins& bins, const CompositeOp
     const int width = frame.beauty.width, height = frame.beauty.height;
     const int tiles = bins.tilesX * bins.tilesY;
     tbb::parallel_for(tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& range) {
-        std::vector<std::uint32_t> order;
         for (int t = range.begin(); t < range.end(); ++t) {
             const int tx = t % bins.tilesX, ty = t / bins.tilesX;
             const int x0 = tx * kTileSize, y0 = ty * kTileSize;
             const int w = std::min(kTileSize, width - x0), h = std::min(kTileSize, height - y0);
-            order.assign(bins.indices.begin() + std::ptrdiff_t(bins.offsets[t]),
-                bins.indices.begin() + std::ptrdiff_t(bins.offsets[t + 1]));
-            // Indices arrive in kernel order; a stable sort by first slab keeps ties in it.
-            std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
-                return set.splats[a].firstSlab < set.splats[b].firstSlab;
-            });
-            std::uint32_t maxSpan = 1;
-            for (std::uint32_t i : order) maxSpan = std::max(maxSpan, set.splats[i].slabCount);
-            TileCompositor<C> tile(x0, y0, w, h, ringSizeFor(maxSpan), options);
+            // Indices arrive in (first slab, kernel index) order (sweepOrder).
+            const std::uint32_t* order = bins.indices.data() + bins.offsets[t];
+            const std::size_t count = std::size_t(bins.offsets[t + 1] - bins.offsets[t]);
+            TileCompositor<C> tile(x0, y0, w, h, ringSizeFor(std::max(bins.maxSpan[std::size_t(t)], 1u)), options);
             std::size_t done = 0;
             const std::size_t passFloats = std::size_t(set.passSourceCount) * 3;
-            for (; done < order.size() && !tile.opaque(); ++done) {
+            for (; done < count && !tile.opaque(); ++done) {
                 const Splat& s = set.splats[order[done]];
                 tile.add(s, set.shares.data() + s.shareOffset, set.shareMoments.data() + 2 * s.shareOffset,
                     passFloats ? set.passSources.data() + order[done] * passFloats : nullptr);
             }
-            skipped[std::size_t(t)] = order.size() - done;
+            skipped[std::size_t(t)] = count - done;
             tile.finish(frame, depthScale, deep.empty() ? nullptr : &deep[std::size_t(t)]);
             advance(progress);
         }
@@ -623,7 +653,9 @@ Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSet
     const int width = camera.width(), height = camera.height();
     Frame frame = blankFrame(width, height, passes);
 
-    const TileBins bins = binSplats(set.splats, width, height);
+    const std::vector<std::uint32_t> order = sweepOrder(set);
+    const TileBins bins = binSplatsInOrder(
+        set.splats, order.size(), [&](std::size_t k) { return order[k]; }, [](const Splat& s) { return s.slabCount; }, width, height);
     stats.splatTilePairs = bins.indices.size();
     const int tiles = bins.tilesX * bins.tilesY;
     std::vector<std::uint64_t> skipped(std::size_t(tiles), 0);

@@ -32,10 +32,11 @@ double ExponentialSum::operator()(double x) const
 }
 
 LightMap::LightMap(const GridSource::Impl& grid, const RenderSettings& settings, Progress* progress)
-    : mCutoff(float(settings.cutoff))
+    : mCutoff(float(settings.cutoff)), mLogCutoff(std::log(mCutoff)), mLogGreyFloor(0.5f * std::log(mCutoff / 3.0f))
 {
     const OpticalModel model(settings);
     for (int c = 0; c < 3; ++c) mExtinction[c] = float(model.extinction(c));
+    mGrey = mExtinction[0] == mExtinction[1] && mExtinction[0] == mExtinction[2];
     mUnlit = model.unlit();
     const openvdb::CoordBBox box = grid.field->evalActiveVoxelBoundingBox();
     setUnits(progress, 0);
@@ -101,12 +102,18 @@ LightMap::LightMap(const GridSource::Impl& grid, const RenderSettings& settings,
                 int kTop = -1, kBottom = -1; // samples holding density
                 for (int k = mNw - 1; k >= 0; --k) {
                     const Vec3d p = indexAt(i, j, k);
-                    double d = 0.0;
-                    if (!grid.linear || skipper.emptyExit(p, -dw) < 1.0) {
-                        float v = 0.0f;
-                        openvdb::tools::BoxSampler::sample(skipper.accessor(), openvdb::Vec3d(p.x, p.y, p.z), v);
-                        if (v >= settings.cutoff) d = v; // vdb_render skips samples below its cutoff
+                    // In an empty node, every sample before the ray leaves it (p - t dw, t < exit) is 0.
+                    const double exit = grid.linear ? skipper.emptyExit(p, -dw) : 0.0;
+                    if (exit > 0.0) {
+                        const int empty = int(std::min(std::ceil(exit), double(k + 1)));
+                        std::fill_n(density.begin() + (k + 1 - empty), empty, 0.0);
+                        k -= empty - 1;
+                        continue;
                     }
+                    double d = 0.0;
+                    float v = 0.0f;
+                    openvdb::tools::BoxSampler::sample(skipper.accessor(), openvdb::Vec3d(p.x, p.y, p.z), v);
+                    if (v >= settings.cutoff) d = v; // vdb_render skips samples below its cutoff
                     density[std::size_t(k)] = d;
                     if (d > 0.0) {
                         if (kTop < 0) kTop = k;
@@ -201,34 +208,39 @@ void LightMap::densityDepths(const Vec3d& q0, const Vec3d& q1, float& d0, float&
     d1 = depthInCell(c, q1.z);
 }
 
-std::array<float, 3> LightMap::transmittanceOfDepth(float depth) const
+std::array<float, 3> LightMap::logTransmittanceOfDepth(float depth) const
 {
-    std::array<float, 3> t{1.0f, 1.0f, 1.0f};
-    if (!(depth > 0.0f)) return t;
+    std::array<float, 3> logT{0.0f, 0.0f, 0.0f};
+    if (mGrey) {
+        // The grey path's value in every channel: bit-identical to it by construction.
+        logT.fill(greyLogTransmittanceOfDepth(depth));
+        return logT;
+    }
+    if (!(depth > 0.0f)) return logT;
     float t2 = 0.0f;
-    for (int c = 0; c < 3; ++c) {
-        t[std::size_t(c)] = std::exp(-mExtinction[c] * depth);
-        t2 += t[std::size_t(c)] * t[std::size_t(c)];
+    for (std::size_t c = 0; c < 3; ++c) {
+        logT[c] = -mExtinction[c] * depth;
+        t2 += std::exp(2.0f * logT[c]);
     }
     // vdb_render stops a shadow ray once |T|^2 < cutoff: the transmittance it keeps is about
-    // that threshold, never darker.
+    // that threshold (every channel scaled alike), never darker.
     if (t2 < mCutoff) {
-        const float scale = t2 > 1e-30f ? std::sqrt(mCutoff / t2) : 0.0f;
-        for (float& v : t) v = scale > 0.0f ? v * scale : std::sqrt(mCutoff / 3.0f);
+        for (std::size_t c = 0; c < 3; ++c) logT[c] = t2 > 1e-30f ? logT[c] + 0.5f * (mLogCutoff - std::log(t2)) : mLogGreyFloor;
     }
-    return t;
+    return logT;
 }
 
-float LightMap::greyTransmittanceOfDepth(float depth) const
+float LightMap::greyLogTransmittanceOfDepth(float depth) const
 {
-    // transmittanceOfDepth's arithmetic for channel 0, bit for bit, with three equal channels.
-    if (!(depth > 0.0f)) return 1.0f;
-    const float e = std::exp(-mExtinction[0] * depth);
-    float t2 = 0.0f;
-    for (int c = 0; c < 3; ++c) t2 += e * e;
-    if (!(t2 < mCutoff)) return e;
-    const float scale = t2 > 1e-30f ? std::sqrt(mCutoff / t2) : 0.0f;
-    return scale > 0.0f ? e * scale : std::sqrt(mCutoff / 3.0f);
+    // |T|^2 = 3 T^2 < cutoff where T < sqrt(cutoff / 3): the floor, in the log domain.
+    return depth > 0.0f ? std::max(-mExtinction[0] * depth, mLogGreyFloor) : 0.0f;
+}
+
+std::array<float, 3> LightMap::transmittanceOfDepth(float depth) const
+{
+    std::array<float, 3> t = logTransmittanceOfDepth(depth);
+    for (float& v : t) v = std::exp(v);
+    return t;
 }
 
 } // namespace detail

@@ -60,8 +60,12 @@ public:
     /// The light's transmittance behind a unit-extinction optical depth @a depth (densityDepth),
     /// per channel, with the same floor.
     std::array<float, 3> transmittanceOfDepth(float depth) const;
+    /// Its natural logarithm per channel: minus the optical depth where the floor does not
+    /// apply, so that ln(front / back) across a layer needs no log. In a grey medium (the same
+    /// extinction in R, G and B) each channel is greyLogTransmittanceOfDepth, bit for bit.
+    std::array<float, 3> logTransmittanceOfDepth(float depth) const;
     /// The same where every channel's extinction is the same (the grey fast path): one value.
-    float greyTransmittanceOfDepth(float depth) const;
+    float greyLogTransmittanceOfDepth(float depth) const;
 
 private:
     struct Ray
@@ -90,6 +94,9 @@ private:
     LargeArray<float> mDepth;
     float mExtinction[3];
     float mCutoff;
+    float mLogCutoff;
+    float mLogGreyFloor; ///< ln sqrt(cutoff / 3): a grey medium's floor
+    bool mGrey = true;   ///< the same extinction in R, G and B
     bool mUnlit;
 };
 
