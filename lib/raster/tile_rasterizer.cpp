@@ -578,6 +578,13 @@ void compositeTiles(const SplatSet& set, const TileBins& bins, const CompositeOp
             std::size_t done = 0;
             const std::size_t passFloats = std::size_t(set.passSourceCount) * 3;
             for (; done < count && !tile.opaque(); ++done) {
+                // The list jumps across the splat array (depth order): fetch ahead.
+                if (done + 4 < count) __builtin_prefetch(&set.splats[order[done + 4]]);
+                if (done + 2 < count) {
+                    const Splat& ahead = set.splats[order[done + 2]];
+                    __builtin_prefetch(set.shares.data() + ahead.shareOffset);
+                    __builtin_prefetch(set.shareMoments.data() + 2 * ahead.shareOffset);
+                }
                 const Splat& s = set.splats[order[done]];
                 tile.add(s, set.shares.data() + s.shareOffset, set.shareMoments.data() + 2 * s.shareOffset,
                     passFloats ? set.passSources.data() + order[done] * passFloats : nullptr);
