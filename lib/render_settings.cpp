@@ -16,33 +16,33 @@ bool nonNegative3(const Vec3d& v) { return finite3(v) && v.x >= 0.0 && v.y >= 0.
 void RenderSettings::validate() const
 {
     auto fail = [](const std::string& what) { throw ValueError(what); };
-    if (!nonNegative3(absorb)) fail("--absorb must be finite and >= 0");
-    if (!nonNegative3(scatter)) fail("--scatter must be finite and >= 0");
-    if (!finite3(lightDir) || !(glm::length(lightDir) > 0.0)) fail("--light direction must be a finite non-zero vector");
-    if (!nonNegative3(lightColor)) fail("--light colour must be finite and >= 0");
-    if (!nonNegative3(emission)) fail("--emission must be finite and >= 0");
+    if (!nonNegative3(medium.absorb)) fail("--absorb must be finite and >= 0");
+    if (!nonNegative3(medium.scatter)) fail("--scatter must be finite and >= 0");
+    if (!finite3(light.direction) || !(glm::length(light.direction) > 0.0)) fail("--light direction must be a finite non-zero vector");
+    if (!nonNegative3(light.color)) fail("--light colour must be finite and >= 0");
+    if (!nonNegative3(medium.emission)) fail("--emission must be finite and >= 0");
     for (int c = 0; c < 3; ++c) {
-        if (emission[c] > 0.0 && !(absorb[c] + scatter[c] > 0.0)) {
+        if (medium.emission[c] > 0.0 && !(medium.absorb[c] + medium.scatter[c] > 0.0)) {
             fail("--emission needs --absorb + --scatter > 0 in every channel that emits (the slab update divides by the optical depth)");
         }
     }
-    if (!(gain >= 0.0) || !std::isfinite(gain)) fail("--gain must be finite and >= 0");
+    if (!(shadow.gain >= 0.0) || !std::isfinite(shadow.gain)) fail("--gain must be finite and >= 0");
     if (!(cutoff >= 0.0 && cutoff < 1.0)) fail("--cutoff must be in [0, 1)");
-    if (!(shadowStep > 0.0) || !std::isfinite(shadowStep)) fail("--shadowstep must be > 0 voxels");
-    if (!(shadowResolution >= 0.25 && shadowResolution <= 16.0)) fail("--shadow-res must be in [0.25, 16] voxels");
+    if (!(shadow.step > 0.0) || !std::isfinite(shadow.step)) fail("--shadowstep must be > 0 voxels");
+    if (!(shadow.resolution >= 0.25 && shadow.resolution <= 16.0)) fail("--shadow-res must be in [0.25, 16] voxels");
     if (!(step >= 1e-3) || !std::isfinite(step)) fail("--step must be >= 0.001 voxels");
-    if (!(kernelSigma >= 0.1 && kernelSigma <= 4.0)) fail("--kernel-sigma must be in [0.1, 4] voxels");
-    if (!(surfaceSigma >= 0.1 && surfaceSigma <= 4.0)) fail("--surface-sigma must be in [0.1, 4] voxels");
-    if (!(lowpass >= 0.0 && lowpass <= 100.0)) fail("--lowpass must be in [0, 100] pixels^2");
-    if (antiAliasing != AntiAliasing::None && !(lowpass > 0.0)) fail("--lowpass must be > 0 unless --aa none");
-    if (!(cutoffRadius >= 1.0 && cutoffRadius <= 6.0)) fail("--cutoff-radius must be in [1, 6] sigma");
-    if (!(slab >= 0.05 && slab <= 1.0e4)) fail("--slab must be in [0.05, 10000] voxels");
-    if (tileKernelSpacing < 1 || tileKernelSpacing > 64) fail("tile kernel spacing must be in [1, 64] voxels");
-    if (!(lodPixels >= 0.0 && lodPixels <= 64.0)) fail("--lod must be in [0, 64] pixels");
-    if (!std::isfinite(isovalue)) fail("--isovalue must be finite");
-    if (std::isinf(iso)) fail("--iso must be finite");
-    if (!(isoOpacity >= 0.0 && isoOpacity <= 1.0)) fail("--iso-opacity must be in [0, 1]");
-    if (!(surfaceTolerance > 0.0 && surfaceTolerance <= 100.0)) fail("surface depth tolerance must be in (0, 100] voxels");
+    if (!(splat.kernelSigma >= 0.1 && splat.kernelSigma <= 4.0)) fail("--kernel-sigma must be in [0.1, 4] voxels");
+    if (!(surface.sigma >= 0.1 && surface.sigma <= 4.0)) fail("--surface-sigma must be in [0.1, 4] voxels");
+    if (!(splat.lowpass >= 0.0 && splat.lowpass <= 100.0)) fail("--lowpass must be in [0, 100] pixels^2");
+    if (splat.antiAliasing != AntiAliasing::None && !(splat.lowpass > 0.0)) fail("--lowpass must be > 0 unless --aa none");
+    if (!(splat.cutoffRadius >= 1.0 && splat.cutoffRadius <= 6.0)) fail("--cutoff-radius must be in [1, 6] sigma");
+    if (!(splat.slab >= 0.05 && splat.slab <= 1.0e4)) fail("--slab must be in [0.05, 10000] voxels");
+    if (splat.tileKernelSpacing < 1 || splat.tileKernelSpacing > 64) fail("tile kernel spacing must be in [1, 64] voxels");
+    if (!(splat.lodPixels >= 0.0 && splat.lodPixels <= 64.0)) fail("--lod must be in [0, 64] pixels");
+    if (!std::isfinite(surface.isovalue)) fail("--isovalue must be finite");
+    if (std::isinf(surface.iso)) fail("--iso must be finite");
+    if (!(surface.isoOpacity >= 0.0 && surface.isoOpacity <= 1.0)) fail("--iso-opacity must be in [0, 1]");
+    if (!(surface.tolerance > 0.0 && surface.tolerance <= 100.0)) fail("surface depth tolerance must be in (0, 100] voxels");
     if (threads < 0) fail("--threads must be >= 0");
 }
 
@@ -51,22 +51,22 @@ RenderSettings RenderSettings::preset(Quality quality)
     RenderSettings s;
     switch (quality) {
     case Quality::Draft:
-        s.cutoffRadius = 2.0;
-        s.slab = 4.0;
-        s.shadowStep = 1.0;
-        s.shadowResolution = 2.0;
-        s.tileKernelSpacing = 8;
-        s.lodPixels = 10.0;
+        s.splat.cutoffRadius = 2.0;
+        s.splat.slab = 4.0;
+        s.shadow.step = 1.0;
+        s.shadow.resolution = 2.0;
+        s.splat.tileKernelSpacing = 8;
+        s.splat.lodPixels = 10.0;
         break;
     case Quality::Default:
         break;
     case Quality::High:
-        s.slab = 0.5;
-        s.shadowStep = 0.375;
-        s.shadowResolution = 0.5;
-        s.tileKernelSpacing = 2;
-        s.expEvaluation = ExpEvaluation::Exact;
-        s.lodPixels = 0.0;
+        s.splat.slab = 0.5;
+        s.shadow.step = 0.375;
+        s.shadow.resolution = 0.5;
+        s.splat.tileKernelSpacing = 2;
+        s.splat.expEvaluation = ExpEvaluation::Exact;
+        s.splat.lodPixels = 0.0;
         break;
     }
     return s;

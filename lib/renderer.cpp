@@ -58,10 +58,10 @@ void Renderer::renderLevelSet(const GridSource::Impl& grid, const Camera& camera
     if (passes.shadow || passes.emission || passes.deep) {
         throw ValueError("level sets give the beauty, Z and transmittance (shadow, emission and deep passes are volume passes)");
     }
-    if (!std::isnan(mSettings.iso)) throw ValueError("--iso is for fog volumes; a level set's surface is chosen with --isovalue");
+    if (!std::isnan(mSettings.surface.iso)) throw ValueError("--iso is for fog volumes; a level set's surface is chosen with --isovalue");
     StageTimer timer;
     progress.stage(0, 60);
-    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(grid, mSettings.isovalue, mSettings.surfaceSigma, false, &progress);
+    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(grid, mSettings.surface.isovalue, mSettings.surface.sigma, false, &progress);
     stats.kernelSeconds = timer.lap();
     progress.stage(60, 100);
     detail::SurfaceStats surfaceStats;
@@ -74,7 +74,7 @@ void Renderer::renderLevelSet(const GridSource::Impl& grid, const Camera& camera
     stats.splatTilePairs = surfaceStats.splatTilePairs;
     if (surfaces.kernels.empty()) {
         std::ostringstream w;
-        w << "no voxel lies next to the iso-surface " << mSettings.isovalue << ": the image is empty";
+        w << "no voxel lies next to the iso-surface " << mSettings.surface.isovalue << ": the image is empty";
         stats.warnings.push_back(w.str());
     }
 }
@@ -82,7 +82,7 @@ void Renderer::renderLevelSet(const GridSource::Impl& grid, const Camera& camera
 void Renderer::addIsoSurface(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes,
     const detail::LightMap& light, detail::SplatSet& splats, detail::Progress& progress) const
 {
-    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(grid, mSettings.iso, mSettings.surfaceSigma, true, &progress);
+    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(grid, mSettings.surface.iso, mSettings.surface.sigma, true, &progress);
     // The light's transmittance at the surface kernels, from the volume's light map.
     std::vector<detail::Rgb> shadows(surfaces.kernels.size());
     for (std::size_t i = 0; i < shadows.size(); ++i) shadows[i] = light.transmittance(light.coordinates(surfaces.kernels[i].pWorld));
@@ -95,9 +95,9 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     // Progress: the stages' typical shares of a frame (docs/performance.md).
     StageTimer timer;
     progress.stage(0, 10);
-    const detail::LevelOfDetail lod(g, camera, mSettings.lodPixels);
+    const detail::LevelOfDetail lod(g, camera, mSettings.splat.lodPixels);
     detail::KernelSet kernels = detail::extractKernels(g, mSettings, &lod, &progress);
-    if (mSettings.prefilter) stats.haloKernels = detail::quasiInterpolate(g, detail::quasiInterpolationAlpha(mSettings.kernelSigma), kernels);
+    if (mSettings.splat.prefilter) stats.haloKernels = detail::quasiInterpolate(g, detail::quasiInterpolationAlpha(mSettings.splat.kernelSigma), kernels);
     stats.kernelSeconds = timer.lap();
     progress.stage(10, 35);
     const detail::LightMap light(g, mSettings, &progress);
@@ -105,7 +105,7 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     progress.stage(35, 45);
     const std::vector<detail::Rgb> colors = detail::kernelColors(g, kernels);
     detail::SplatSet splats = detail::projectSplats(g, kernels, colors, camera, mSettings, passes, &progress);
-    if (!std::isnan(mSettings.iso)) addIsoSurface(g, camera, passes, light, splats, progress);
+    if (!std::isnan(mSettings.surface.iso)) addIsoSurface(g, camera, passes, light, splats, progress);
     stats.projectSeconds = timer.lap();
     progress.stage(45, 100);
     detail::RasterStats raster;

@@ -66,8 +66,8 @@ TEST(Convergence, ReferenceLightsALinearRampAsItsNumericalIntegral)
     auto grid = makeFogGrid(openvdb::Coord(0, -20, 0), openvdb::Coord(N - 1, 19, D - 1),
         [&](const openvdb::Coord& ijk) { return float(g * (ijk.x() + 1)); }, h);
     RenderSettings s = scatteringSlabSettings(sigma);
-    s.lightDir = Vec3d(1, 0, 0);
-    s.shadowStep = 0.025;
+    s.light.direction = Vec3d(1, 0, 0);
+    s.shadow.step = 0.025;
     s.method = Method::RayMarch;
     s.step = 0.05;
     // The frame spans x in [-0.5, N - 1.5] voxels, inside the linear part, and the middle in y.
@@ -104,12 +104,12 @@ TEST(Convergence, ThinDenseSheetLitFromTheCameraMatchesTheClosedForm)
     // optical depth is short by about step x density / 2 (0.2 at step 0.05, 3 % brighter), so
     // the step is fine.
     RenderSettings s = scatteringSlabSettings(1.0);
-    s.shadowStep = 0.005;
+    s.shadow.step = 0.005;
     s.step = 0.02;
     const double expected = 0.5 * (1.0 - std::exp(-2.0 * rho));
     const auto error = [&](Method method, double slab) {
         s.method = method;
-        s.slab = slab;
+        s.splat.slab = slab;
         const Image img = renderGrid(makeBoxGrid(openvdb::Coord(-20, -20, 0), openvdb::Coord(19, 19, 0), float(rho), h),
             orthoDownZ(-0.05, -0.05, 1.0, 1.0, 16), s);
         const double e = worstError(img, 0, -5.0, -5.0, 10.0, [&](double, double) { return expected; });
@@ -147,10 +147,10 @@ TEST(Convergence, SmallerShadowStepsNeverMoveAwayFromTheClosedForm)
         RenderSettings s = scatteringSlabSettings(sigma);
         s.method = method;
         s.step = 0.1;
-        s.slab = 0.5;
+        s.splat.slab = 0.5;
         double previous = 1e30;
         for (const double step : {3.0, 1.0, 0.375, 0.125}) {
-            s.shadowStep = step;
+            s.shadow.step = step;
             const Image img = renderGrid(makeBoxGrid(openvdb::Coord(-20, -20, 0), openvdb::Coord(19, 19, depth - 1), float(rho), h),
                 orthoDownZ(-0.05, -0.05, 2.0, 1.0, 8), s);
             const double e = worstError(img, 0, -5.0, -5.0, 10.0, [&](double, double) { return expected; });

@@ -71,7 +71,7 @@ Frame renderAll(const Scene& scene, bool deep = false)
     p.depth = p.transmittance = p.shadow = p.emission = !deep;
     p.deep = deep;
     RenderSettings s;
-    s.emission = Vec3d(0.1, 0.05, 0.0);
+    s.medium.emission = Vec3d(0.1, 0.05, 0.0);
     return Renderer(s).renderFrame(scene.cloud, scene.camera, p);
 }
 

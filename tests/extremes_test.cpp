@@ -96,7 +96,7 @@ TEST(Extremes, GrazingRaysAtTheFrustumEdge)
     cam.setFieldOfView(120.0);
     auto grid = makeBoxGrid(openvdb::Coord(14, -4, -12), openvdb::Coord(40, 4, -2), 0.3f, 0.1);
     RenderSettings wide; // kernels wide enough that some beyond 1.3x the edge reach into the frame
-    wide.kernelSigma = 0.55;
+    wide.splat.kernelSigma = 0.55;
     const RenderStats s = expectMatchesReference(grid, cam, 0.03, wide);
     EXPECT_NE(allWarnings(s).find("frustum edge"), std::string::npos) << allWarnings(s);
 }
@@ -110,9 +110,9 @@ TEST(Extremes, FootprintLargerThanTheImage)
     // the same Gaussian, self-emitting (the diagnostic march shades per kernel centre, the
     // splatter per slab sample: with no light the two differ only in the projection).
     RenderSettings emissive;
-    emissive.scatter = Vec3d(0.0);
-    emissive.absorb = Vec3d(1.6);
-    emissive.emission = Vec3d(1.0);
+    emissive.medium.scatter = Vec3d(0.0);
+    emissive.medium.absorb = Vec3d(1.6);
+    emissive.medium.emission = Vec3d(1.0);
     expectMatchesReference(makeBoxGrid(openvdb::Coord(0), openvdb::Coord(0), 0.5f, 1.0), cam, 0.02, emissive, 0.25,
         Method::RayMarchGaussian);
 }
@@ -187,7 +187,7 @@ TEST(Extremes, SmallVoxelsFarFromTheOrigin)
         CameraSettings cam = camera(offset + Vec3d(0.01, 0.02, 0.06), offset, 64, 48);
         cam.near = 1e-5;
         RenderSettings s;
-        s.doublePrecision = doublePrecision;
+        s.splat.doublePrecision = doublePrecision;
         return renderGrid(grid, cam, s);
     };
     const Image origin = render(Vec3d(0.0), true);

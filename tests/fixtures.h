@@ -145,8 +145,8 @@ inline openvdb::FloatGrid::Ptr sphereLevelSet(double radius, double h)
 inline RenderSettings absorberSettings(double sigma)
 {
     RenderSettings s;
-    s.absorb = Vec3d(sigma);
-    s.scatter = Vec3d(0.0);
+    s.medium.absorb = Vec3d(sigma);
+    s.medium.scatter = Vec3d(0.0);
     s.cutoff = 0.0;
     s.threads = 0;
     return s;
@@ -158,13 +158,13 @@ inline RenderSettings absorberSettings(double sigma)
 inline RenderSettings scatteringSlabSettings(double sigma)
 {
     RenderSettings s;
-    s.absorb = Vec3d(0.0);
-    s.scatter = Vec3d(sigma);
-    s.lightDir = Vec3d(0, 0, 1);
-    s.lightColor = Vec3d(1.0);
-    s.gain = 0.0;
+    s.medium.absorb = Vec3d(0.0);
+    s.medium.scatter = Vec3d(sigma);
+    s.light.direction = Vec3d(0, 0, 1);
+    s.light.color = Vec3d(1.0);
+    s.shadow.gain = 0.0;
     s.cutoff = 0.0;
-    s.shadowStep = 0.1;
+    s.shadow.step = 0.1;
     s.step = 0.25;
     return s;
 }

@@ -147,7 +147,7 @@ TEST(Progress, EveryStageAdvancesExactlyTheUnitsItDeclares)
 
     const GridSource sphere = gridSourceFromOpenVDB(sphereLevelSet(1.0, 0.04));
     const GridSource::Impl& surface = sphere.impl();
-    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(surface, 0.0, settings.kernelSigma, false, &progress);
+    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(surface, 0.0, settings.splat.kernelSigma, false, &progress);
     expectComplete("surface kernels (one per leaf node)", surface.grid->tree().leafCount());
     detail::SurfaceStats surfaceStats;
     const Camera sphereView(orthoDownZ(0.0, 0.0, 5.0, 3.0, 150), Vec3d(0.0));
@@ -233,7 +233,7 @@ TEST(Renderers, TwoRenderersWithDifferentSettingsAtOnceGiveTheImagesTheyGiveAlon
     a.threads = 1;
     RenderSettings b = RenderSettings::preset(Quality::High);
     b.threads = 2;
-    b.scatter = Vec3d(0.5, 1.0, 2.0);
+    b.medium.scatter = Vec3d(0.5, 1.0, 2.0);
     const Camera ca = cloudCamera(cloud, 320, 180), cb = cloudCamera(sheared, 256, 256);
     const Image aloneA = Renderer(a).render(cloud, ca), aloneB = Renderer(b).render(sheared, cb);
     for (int round = 0; round < 3; ++round) {

@@ -105,11 +105,11 @@ TEST(LevelOfDetail, OpticalDepthIntegralIsKept)
     // merging keeps (mass x projected area per unit volume).
     auto grid = blob(6, 1.0f, 1.0);
     RenderSettings s = absorberSettings(1e-4);
-    s.lodPixels = 0.0;
+    s.splat.lodPixels = 0.0;
     const CameraSettings cam = perspectiveDownZ(400.0, 256); // a voxel is 0.32 pixels
     RenderStats plain, merged;
     const Image a = renderGrid(grid, cam, s, &plain);
-    s.lodPixels = 2.0;
+    s.splat.lodPixels = 2.0;
     const Image b = renderGrid(grid, cam, s, &merged);
     EXPECT_EQ(plain.voxelsMerged, 0u);
     EXPECT_EQ(merged.voxelsMerged, merged.activeVoxels);
@@ -124,7 +124,7 @@ TEST(LevelOfDetail, UniformMediumIsUnchanged)
     const double sigma = 0.2, rho = 0.5;
     auto grid = makeBoxGrid(openvdb::Coord(-32, -32, 0), openvdb::Coord(31, 31, 15), float(rho), 1.0);
     RenderSettings s = absorberSettings(sigma);
-    s.lodPixels = 4.0;
+    s.splat.lodPixels = 4.0;
     RenderStats stats;
     const Image img = renderGrid(grid, orthoDownZ(-0.5, -0.5, 100.0, 16.0, 8), s, &stats); // 0.5 pixels a voxel
     EXPECT_EQ(stats.voxelsMerged, stats.activeVoxels);
@@ -138,11 +138,11 @@ TEST(LevelOfDetail, SubPixelVoxelsMergeWithASmallError)
     // dominates every footprint, so merging them barely changes the image.
     auto grid = blob(12, 0.5f, 1.0);
     RenderSettings s;
-    s.lodPixels = 0.0;
+    s.splat.lodPixels = 0.0;
     const CameraSettings cam = perspectiveDownZ(600.0, 256); // a voxel ~ 0.22 pixels
     RenderStats plain, merged;
     const Image a = renderGrid(grid, cam, s, &plain);
-    s.lodPixels = 1.0; // blocks of up to 4 voxels
+    s.splat.lodPixels = 1.0; // blocks of up to 4 voxels
     const Image b = renderGrid(grid, cam, s, &merged);
     EXPECT_GT(merged.voxelsMerged, 0u);
     EXPECT_LT(merged.kernels * 8, plain.kernels);

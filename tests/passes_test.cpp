@@ -59,7 +59,7 @@ TEST(Passes, DepthIsWhereAlphaReachesOneHalfInAUniformSlab)
     const double expected = 10.0 - 0.05 + std::log(2.0) / 0.1 * kVoxel;
     for (const double slabVoxels : {0.5, 2.0, 8.0}) {
         RenderSettings s = absorberSettings(0.1);
-        s.slab = slabVoxels;
+        s.splat.slab = slabVoxels;
         const Frame f = Renderer(s).renderFrame(slab, camera, allFlatPasses());
         ASSERT_EQ(f.depth.size(), 64u);
         for (float z : f.depth) EXPECT_NEAR(z, expected, 0.25 * kVoxel) << "--slab " << slabVoxels;
@@ -89,7 +89,7 @@ TEST(Passes, DepthIsCameraDepthForPerspectiveCameras)
     c.setFieldOfView(60.0);
     const Camera camera(c, Vec3d(0.0));
     RenderSettings s = absorberSettings(0.1);
-    s.lodPixels = 0.0; // keep voxels unmerged for an exact face
+    s.splat.lodPixels = 0.0; // keep voxels unmerged for an exact face
     const Frame f = Renderer(s).renderFrame(slab, camera, allFlatPasses());
     for (const auto& [x, y] : {std::pair{0, 0}, {32, 32}, {63, 20}, {10, 50}}) {
         const double u = (x + 0.5 - 32.0) / camera.focalPixels(), v = (y + 0.5 - 32.0) / camera.focalPixels();
@@ -103,11 +103,11 @@ TEST(Passes, TransmittanceIsPerChannelAndAlphaIsItsMean)
     // 10 voxels deep, absorb (0.05, 0.1, 0.2): T_c = exp(-10 sigma_c).
     const GridSource slab = gridSourceFromOpenVDB(makeBoxGrid(openvdb::Coord(-20, -20, -9), openvdb::Coord(20, 20, 0), 1.0f, kVoxel));
     RenderSettings s = absorberSettings(0.0);
-    s.absorb = Vec3d(0.05, 0.1, 0.2);
+    s.medium.absorb = Vec3d(0.05, 0.1, 0.2);
     const Frame f = Renderer(s).renderFrame(slab, slabCamera(), allFlatPasses());
     for (std::size_t i = 0; i < 64; ++i) {
         for (int c = 0; c < 3; ++c) {
-            EXPECT_NEAR(f.transmittance[3 * i + c], std::exp(-10.0 * s.absorb[c]), 0.01) << "channel " << c;
+            EXPECT_NEAR(f.transmittance[3 * i + c], std::exp(-10.0 * s.medium.absorb[c]), 0.01) << "channel " << c;
         }
         const float* t = &f.transmittance[3 * i];
         EXPECT_FLOAT_EQ(f.beauty.rgba[4 * i + 3], 1.0f - (t[0] + t[1] + t[2]) / 3.0f);
@@ -119,8 +119,8 @@ TEST(Passes, ShadowPassIsTheBeautyOfAWhiteAlbedoOneMedium)
     const GridSource cloud = makeSampleGrid(SampleGrid::Cloud, 0.05);
     const Camera camera = cloudCamera(cloud, 96, 64);
     RenderSettings s; // absorb 0, white light 1: the beauty is the composited shadow term
-    s.absorb = Vec3d(0.0);
-    s.lightColor = Vec3d(1.0);
+    s.medium.absorb = Vec3d(0.0);
+    s.light.color = Vec3d(1.0);
     const Frame f = Renderer(s).renderFrame(cloud, camera, allFlatPasses());
     double sum = 0.0;
     for (std::size_t i = 0; i < f.shadow.size(); ++i) {
@@ -135,12 +135,12 @@ TEST(Passes, EmissionAloneMatchesTheAnalyticSlabAndAddsToTheLight)
     // Light off: C = (eta / sigma_t)(1 - exp(-sigma_t L)), L = 40 voxels, sigma_t = 0.05.
     const GridSource slab = slabGrid();
     RenderSettings dark = absorberSettings(0.05);
-    dark.lightColor = Vec3d(0.0);
-    dark.emission = Vec3d(0.02, 0.01, 0.0);
+    dark.light.color = Vec3d(0.0);
+    dark.medium.emission = Vec3d(0.02, 0.01, 0.0);
     const Frame f = Renderer(dark).renderFrame(slab, slabCamera(), allFlatPasses());
     for (std::size_t i = 0; i < 64; ++i)
         for (int c = 0; c < 3; ++c) {
-            const double expected = dark.emission[c] / 0.05 * (1.0 - std::exp(-0.05 * 40.0));
+            const double expected = dark.medium.emission[c] / 0.05 * (1.0 - std::exp(-0.05 * 40.0));
             EXPECT_NEAR(f.beauty.rgba[4 * i + c], expected, 0.01 * expected + 1e-7);
             EXPECT_FLOAT_EQ(f.emission[3 * i + c], f.beauty.rgba[4 * i + c]);
         }
@@ -149,7 +149,7 @@ TEST(Passes, EmissionAloneMatchesTheAnalyticSlabAndAddsToTheLight)
     const Camera camera = cloudCamera(cloud, 96, 64);
     RenderSettings lit;
     RenderSettings both = lit;
-    both.emission = Vec3d(0.3, 0.1, 0.05);
+    both.medium.emission = Vec3d(0.3, 0.1, 0.05);
     const Frame a = Renderer(lit).renderFrame(cloud, camera, allFlatPasses());
     const Frame b = Renderer(both).renderFrame(cloud, camera, allFlatPasses());
     double emitted = 0.0;
@@ -160,7 +160,7 @@ TEST(Passes, EmissionAloneMatchesTheAnalyticSlabAndAddsToTheLight)
     EXPECT_GT(emitted, 1.0);
     // The reference integrator carries the same emission term (light off: emission alone).
     RenderSettings glow = both;
-    glow.lightColor = Vec3d(0.0);
+    glow.light.color = Vec3d(0.0);
     RenderSettings ref = glow;
     ref.method = Method::RayMarch;
     ref.step = 0.5;
@@ -177,7 +177,7 @@ TEST(Passes, PassesLeaveTheBeautyBitIdentical)
     const Camera camera = cloudCamera(cloud, 96, 64);
     for (const Vec3d& light : {Vec3d(0.7), Vec3d(1.0, 0.5, 0.2)}) { // grey and three-channel paths
         RenderSettings s;
-        s.lightColor = light;
+        s.light.color = light;
         const Image plain = Renderer(s).render(cloud, camera);
         PassRequest all = allFlatPasses();
         all.deep = true;
@@ -195,7 +195,7 @@ TEST(Passes, DeepSamplesAreTidyAndFlattenToTheBeauty)
     deepOnly.deep = true;
     for (const double slab : {0.5, 2.0}) {
         RenderSettings s;
-        s.slab = slab;
+        s.splat.slab = slab;
         const Frame f = Renderer(s).renderFrame(cloud, camera, deepOnly);
         const DeepImage& d = f.deep;
         ASSERT_EQ(d.offsets.size(), 96u * 64u + 1u);
@@ -232,7 +232,7 @@ TEST(Passes, RayMarchRejectsPassesItCannotMake)
     shadow.shadow = true;
     EXPECT_THROW(Renderer(s).renderFrame(slab, slabCamera(), shadow), ValueError);
     RenderSettings bad;
-    bad.absorb = bad.scatter = Vec3d(0.0);
-    bad.emission = Vec3d(1.0);
+    bad.medium.absorb = bad.medium.scatter = Vec3d(0.0);
+    bad.medium.emission = Vec3d(1.0);
     EXPECT_THROW(Renderer{bad}, ValueError) << "emission without extinction";
 }

@@ -109,7 +109,7 @@ TEST(Renderer, ColorGridTintsTheScatteredLightPerVoxel)
             }
     const GridSource source = withColorGrid(gridSourceFromOpenVDB(density), color);
     RenderSettings s = scatteringSlabSettings(sigma);
-    s.emission = Vec3d(0.0, 0.05, 0.0);
+    s.medium.emission = Vec3d(0.0, 0.05, 0.0);
     const double tau = sigma * rho * depth;
     const double scattered = 0.5 * (1.0 - std::exp(-2.0 * tau));
     const double emitted = 0.05 / sigma * (1.0 - std::exp(-tau)); // E / extinction x alpha
@@ -140,7 +140,7 @@ TEST(Renderer, StoppedRaysKeepVdbRendersResidualAtAnySlabThickness)
     const double residual = std::sqrt(RenderSettings().cutoff / 3.0);
     for (const double slab : {0.5, 1.0, 2.0, 4.0}) {
         RenderSettings s;
-        s.slab = slab;
+        s.splat.slab = slab;
         const Image img = renderGrid(makeBoxGrid(openvdb::Coord(-20, -20, 0), openvdb::Coord(19, 19, 15), 1.0f, 0.1),
             orthoDownZ(-0.05, -0.05, 5.0, 2.0, 16), s);
         for (std::size_t i = 3; i < img.rgba.size(); i += 4) {
@@ -156,9 +156,9 @@ TEST(Renderer, StoppedColouredRaysKeepTheCutoffTransmittance)
     // coloured absorber must keep |T_rgb|^2 = cutoff, at any slab thickness.
     for (const double slab : {0.5, 2.0, 4.0}) {
         RenderSettings s;
-        s.absorb = Vec3d(0.3, 0.8, 2.0);
-        s.scatter = Vec3d(0.0);
-        s.slab = slab;
+        s.medium.absorb = Vec3d(0.3, 0.8, 2.0);
+        s.medium.scatter = Vec3d(0.0);
+        s.splat.slab = slab;
         PassRequest passes;
         passes.transmittance = true;
         const auto grid = makeBoxGrid(openvdb::Coord(-20, -20, 0), openvdb::Coord(19, 19, 15), 1.0f, 0.1);
@@ -192,12 +192,12 @@ TEST(Renderer, SingleVoxelImageIntegral)
             const double f = camera.focalPixels();
             const double expectedTau = sigma * rho * h * h * glm::length(t) / (t.z * t.z * t.z) * f * f;
             // alpha = 1 - exp(-tau) ~ tau - tau^2 / 2 for the small peak optical depths here.
-            s.prefilter = false;
+            s.splat.prefilter = false;
             EXPECT_NEAR(alphaSum(renderGrid(grid, cam, s)), expectedTau, 0.01 * expectedTau) << "voxel " << c << " size " << h;
             // The prefilter keeps the mass (1 + 6 alpha - 6 alpha), but an isolated voxel's
             // negative halo lobes project outside its footprint, where a slab's optical depth
             // is clamped at 0: 4 % more (docs/numerics.md#quasi-interpolation).
-            s.prefilter = true;
+            s.splat.prefilter = true;
             EXPECT_NEAR(alphaSum(renderGrid(grid, cam, s)), 1.04 * expectedTau, 0.01 * expectedTau) << "voxel " << c << " size " << h;
         }
     }
@@ -232,7 +232,7 @@ TEST(Renderer, PartitionOfUnityRippleShrinksWithKernelSigma)
         // for sharpness: with the prefilter it is the most accurate against the trilinear field
         // (docs/numerics.md#quasi-interpolation). Coarse lattices (tiles, level of detail), whose
         // regions are uniform, need flatness instead.
-        if (sigma == RenderSettings().kernelSigma) {
+        if (sigma == RenderSettings().splat.kernelSigma) {
             EXPECT_LT(r, 0.05);
         }
         if (sigma == detail::kCoarseKernelSigma) {
@@ -264,11 +264,11 @@ TEST(Renderer, GreyFastPathEqualsTheThreeChannelPath)
     const GridSource cloud = makeSampleGrid(SampleGrid::Cloud, 0.05);
     const Camera camera = cloudCamera(cloud, 120, 90);
     RenderSettings colour;
-    colour.lightColor = Vec3d(0.9, 0.5, 0.2);
+    colour.light.color = Vec3d(0.9, 0.5, 0.2);
     const Image c = Renderer(colour).render(cloud, camera);
     for (int ch = 0; ch < 3; ++ch) {
         RenderSettings grey;
-        grey.lightColor = Vec3d(colour.lightColor[ch]);
+        grey.light.color = Vec3d(colour.light.color[ch]);
         const Image g = Renderer(grey).render(cloud, camera);
         std::size_t same = 0, n = 0;
         for (std::size_t i = 0; i < g.rgba.size(); i += 4, ++n) {
@@ -343,14 +343,14 @@ TEST(Renderer, ActiveTilesAgreeWithTheirVoxels)
     const Image reference = Renderer(RenderSettings()).render(voxels, camera);
     for (int spacing : {1, 2, 4, 8}) {
         RenderSettings s;
-        s.tileKernelSpacing = spacing;
+        s.splat.tileKernelSpacing = spacing;
         const Image img = Renderer(s).render(tiles, camera);
         const double e = rmse(img, reference);
         std::printf("active tiles: kernel spacing %d voxels, RMSE against voxelized tiles %.2e\n", spacing, e);
         if (spacing == 1) {
             EXPECT_LT(e, 1e-5);
         }
-        if (spacing == RenderSettings().tileKernelSpacing) {
+        if (spacing == RenderSettings().splat.tileKernelSpacing) {
             EXPECT_LT(e, 2e-3);
         }
     }
@@ -499,9 +499,9 @@ TEST(Renderer, ExpEvaluationModesAgree)
 {
     RenderSettings s;
     const Image incremental = renderSample(SampleGrid::Cloud, 0.05, s);
-    s.expEvaluation = ExpEvaluation::Exact;
+    s.splat.expEvaluation = ExpEvaluation::Exact;
     const Image exact = renderSample(SampleGrid::Cloud, 0.05, s);
-    s.expEvaluation = ExpEvaluation::Table;
+    s.splat.expEvaluation = ExpEvaluation::Table;
     const Image table = renderSample(SampleGrid::Cloud, 0.05, s);
     EXPECT_LT(rmse(incremental, exact), 1e-5);
     EXPECT_LT(rmse(table, exact), 1e-4);
@@ -517,9 +517,9 @@ TEST(Renderer, RenormalisationRestoresTheTruncatedMass)
     cam.translate = Vec3d(0, 0, 2.0);
     cam.lookAt = Vec3d(0.0);
     RenderSettings s = absorberSettings(1e-2); // peak optical depth ~1e-3: alpha ~ tau, float-exact
-    s.cutoffRadius = 2.0;
+    s.splat.cutoffRadius = 2.0;
     const double on = alphaSum(renderGrid(grid, cam, s));
-    s.renormalize = false;
+    s.splat.renormalize = false;
     const double off = alphaSum(renderGrid(grid, cam, s));
     EXPECT_NEAR(off / on, 1.0 - std::exp(-2.0), 2e-3);
 }
@@ -544,12 +544,12 @@ TEST(Renderer, LightMapConvergesAsItsRaysGetDenser)
     // Shadow rays every N voxels across the light (--shadow-res), bilinear in optical depth in
     // between: the error against a fine map falls with N.
     RenderSettings s;
-    s.shadowStep = 0.5;
-    s.shadowResolution = 0.25;
+    s.shadow.step = 0.5;
+    s.shadow.resolution = 0.25;
     const Image fine = renderSample(SampleGrid::Cloud, 0.04, s);
     double previous = 0.0;
     for (double n : {0.5, 1.0, 2.0, 4.0}) {
-        s.shadowResolution = n;
+        s.shadow.resolution = n;
         const double e = rmse(renderSample(SampleGrid::Cloud, 0.04, s), fine, 0);
         std::printf("light map rays every %g voxels: red RMSE against rays every 0.25 voxels %.2e\n", n, e);
         EXPECT_GT(e, previous);

@@ -21,7 +21,7 @@ openvdb::FloatGrid::Ptr torusLevelSet(double major, double minor, double h)
 RenderSettings shaded(SurfaceShader shader)
 {
     RenderSettings s;
-    s.shader = shader;
+    s.surface.shader = shader;
     return s;
 }
 
@@ -50,7 +50,7 @@ TEST(Surface, SphereHasTheRightRadiusAndNormals)
     }
     EXPECT_TRUE(std::isinf(f.depth[0])) << "background";
     RenderSettings fogOption = shaded(SurfaceShader::Normal);
-    fogOption.iso = 0.5;
+    fogOption.surface.iso = 0.5;
     EXPECT_THROW(Renderer(fogOption).render(sphere, camera), ValueError) << "--iso is for fog volumes";
 }
 
@@ -239,7 +239,7 @@ TEST(Surface, CheckerPlaneAtAGrazingAngleShowsNoMoire)
     const GridSource source = CheckerPlane::surface();
     const Camera camera = CheckerPlane::camera();
     RenderSettings ewa = shaded(SurfaceShader::Matte), point = ewa;
-    point.antiAliasing = AntiAliasing::None;
+    point.splat.antiAliasing = AntiAliasing::None;
     const Image filtered = Renderer(ewa).render(source, camera), aliased = Renderer(point).render(source, camera);
     ASSERT_TRUE(filtered.allFinite());
     // Rows by the distance they see: the plane at depth d is at row y = cy + f * 0.5 / d (about).
@@ -268,11 +268,11 @@ TEST(Surface, CheckerSheetWithVolumeKernelsFiltersButBlursTheTexture)
     // a grazing angle: near the camera the surface kernels keep more contrast.
     const Camera camera = CheckerPlane::camera();
     RenderSettings volume;
-    volume.lightDir = Vec3d(0, 1, 0);
-    volume.lightColor = Vec3d(1.0);
-    volume.absorb = Vec3d(0.0);
-    volume.scatter = Vec3d(1.0);
-    volume.shadowStep = 0.25;
+    volume.light.direction = Vec3d(0, 1, 0);
+    volume.light.color = Vec3d(1.0);
+    volume.medium.absorb = Vec3d(0.0);
+    volume.medium.scatter = Vec3d(1.0);
+    volume.shadow.step = 0.25;
     const Image sheet = Renderer(volume).render(CheckerPlane::volume(), camera);
     const Image plane = Renderer(shaded(SurfaceShader::Matte)).render(CheckerPlane::surface(), camera);
     ASSERT_TRUE(sheet.allFinite());
@@ -356,13 +356,13 @@ TEST(Surface, IsoSurfaceInsideAFogVolumeIsOccludingAndTinted)
     };
     const Camera camera(orthoDownZ(0.0, 0.0, 5.0, 3.0, 90), Vec3d(0.0));
     RenderSettings s;
-    s.absorb = Vec3d(0.3, 0.1, 0.02); // the plate's tint (scatter 0: a pure absorber)
-    s.scatter = Vec3d(0.0);
-    s.emission = Vec3d(0.5, 0.5, 0.5); // makes the blob (and the ball's inside) glow
-    s.lightDir = Vec3d(1.0, 0.0, 0.0);
-    s.lightColor = Vec3d(1.0);
+    s.medium.absorb = Vec3d(0.3, 0.1, 0.02); // the plate's tint (scatter 0: a pure absorber)
+    s.medium.scatter = Vec3d(0.0);
+    s.medium.emission = Vec3d(0.5, 0.5, 0.5); // makes the blob (and the ball's inside) glow
+    s.light.direction = Vec3d(1.0, 0.0, 0.0);
+    s.light.color = Vec3d(1.0);
     s.cutoff = 0.0;
-    s.iso = 0.5;
+    s.surface.iso = 0.5;
     const int x = 60, y = 45; // surface point (0.5, 0, 0.87): lit at 60 degrees
     const Image alone = Renderer(s).render(makeScene(false, false), camera);
     const Image withBlob = Renderer(s).render(makeScene(false, true), camera);
@@ -372,7 +372,7 @@ TEST(Surface, IsoSurfaceInsideAFogVolumeIsOccludingAndTinted)
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(withBlob.pixel(45, 45)[c], alone.pixel(45, 45)[c], 1e-4) << "the blob is hidden";
     // The plate alone: its per-channel transmittance (the transmittance pass) and its own glow.
     RenderSettings plateOnly = s;
-    plateOnly.iso = std::numeric_limits<double>::quiet_NaN();
+    plateOnly.surface.iso = std::numeric_limits<double>::quiet_NaN();
     auto plateGrid = openvdb::FloatGrid::create(0.0f);
     plateGrid->setTransform(openvdb::math::Transform::createLinearTransform(h));
     {

@@ -69,28 +69,28 @@ public:
         mApp->add_option("--near", mNear, "near plane depth in world units (default: " + fmt(cs.near) + ")");
         mApp->add_option("--far", mFar, "far plane depth in world units (default: " + fmt(cs.far) + ")");
         // Optical model (vdb_render's dense-volume model).
-        mApp->add_option("--absorb", mAbsorb, "absorption R,G,B per unit density per voxel length (default: " + fmt3(rs.absorb) + ")");
-        mApp->add_option("--scatter", mScatter, "scattering R,G,B per unit density per voxel length (default: " + fmt3(rs.scatter) + ")");
+        mApp->add_option("--absorb", mAbsorb, "absorption R,G,B per unit density per voxel length (default: " + fmt3(rs.medium.absorb) + ")");
+        mApp->add_option("--scatter", mScatter, "scattering R,G,B per unit density per voxel length (default: " + fmt3(rs.medium.scatter) + ")");
         mApp->add_option("--light", mLight,
-            "direction towards the light X,Y,Z[,R,G,B] with optional colour (default: " + fmt3(rs.lightDir) + "," +
-                fmt3(rs.lightColor) + ")");
+            "direction towards the light X,Y,Z[,R,G,B] with optional colour (default: " + fmt3(rs.light.direction) + "," +
+                fmt3(rs.light.color) + ")");
         mApp->add_option("--emission", mEmission,
             "self-emission R,G,B per unit density per voxel length, added to the scattered light (default: " +
-                fmt3(rs.emission) + ")");
-        mApp->add_option("--gain", mGain, "shadow-ray extinction falls as 1/(1 + gain * distance in voxels) (default: " + fmt(rs.gain) + ")");
+                fmt3(rs.medium.emission) + ")");
+        mApp->add_option("--gain", mGain, "shadow-ray extinction falls as 1/(1 + gain * distance in voxels) (default: " + fmt(rs.shadow.gain) + ")");
         mApp->add_option("--cutoff", mCutoff,
             "density cutoff, and rays stop where |transmittance RGB|^2 < cutoff (default: " + fmt(rs.cutoff) + ")");
-        mApp->add_option("--shadowstep", mShadowStep, "shadow-ray step in voxels (default: " + fmt(rs.shadowStep) + ")");
-        mApp->add_option("--shadow-res", mShadowRes, "light map: shadow rays every N voxels across the light, interpolated in between; range [0.25, 16] (default: " + fmt(rs.shadowResolution) + ")");
+        mApp->add_option("--shadowstep", mShadowStep, "shadow-ray step in voxels (default: " + fmt(rs.shadow.step) + ")");
+        mApp->add_option("--shadow-res", mShadowRes, "light map: shadow rays every N voxels across the light, interpolated in between; range [0.25, 16] (default: " + fmt(rs.shadow.resolution) + ")");
         mApp->add_option("--step", mStep, "primary-ray step in voxels for --method raymarch (default: " + fmt(rs.step) + "); the splatter has no primary rays and ignores it");
         mApp->add_option("--method", mMethod, "splat (EWA volume splatting), raymarch (the reference: ray-marches the trilinear field with a shadow ray per sample, as vdb_render; slow) or raymarch-gaussian (diagnostic: ray-marches the splatter's own Gaussian reconstruction and per-kernel shadows) (default: splat)");
         // EWA splatting.
-        mApp->add_option("--kernel-sigma", mKernelSigma, "reconstruction kernel std. deviation in voxels, range [0.1, 4] (default: " + fmt(rs.kernelSigma) + ")");
-        mApp->add_option("--surface-sigma", mSurfaceSigma, "level sets and --iso: surface kernel std. deviation along the surface in voxels, range [0.1, 4] (default: " + fmt(rs.surfaceSigma) + ")");
-        mApp->add_option("--lowpass", mLowpass, "screen-space low-pass filter variance in pixels^2 (default: " + fmt(rs.lowpass) + ")");
+        mApp->add_option("--kernel-sigma", mKernelSigma, "reconstruction kernel std. deviation in voxels, range [0.1, 4] (default: " + fmt(rs.splat.kernelSigma) + ")");
+        mApp->add_option("--surface-sigma", mSurfaceSigma, "level sets and --iso: surface kernel std. deviation along the surface in voxels, range [0.1, 4] (default: " + fmt(rs.surface.sigma) + ")");
+        mApp->add_option("--lowpass", mLowpass, "screen-space low-pass filter variance in pixels^2 (default: " + fmt(rs.splat.lowpass) + ")");
         mApp->add_option("--aa", mAa, "anti-aliasing: floor (each footprint axis at least --lowpass wide), ewa (resampling filter, Eq. 33: always adds --lowpass), swan (uniform scaling) or none (default: floor)");
-        mApp->add_option("--cutoff-radius", mCutoffRadius, "footprint cut-off radius in std. deviations (default: " + fmt(rs.cutoffRadius) + ")");
-        mApp->add_option("--slab", mSlab, "image-aligned slab thickness in voxel lengths (default: " + fmt(rs.slab) + ")");
+        mApp->add_option("--cutoff-radius", mCutoffRadius, "footprint cut-off radius in std. deviations (default: " + fmt(rs.splat.cutoffRadius) + ")");
+        mApp->add_option("--slab", mSlab, "image-aligned slab thickness in voxel lengths (default: " + fmt(rs.splat.slab) + ")");
         mApp->add_option("--quality", mQuality,
             "preset of the speed/accuracy knobs: draft, default or high; explicit options override it "
             "(values in docs/performance.md) (default: default)");
@@ -99,14 +99,14 @@ public:
         mApp->add_option("--renormalize", mRenormalize, "on: divide footprints by the mass kept inside --cutoff-radius; off: keep the truncated mass (default: on)");
         mApp->add_option("--precision", mPrecision, "world-to-camera transform and covariances in double or float (default: double)");
         mApp->add_option("--tile-spacing", mTileSpacing, "largest kernel spacing in voxels for active tiles, 1 to voxelise them (default: 4)");
-        mApp->add_option("--lod", mLod, "level of detail: blocks of 2, 4 or 8 voxels a side become one kernel where the block projects to at most this many pixels; 0 = off (default: " + fmt(rs.lodPixels) + ")");
+        mApp->add_option("--lod", mLod, "level of detail: blocks of 2, 4 or 8 voxels a side become one kernel where the block projects to at most this many pixels; 0 = off (default: " + fmt(rs.splat.lodPixels) + ")");
         // Fog volumes with an iso-surface.
         mApp->add_option("--iso", mIso,
             "fog volumes: also render the iso-surface density = VALUE with flattened surface kernels, lit by "
             "--light and composited with the volume (default: off)");
         mApp->add_option("--iso-opacity", mIsoOpacity, "opacity of the --iso surface, 0..1 (default: 1)");
         // Level sets (vdb_render's level-set options).
-        mApp->add_option("--isovalue", mIsovalue, "level sets: iso-surface to render, in world units (default: " + fmt(rs.isovalue) + ")");
+        mApp->add_option("--isovalue", mIsovalue, "level sets: iso-surface to render, in world units (default: " + fmt(rs.surface.isovalue) + ")");
         mApp->add_option("--shader", mShader,
             "level sets: diffuse (|N.ray|, a light at the camera), matte (white), normal ((N+1)/2) or position "
             "(world position in the active bounding box) (default: diffuse)");
@@ -283,37 +283,37 @@ private:
         if (mNear) cam.near = *mNear;
         if (mFar) cam.far = *mFar;
 
-        if (!mAbsorb.empty()) rs.absorb = parseVec3("absorb", mAbsorb, true);
-        if (!mScatter.empty()) rs.scatter = parseVec3("scatter", mScatter, true);
-        if (!mEmission.empty()) rs.emission = parseVec3("emission", mEmission, true);
+        if (!mAbsorb.empty()) rs.medium.absorb = parseVec3("absorb", mAbsorb, true);
+        if (!mScatter.empty()) rs.medium.scatter = parseVec3("scatter", mScatter, true);
+        if (!mEmission.empty()) rs.medium.emission = parseVec3("emission", mEmission, true);
         if (!mLight.empty()) {
             const std::vector<double> v = parseNumbers("light", mLight);
             if (v.size() != 3 && v.size() != 6) throw ValueError("--light: expected X,Y,Z or X,Y,Z,R,G,B, got '" + mLight + "'");
-            rs.lightDir = Vec3d(v[0], v[1], v[2]);
-            if (v.size() == 6) rs.lightColor = Vec3d(v[3], v[4], v[5]);
+            rs.light.direction = Vec3d(v[0], v[1], v[2]);
+            if (v.size() == 6) rs.light.color = Vec3d(v[3], v[4], v[5]);
         }
-        if (mGain) rs.gain = *mGain;
+        if (mGain) rs.shadow.gain = *mGain;
         if (mCutoff) rs.cutoff = *mCutoff;
-        if (mShadowStep) rs.shadowStep = *mShadowStep;
-        if (mShadowRes) rs.shadowResolution = *mShadowRes;
+        if (mShadowStep) rs.shadow.step = *mShadowStep;
+        if (mShadowRes) rs.shadow.resolution = *mShadowRes;
         if (mStep) rs.step = *mStep;
         if (!mMethod.empty()) rs.method = parseChoice("method", mMethod, kMethods);
-        if (mKernelSigma) rs.kernelSigma = *mKernelSigma;
-        if (mSurfaceSigma) rs.surfaceSigma = *mSurfaceSigma;
-        if (mLowpass) rs.lowpass = *mLowpass;
-        if (!mAa.empty()) rs.antiAliasing = parseChoice("aa", mAa, kAntiAliasing);
-        if (mCutoffRadius) rs.cutoffRadius = *mCutoffRadius;
-        if (!mExp.empty()) rs.expEvaluation = parseChoice("exp", mExp, kExpEvaluations);
-        if (!mRenormalize.empty()) rs.renormalize = parseChoice("renormalize", mRenormalize, kOnOff);
-        if (!mPrefilter.empty()) rs.prefilter = parseChoice("prefilter", mPrefilter, kOnOff);
-        if (mTileSpacing) rs.tileKernelSpacing = *mTileSpacing;
-        if (!mPrecision.empty()) rs.doublePrecision = parseChoice("precision", mPrecision, kPrecisions);
-        if (mSlab) rs.slab = *mSlab;
-        if (mLod) rs.lodPixels = *mLod;
-        if (mIsovalue) rs.isovalue = *mIsovalue;
-        if (mIso) rs.iso = *mIso;
-        if (mIsoOpacity) rs.isoOpacity = *mIsoOpacity;
-        if (!mShader.empty()) rs.shader = parseChoice("shader", mShader, kShaders);
+        if (mKernelSigma) rs.splat.kernelSigma = *mKernelSigma;
+        if (mSurfaceSigma) rs.surface.sigma = *mSurfaceSigma;
+        if (mLowpass) rs.splat.lowpass = *mLowpass;
+        if (!mAa.empty()) rs.splat.antiAliasing = parseChoice("aa", mAa, kAntiAliasing);
+        if (mCutoffRadius) rs.splat.cutoffRadius = *mCutoffRadius;
+        if (!mExp.empty()) rs.splat.expEvaluation = parseChoice("exp", mExp, kExpEvaluations);
+        if (!mRenormalize.empty()) rs.splat.renormalize = parseChoice("renormalize", mRenormalize, kOnOff);
+        if (!mPrefilter.empty()) rs.splat.prefilter = parseChoice("prefilter", mPrefilter, kOnOff);
+        if (mTileSpacing) rs.splat.tileKernelSpacing = *mTileSpacing;
+        if (!mPrecision.empty()) rs.splat.doublePrecision = parseChoice("precision", mPrecision, kPrecisions);
+        if (mSlab) rs.splat.slab = *mSlab;
+        if (mLod) rs.splat.lodPixels = *mLod;
+        if (mIsovalue) rs.surface.isovalue = *mIsovalue;
+        if (mIso) rs.surface.iso = *mIso;
+        if (mIsoOpacity) rs.surface.isoOpacity = *mIsoOpacity;
+        if (!mShader.empty()) rs.surface.shader = parseChoice("shader", mShader, kShaders);
         if (mSamples && *mSamples < 1) throw ValueError("--samples must be >= 1");
         rs.threads = mThreads;
     }
@@ -334,27 +334,27 @@ private:
         for (const auto& [k, v] : Attributes{{"focal", fmt(c.focal)}, {"aperture", fmt(c.aperture)}, {"fov", fmt(c.fieldOfView())},
                  {"frame", fmt(c.frame)}, {"near", fmt(c.near)}, {"far", fmt(c.far)}})
             cameraGroup.emplace_back(k, v);
-        Attributes model{{"absorb", fmt3(rs.absorb)}, {"scatter", fmt3(rs.scatter)}, {"emission", fmt3(rs.emission)},
-            {"light", fmt3(rs.lightDir) + "," + fmt3(rs.lightColor)}, {"gain", fmt(rs.gain)}, {"cutoff", fmt(rs.cutoff)},
-            {"shadowstep", fmt(rs.shadowStep)}, {"shadow-res", fmt(rs.shadowResolution)}};
+        Attributes model{{"absorb", fmt3(rs.medium.absorb)}, {"scatter", fmt3(rs.medium.scatter)}, {"emission", fmt3(rs.medium.emission)},
+            {"light", fmt3(rs.light.direction) + "," + fmt3(rs.light.color)}, {"gain", fmt(rs.shadow.gain)}, {"cutoff", fmt(rs.cutoff)},
+            {"shadowstep", fmt(rs.shadow.step)}, {"shadow-res", fmt(rs.shadow.resolution)}};
         if (grid.hasColorGrid()) model.emplace_back("color", mColor);
         Attributes method{{"method", choiceName(rs.method, kMethods)}};
         if (rs.method != Method::Splat) method.emplace_back("step", fmt(rs.step));
-        if (!grid.isLevelSet() && !std::isnan(rs.iso)) {
-            method.emplace_back("iso", fmt(rs.iso));
-            method.emplace_back("iso-opacity", fmt(rs.isoOpacity));
-            method.emplace_back("surface-sigma", fmt(rs.surfaceSigma));
+        if (!grid.isLevelSet() && !std::isnan(rs.surface.iso)) {
+            method.emplace_back("iso", fmt(rs.surface.iso));
+            method.emplace_back("iso-opacity", fmt(rs.surface.isoOpacity));
+            method.emplace_back("surface-sigma", fmt(rs.surface.sigma));
         }
         if (grid.isLevelSet()) {
-            method.emplace_back("isovalue", fmt(rs.isovalue));
-            method.emplace_back("shader", choiceName(rs.shader, kShaders));
-            method.emplace_back("surface-sigma", fmt(rs.surfaceSigma));
+            method.emplace_back("isovalue", fmt(rs.surface.isovalue));
+            method.emplace_back("shader", choiceName(rs.surface.shader, kShaders));
+            method.emplace_back("surface-sigma", fmt(rs.surface.sigma));
         }
-        for (const auto& [k, v] : Attributes{{"kernel-sigma", fmt(rs.kernelSigma)}, {"prefilter", choiceName(rs.prefilter, kOnOff)}, {"lowpass", fmt(rs.lowpass)},
-                 {"aa", choiceName(rs.antiAliasing, kAntiAliasing)}, {"cutoff-radius", fmt(rs.cutoffRadius)},
-                 {"renormalize", choiceName(rs.renormalize, kOnOff)}, {"exp", choiceName(rs.expEvaluation, kExpEvaluations)},
-                 {"precision", choiceName(rs.doublePrecision, kPrecisions)}, {"slab", fmt(rs.slab)},
-                 {"tile-spacing", std::to_string(rs.tileKernelSpacing)}, {"lod", fmt(rs.lodPixels)},
+        for (const auto& [k, v] : Attributes{{"kernel-sigma", fmt(rs.splat.kernelSigma)}, {"prefilter", choiceName(rs.splat.prefilter, kOnOff)}, {"lowpass", fmt(rs.splat.lowpass)},
+                 {"aa", choiceName(rs.splat.antiAliasing, kAntiAliasing)}, {"cutoff-radius", fmt(rs.splat.cutoffRadius)},
+                 {"renormalize", choiceName(rs.splat.renormalize, kOnOff)}, {"exp", choiceName(rs.splat.expEvaluation, kExpEvaluations)},
+                 {"precision", choiceName(rs.splat.doublePrecision, kPrecisions)}, {"slab", fmt(rs.splat.slab)},
+                 {"tile-spacing", std::to_string(rs.splat.tileKernelSpacing)}, {"lod", fmt(rs.splat.lodPixels)},
                  {"threads", std::to_string(rs.threads)}})
             method.emplace_back(k, v);
         return {cameraGroup, model, method, mOutputOptions.resolved()};

@@ -18,7 +18,7 @@ struct PassRequest
     bool depth = false;         ///< Z: depth where the pixel's alpha first reaches 0.5
     bool transmittance = false; ///< RGB transmittance of the whole volume along the pixel
     bool shadow = false;        ///< light's shadow transmittance, composited like the beauty
-    bool emission = false;      ///< the volume's own emission (RenderSettings::emission) alone
+    bool emission = false;      ///< the volume's own emission (RenderSettings::medium.emission) alone
     bool deep = false;          ///< one deep sample per non-empty slab
 };
 

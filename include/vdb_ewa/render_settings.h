@@ -49,24 +49,34 @@ enum class Method
     RayMarchGaussian ///< diagnostic: ray-march the splatter's Gaussian reconstruction, shadows per kernel
 };
 
-struct VDB_EWA_API RenderSettings
+/// The medium's optical model (vdb_render's names and defaults).
+struct Medium
 {
-    Method method = Method::Splat;
-    // --- Optical model (vdb_render's names and defaults) ---
     Vec3d absorb{0.1, 0.1, 0.1};      ///< absorption per unit density per voxel length, RGB
     Vec3d scatter{1.5, 1.5, 1.5};     ///< scattering per unit density per voxel length, RGB
-    Vec3d lightDir{0.3, 0.3, 0.0};    ///< direction *towards* the light, world space (normalised)
-    Vec3d lightColor{0.7, 0.7, 0.7};  ///< radiance of the directional light, RGB
     Vec3d emission{0.0, 0.0, 0.0};    ///< self-emission R,G,B per unit density per voxel length (radiance
                                       ///< per unit optical length, like scatter x light colour); 0 = none
-    double gain = 0.2;                ///< shadow-ray extinction falls as 1/(1 + gain * s), s in voxels
-    double cutoff = 0.005;            ///< density cutoff; rays stop where |T|^2 < cutoff (RGB T)
-    double shadowStep = 0.5;          ///< shadow-ray step in voxels (vdb_render's default is 3)
-    double shadowResolution = 1.0;    ///< light map: shadow rays every N voxel lengths across the light, bilinear
-                                      ///< in between (docs/numerics.md#shading-per-slab-sample)
-    double step = 1.0;                ///< primary-ray step in voxels (--method raymarch only)
+};
 
-    // --- EWA splatting ---
+/// One directional light.
+struct Light
+{
+    Vec3d direction{0.3, 0.3, 0.0};   ///< direction *towards* the light, world space (normalised)
+    Vec3d color{0.7, 0.7, 0.7};       ///< radiance of the directional light, RGB
+};
+
+/// The light's transmittance: shadow rays / light map.
+struct ShadowOptions
+{
+    double step = 0.5;                ///< shadow-ray step in voxels (vdb_render's default is 3)
+    double resolution = 1.0;          ///< light map: shadow rays every N voxel lengths across the light, bilinear
+                                      ///< in between (docs/numerics.md#shading-per-slab-sample)
+    double gain = 0.2;                ///< shadow-ray extinction falls as 1/(1 + gain * s), s in voxels
+};
+
+/// EWA splatting knobs.
+struct SplatOptions
+{
     double kernelSigma = 0.5;   ///< reconstruction kernel std. deviation in voxels (Eq. 19, V = s^2 I)
     /// Quasi-interpolating kernel weights: voxel kernels weighted so that the Gaussian sum has the
     /// trilinear field's local second moment, with negative halo kernels at the support's faces
@@ -82,17 +92,36 @@ struct VDB_EWA_API RenderSettings
     int tileKernelSpacing = 4;  ///< largest kernel spacing (voxels) used to model active tiles
     double lodPixels = 2.0;     ///< level of detail: merge blocks of 2^L voxels into one kernel where
                                 ///< the block spacing projects to at most this many pixels; 0 = off
+};
 
-    // --- Surfaces (level-set grids; docs/equations.md#surface-kernels) ---
+/// Surfaces (level-set grids, fog iso-surfaces; docs/equations.md#surface-kernels).
+struct SurfaceOptions
+{
     double isovalue = 0.0;      ///< iso-surface of a level set, world units (vdb_render -isovalue)
     SurfaceShader shader = SurfaceShader::Diffuse;
-    double surfaceSigma = 0.55; ///< surface kernel std. deviation in voxels along the tangent plane
-                                ///< (Sec. 6.4; wider than kernelSigma so that no holes open between samples)
-    double surfaceTolerance = 4.0; ///< z-buffer depth tolerance in voxel lengths (Sec. 7.2)
+    double sigma = 0.55;        ///< surface kernel std. deviation in voxels along the tangent plane
+                                ///< (Sec. 6.4; wider than SplatOptions::kernelSigma so that no holes
+                                ///< open between samples)
+    double tolerance = 4.0;     ///< z-buffer depth tolerance in voxel lengths (Sec. 7.2)
     /// Fog volumes: also render the iso-surface density == iso with flattened surface kernels
     /// composited with the volume's (Sec. 6.4); NaN = off.
     double iso = std::numeric_limits<double>::quiet_NaN();
     double isoOpacity = 1.0;    ///< opacity of that surface, in [0, 1]
+};
+
+/// Everything a render needs besides the grid and the camera, in plain groups.
+struct VDB_EWA_API RenderSettings
+{
+    Method method = Method::Splat;
+    Medium medium;              ///< optical model
+    Light light;                ///< the directional light
+    ShadowOptions shadow;       ///< the light's transmittance
+    SplatOptions splat;         ///< EWA splatting knobs
+    SurfaceOptions surface;     ///< level sets and fog iso-surfaces
+
+    // --- Integration ---
+    double cutoff = 0.005;            ///< density cutoff; rays stop where |T|^2 < cutoff (RGB T)
+    double step = 1.0;                ///< primary-ray step in voxels (--method raymarch only)
 
     // --- Execution ---
     /// Worker threads: N > 0 runs the render in its own tbb::task_arena of N threads; 0 runs it

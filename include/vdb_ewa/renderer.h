@@ -53,7 +53,7 @@ public:
     const RenderSettings& settings() const { return mSettings; }
 
     /// Render @a grid through @a camera: a fog volume with EWA volume splatting, a level set as
-    /// its iso-surface with surface splats (settings.isovalue, settings.shader).
+    /// its iso-surface with surface splats (settings.surface.isovalue, settings.surface.shader).
     /// Thread-safe: a Renderer holds no mutable state, so one Renderer (or several) may render
     /// on several threads at once; each render runs in its own tbb::task_arena of
     /// settings.threads threads (0: the caller's arena). The result does not depend on the
@@ -77,7 +77,7 @@ private:
     VDB_EWA_LOCAL void renderFogVolume(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes, Frame& frame,
         RenderStats& stats, detail::Progress& progress) const;
 
-    /// Fog volumes with settings.iso: the iso-surface's kernels join the volume's splats.
+    /// Fog volumes with settings.surface.iso: the iso-surface's kernels join the volume's splats.
     VDB_EWA_LOCAL void addIsoSurface(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes,
         const detail::LightMap& light, detail::SplatSet& splats, detail::Progress& progress) const;
 

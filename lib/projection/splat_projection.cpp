@@ -32,7 +32,7 @@ struct DepthExtent
 
 } // namespace
 
-ProjectionParams projectionParams(const Camera& camera, const RenderSettings& settings)
+ProjectionParams projectionParams(const Camera& camera, const SplatOptions& splat)
 {
     ProjectionParams p;
     p.perspective = camera.projection() == Projection::Perspective;
@@ -40,10 +40,10 @@ ProjectionParams projectionParams(const Camera& camera, const RenderSettings& se
     p.principalPoint = camera.principalPoint();
     p.maxTanX = 1.3 * 0.5 * camera.width() / camera.focalPixels();
     p.maxTanY = 1.3 * 0.5 * camera.height() / camera.focalPixels();
-    p.antiAliasing = settings.antiAliasing;
-    p.lowpass = settings.lowpass;
-    p.cutoffRadius = settings.cutoffRadius;
-    p.renormalize = settings.renormalize;
+    p.antiAliasing = splat.antiAliasing;
+    p.lowpass = splat.lowpass;
+    p.cutoffRadius = splat.cutoffRadius;
+    p.renormalize = splat.renormalize;
     return p;
 }
 
@@ -66,12 +66,12 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels, c
     const Camera& camera, const RenderSettings& settings, const PassRequest& passes, Progress* progress)
 {
     SplatSet out;
-    const ProjectionParams params = projectionParams(camera, settings);
+    const ProjectionParams params = projectionParams(camera, settings.splat);
     const bool perspective = params.perspective;
     const Mat3d R = camera.cameraFromWorld();
     const double ell = grid.voxelLength;
     out.slabs.zBase = perspective ? 0.0 : camera.near();
-    out.slabs.thickness = settings.slab * ell;
+    out.slabs.thickness = settings.splat.slab * ell;
 
     // Affine grids: camera-space covariance of a unit kernel, formed once per frame (Eq. 31).
     const Mat3d RA = R * grid.indexToWorldLinear;
@@ -107,11 +107,11 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels, c
                     cov = a * glm::transpose(a);
                     volume = std::abs(glm::determinant(a));
                 }
-                const double s = k.spacing, sigma = kernelSigmaVoxels(k, settings.kernelSigma);
+                const double s = k.spacing, sigma = kernelSigmaVoxels(k, settings.splat.kernelSigma);
                 cov *= sigma * sigma;
-                const Vec3d t = settings.doublePrecision ? camera.cameraFromWorldPoint(pWorld)
-                                                         : cameraFromWorldFloat(camera, pWorld);
-                if (!settings.doublePrecision) cov = Mat3d(glm::mat3(cov));
+                const Vec3d t = settings.splat.doublePrecision ? camera.cameraFromWorldPoint(pWorld)
+                                                               : cameraFromWorldFloat(camera, pWorld);
+                if (!settings.splat.doublePrecision) cov = Mat3d(glm::mat3(cov));
                 if (perspective && !(t.z > camera.near())) { // centre before the near plane
                     flags[i] = 1;
                     continue;

@@ -60,8 +60,8 @@ constexpr int kMaxSlabSpan = 1024;
 /// The slab thickness is raised so that no kernel spans more than this many slabs.
 constexpr int kSlabSpanTarget = 256;
 
-/// The footprint parameters of @a camera and @a settings (the frustum-edge clamp at 1.3x).
-ProjectionParams projectionParams(const Camera& camera, const RenderSettings& settings);
+/// The footprint parameters of @a camera and @a splat (the frustum-edge clamp at 1.3x).
+ProjectionParams projectionParams(const Camera& camera, const SplatOptions& splat);
 
 /// The inclusive box of pixels whose centres lie in @a fp's cut-off box, clipped to the image;
 /// false if empty.

@@ -25,10 +25,10 @@ bool projectSurface(const SurfaceKernel& kernel, double sigma, const Camera& cam
 void appendSurfaceSplats(SplatSet& set, const SurfaceSet& surfaces, const std::vector<Rgb>& shadows,
     const Camera& camera, const RenderSettings& settings, double voxelLength, const PassRequest& passes)
 {
-    const ProjectionParams params = projectionParams(camera, settings);
+    const ProjectionParams params = projectionParams(camera, settings.splat);
     const bool perspective = params.perspective;
-    const Vec3d toLight = glm::normalize(settings.lightDir);
-    const double tauSurface = std::min(20.0, -std::log1p(-std::min(settings.isoOpacity, 1.0)));
+    const Vec3d toLight = glm::normalize(settings.light.direction);
+    const double tauSurface = std::min(20.0, -std::log1p(-std::min(settings.surface.isoOpacity, 1.0)));
     const double sd = 0.25 * voxelLength; // a flattened kernel: about one slab deep
     for (std::size_t i = 0; i < surfaces.kernels.size(); ++i) {
         const SurfaceKernel& k = surfaces.kernels[i];
@@ -47,7 +47,7 @@ void appendSurfaceSplats(SplatSet& set, const SurfaceSet& surfaces, const std::v
         const double lambert = std::max(0.0, glm::dot(k.normal, toLight));
         for (int c = 0; c < 3; ++c) {
             sp.tau[c] = float(tau);
-            sp.emission[c] = float(tau * settings.lightColor[c] * k.albedo[c] * lambert * double(shadows[i][c]));
+            sp.emission[c] = float(tau * settings.light.color[c] * k.albedo[c] * lambert * double(shadows[i][c]));
             sp.scatter[c] = 0.0f;
         }
         sp.firstSlab = first;

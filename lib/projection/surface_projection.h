@@ -19,7 +19,7 @@ bool projectSurface(const SurfaceKernel& kernel, double sigma, const Camera& cam
     Vec3d& t, Vec3d& normal, Footprint& fp);
 
 /// Fog volumes with an iso-surface (Sec. 6.4): append @a surfaces to @a set as thin splats of
-/// the slab compositor. Each covers its pixels with optical depth -ln(1 - settings.isoOpacity)
+/// the slab compositor. Each covers its pixels with optical depth -ln(1 - settings.surface.isoOpacity)
 /// (capped at 20) x area x footprint (the kernels sum to one over the surface), shaded
 /// Lambert from the light, times @a shadows (one per surface kernel) and the kernel's material
 /// colour; back faces are culled.

@@ -62,7 +62,7 @@ Vec3d shade(SurfaceShader shader, const Vec3d& normal, const Vec3d& rayDir, cons
 
 std::vector<SurfaceSplat> projectSurfaceSplats(const SurfaceSet& set, const Camera& camera, const RenderSettings& settings)
 {
-    const ProjectionParams params = projectionParams(camera, settings);
+    const ProjectionParams params = projectionParams(camera, settings.splat);
     const Vec3d forward = glm::transpose(camera.cameraFromWorld())[2];
     const bool perspective = params.perspective;
     const std::size_t n = set.kernels.size();
@@ -80,7 +80,7 @@ std::vector<SurfaceSplat> projectSurfaceSplats(const SurfaceSet& set, const Came
             setFootprint(s, fp, params.cutoffRadius);
             s.weight = float(k.area * fp.peak);
             const Vec3d rayDir = perspective ? glm::normalize(k.pWorld - camera.eye()) : forward;
-            const Vec3d c = k.albedo * shade(settings.shader, k.normal, rayDir, k.pWorld, set);
+            const Vec3d c = k.albedo * shade(settings.surface.shader, k.normal, rayDir, k.pWorld, set);
             for (int ch = 0; ch < 3; ++ch) s.colour[ch] = float(c[ch]);
             s.centre = t;
             s.planeNormal = normal;
@@ -111,7 +111,7 @@ Frame rasterizeSurfaces(const SurfaceSet& set, const Camera& camera, const Rende
     stats.culled = set.kernels.size() - splats.size();
     const TileBins bins = binSplats(splats, width, height);
     stats.splatTilePairs = bins.indices.size();
-    const double tolerance = settings.surfaceTolerance * voxelLength;
+    const double tolerance = settings.surface.tolerance * voxelLength;
     const bool perspective = camera.projection() == Projection::Perspective;
     const double f = camera.focalPixels();
     const Vec2d principal = camera.principalPoint();

@@ -24,7 +24,7 @@ struct SurfaceStats
 /// Back-facing kernels are culled. Per pixel, two passes over its splats: the front surface is
 /// the nearest depth at which the pixel's ray meets a kernel's disc (3 sigma; at silhouettes,
 /// where only filtered tails reach, the nearest tail), then every splat whose tangent-plane
-/// depth along the ray is within settings.surfaceTolerance voxel lengths of it is accumulated
+/// depth along the ray is within settings.surface.tolerance voxel lengths of it is accumulated
 /// in kernel order (deterministic). Weight w = area x footprint; colour = sum w c / sum w;
 /// alpha = min(1, sum w / 0.9) (the kernels' areas make sum w = 1 inside a surface, to a few
 /// per cent). Z, where alpha >= 0.5: the weighted mean of the splats' tangent-plane depths

@@ -666,10 +666,10 @@ Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSet
     stats.splatTilePairs = bins.indices.size();
     const int tiles = bins.tilesX * bins.tilesY;
     std::vector<std::uint64_t> skipped(std::size_t(tiles), 0);
-    const ExpTable table(float(settings.cutoffRadius * settings.cutoffRadius));
+    const ExpTable table(float(settings.splat.cutoffRadius * settings.splat.cutoffRadius));
     CompositeOptions options;
     options.cutoff = float(settings.cutoff);
-    options.exp = settings.expEvaluation;
+    options.exp = settings.splat.expEvaluation;
     options.table = &table;
     options.slabs = set.slabs;
     options.passes = passes;

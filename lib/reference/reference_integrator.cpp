@@ -42,9 +42,9 @@ ReferenceVolume buildVolume(const GridSource::Impl& grid, const RenderSettings& 
     auto impl = std::make_shared<GridSource::Impl>(grid);
     impl->grid = voxels;
     RenderSettings unit = settings;
-    unit.tileKernelSpacing = 1;
+    unit.splat.tileKernelSpacing = 1;
     KernelSet kernels = extractKernels(*impl, unit);
-    if (settings.prefilter) quasiInterpolate(*impl, quasiInterpolationAlpha(settings.kernelSigma), kernels);
+    if (settings.splat.prefilter) quasiInterpolate(*impl, quasiInterpolationAlpha(settings.splat.kernelSigma), kernels);
     stats.activeVoxels = kernels.activeVoxels;
     stats.kernels = kernels.kernels.size();
     stats.kernelsSkipped = kernels.belowCutoff + kernels.notANumber;
@@ -290,13 +290,13 @@ Frame rayMarchGaussianSum(const GridSource::Impl& grid, const Camera& camera, co
     const auto t0 = std::chrono::steady_clock::now();
     const openvdb::CoordBBox box = volume.density->evalActiveVoxelBoundingBox();
     if (box.empty()) return blankFrame(camera.width(), camera.height(), passes);
-    const double pad = kReferenceTruncation * settings.kernelSigma + 1.0;
+    const double pad = kReferenceTruncation * settings.splat.kernelSigma + 1.0;
     const Vec3d boxLo = Vec3d(box.min().x(), box.min().y(), box.min().z()) - pad;
     const Vec3d boxHi = Vec3d(box.max().x(), box.max().y(), box.max().z()) + pad;
     if (progress) progress->stage(15, 100);
-    const int radius = int(std::ceil(kReferenceTruncation * settings.kernelSigma));
+    const int radius = int(std::ceil(kReferenceTruncation * settings.splat.kernelSigma));
     Frame frame = marchRays(grid, camera, settings, passes, *volume.density, radius, boxLo, boxHi,
-        [&] { return GaussianSumSampler(volume, settings.kernelSigma); }, progress);
+        [&] { return GaussianSumSampler(volume, settings.splat.kernelSigma); }, progress);
     stats.rasterSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return frame;
 }

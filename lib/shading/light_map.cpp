@@ -44,8 +44,8 @@ LightMap::LightMap(const GridSource::Impl& grid, const RenderSettings& settings,
 
     // Frame: e1, e2 across the light, l towards it; units h across, the step along (world
     // lengths in voxel lengths, as vdb_render's steps).
-    const double ell = grid.voxelLength, h = settings.shadowResolution, step = settings.shadowStep;
-    const Vec3d l = glm::normalize(settings.lightDir);
+    const double ell = grid.voxelLength, h = settings.shadow.resolution, step = settings.shadow.step;
+    const Vec3d l = glm::normalize(settings.light.direction);
     const Vec3d e1 = glm::normalize(glm::cross(l, std::abs(l.x) < 0.6 ? Vec3d(1, 0, 0) : Vec3d(0, 1, 0)));
     const Vec3d e2 = glm::cross(l, e1);
     mFromWorld = glm::transpose(Mat3d(e1 / (h * ell), e2 / (h * ell), l / (step * ell)));
@@ -71,11 +71,11 @@ LightMap::LightMap(const GridSource::Impl& grid, const RenderSettings& settings,
     // vdb_render weighs a shadow sample s voxel lengths away by 1 / (1 + gain s): as a sum of
     // exponentials, each term a first-order recursive filter along the ray (ExponentialSum).
     std::vector<double> weight{1.0}, decay{1.0};
-    if (settings.gain > 0.0) {
-        const ExponentialSum sum(settings.gain * step * double(mNw));
+    if (settings.shadow.gain > 0.0) {
+        const ExponentialSum sum(settings.shadow.gain * step * double(mNw));
         weight = sum.a;
         decay.resize(sum.b.size());
-        for (std::size_t n = 0; n < decay.size(); ++n) decay[n] = std::exp(-sum.b[n] * settings.gain * step);
+        for (std::size_t n = 0; n < decay.size(); ++n) decay[n] = std::exp(-sum.b[n] * settings.shadow.gain * step);
     }
     const int terms = int(weight.size());
     const int margin = int(std::ceil(2.0 / step)); // kept below a ray's lowest density

@@ -17,7 +17,7 @@ namespace detail {
 ShadowMarcher::ShadowMarcher(const GridSource::Impl& grid, const RenderSettings& settings)
     : mGrid(grid), mSkipper(*grid.field, 0), mSettings(settings), mModel(settings)
 {
-    const Vec3d l = glm::normalize(settings.lightDir);
+    const Vec3d l = glm::normalize(settings.light.direction);
     mLightWorld = l;
     if (grid.linear) {
         // Index-space displacement per voxel length travelled towards the light.
@@ -30,9 +30,9 @@ ShadowMarcher::ShadowMarcher(const GridSource::Impl& grid, const RenderSettings&
 
 Rgb ShadowMarcher::march(const Vec3d& pIndex)
 {
-    const double step = mSettings.shadowStep;
+    const double step = mSettings.shadow.step;
     const double cutoff = mSettings.cutoff;
-    const double gain = mSettings.gain;
+    const double gain = mSettings.shadow.gain;
     double t[3] = {1.0, 1.0, 1.0};
     // Voxel lengths until the ray leaves the padded active bounding box.
     const double sMax = exitDistance(pIndex);

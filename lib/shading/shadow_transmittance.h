@@ -15,8 +15,8 @@ namespace vdb_ewa {
 namespace detail {
 
 /// vdb_render's shadow ray through the field (GridSource::Impl::field) towards the directional
-/// light, for one thread (it owns a ValueAccessor): samples at s = k * shadowStep voxel
-/// lengths (k >= 1), trilinear density d, T *= exp(-sigma_t d shadowStep / (1 + gain s)),
+/// light, for one thread (it owns a ValueAccessor): samples at s = k * shadow.step voxel
+/// lengths (k >= 1), trilinear density d, T *= exp(-sigma_t d shadow.step / (1 + shadow.gain s)),
 /// stopping where |T|^2 < cutoff; empty tree nodes are skipped.
 class ShadowMarcher
 {

@@ -133,7 +133,7 @@ KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& set
         if (vc == ValueClass::NotANumber) set.notANumber += voxelsInTile;
         if (vc == ValueClass::Clamped) set.clamped += voxelsInTile;
         if (density <= 0.0f) continue;
-        const int s = tileLatticeSpacing(dim, settings.tileKernelSpacing);
+        const int s = tileLatticeSpacing(dim, settings.splat.tileKernelSpacing);
         tiles.push_back({box.min(), dim, s, density, set.kernels.size() + tileKernels});
         const std::size_t n = std::size_t(dim / s);
         tileKernels += n * n * n;
