@@ -134,5 +134,17 @@ TEST(SlabShare, SlabLightTransmittanceIsTheLayersIntegral)
             const double expected = integral / meanExp;
             EXPECT_NEAR(slabLightTransmittance(tau, front, back), expected, 2e-6 * expected + 1e-9)
                 << "tau " << tau << " front " << front << " back " << back;
+            // The compositor's form: the integral itself, the light given by its optical depth
+            // across the layer, ln(front / back).
+            const float logRatio = lightLogRatio(std::log(front), std::log(back));
+            EXPECT_NEAR(slabLightIntegral(tau, front, logRatio), integral, 2e-6 * integral + 1e-9)
+                << "tau " << tau << " front " << front << " back " << back;
+            // compositeSlab adds T x the integrated source and attenuates as the layer does.
+            float colour = 0.0f, t = 0.5f;
+            compositeSlab(tau, slabAbsorbed(tau), 0.0f, slabLightIntegral(tau, front, logRatio), colour, t);
+            if (tau > 0.0f) {
+                EXPECT_NEAR(colour, 0.5 * integral, 2e-6 * integral + 1e-9);
+                EXPECT_NEAR(t, 0.5 * std::exp(-double(tau)), 1e-7);
+            }
         }
 }

@@ -52,18 +52,26 @@ VDB_EWA_API std::int64_t slabSpan(const SlabGrid& slabs, double mu, double sd, d
 VDB_EWA_API int slabShares(const SlabGrid& slabs, double mu, double sd, double truncation,
     double clipNear, double clipFar, std::int64_t& first, float* shares, int maxCount, float* moments = nullptr);
 
-/// Exact front-to-back update of one homogeneous slab for one colour channel: optical depth
-/// @a tau, extinction-weighted emission @a emission (= sum of colour x optical depth).
-/// C += T (E / tau)(1 - exp(-tau)); T *= exp(-tau).
 /// The fraction of light a slab of optical depth @a tau absorbs, 1 - exp(-tau) (0 for tau <= 0).
 inline float slabAbsorbed(float tau) { return tau > 0.0f ? -std::expm1(-tau) : 0.0f; }
 
-/// compositeSlab with @a absorbed = slabAbsorbed(tau) already known.
-inline void compositeSlab(float tau, float absorbed, float emission, float& colour, float& transmittance)
+/// Exact front-to-back update of one homogeneous slab for one colour channel: optical depth
+/// @a tau, extinction-weighted emission @a emission (= sum of colour x optical depth), and
+/// @a scattered, a source already integrated across the slab (the scattering weight x the
+/// light's colour x slabLightIntegral):
+/// C += T ((E / tau)(1 - exp(-tau)) + scattered); T *= exp(-tau). @a absorbed: slabAbsorbed(tau).
+inline void compositeSlab(float tau, float absorbed, float emission, float scattered, float& colour, float& transmittance)
 {
     if (!(tau > 0.0f)) return;
-    colour += transmittance * (tau > 1e-7f ? emission / tau * absorbed : emission);
+    const float emitted = emission == 0.0f ? 0.0f : (tau > 1e-7f ? emission / tau * absorbed : emission);
+    colour += transmittance * (emitted + scattered);
     transmittance *= 1.0f - absorbed;
+}
+
+/// compositeSlab with no integrated source.
+inline void compositeSlab(float tau, float absorbed, float emission, float& colour, float& transmittance)
+{
+    compositeSlab(tau, absorbed, emission, 0.0f, colour, transmittance);
 }
 
 inline void compositeSlab(float tau, float emission, float& colour, float& transmittance)
@@ -84,18 +92,28 @@ inline void compositeSlab(float tau, float emission, float& colour, float& trans
 /// slabAbsorbed(tau), which the compositor has at hand.
 inline float slabLightTransmittance(float tau, float absorbed, float front, float back);
 
-/// slabLightTransmittance with the light's change across the layer given as @a logRatio =
-/// ln(front / back), the light's optical depth between the layer's back and front (known
-/// without a log where the light's optical depth is: lightLogRatio). Values of the light
-/// below 1e-30 count as 1e-30, in @a front and in both logarithms behind @a logRatio.
-inline float slabLightTransmittanceOfLogRatio(float tau, float absorbed, float front, float logRatio)
+/// The light a uniform layer of optical depth @a tau scatters towards the eye per unit
+/// scattering weight and light colour: int_0^1 T_L(u) e^(-tau u) du = front E(tau + k), with
+/// the light's transmittance falling exponentially from @a front at the layer's front by
+/// @a logRatio = k = ln(front / back) across it, the light's optical depth between the
+/// layer's back and front (known without a log where that optical depth is: lightLogRatio).
+/// compositeSlab's @a scattered is the scattering weight x the light's colour x this; it is
+/// slabLightTransmittance x E(tau), without the division. Values of the light below 1e-30 count
+/// as 1e-30, in @a front and in both logarithms behind @a logRatio.
+inline float slabLightIntegral(float tau, float front, float logRatio)
 {
     // E(x) = (1 - e^-x) / x; below |x| = 1e-3 its series to x^2 (error x^3 / 24 < 1e-10).
-    const auto series = [](float x) { return 1.0f - x * (0.5f - x / 6.0f); };
-    const auto meanOfExp = [&](float x) { return std::abs(x) < 1e-3f ? series(x) : -std::expm1(-x) / x; };
-    const float f = front > 1e-30f ? front : 1e-30f;
+    const float x = (tau > 0.0f ? tau : 0.0f) + logRatio;
+    const float meanOfExp = std::abs(x) < 1e-3f ? 1.0f - x * (0.5f - x / 6.0f) : -std::expm1(-x) / x;
+    return (front > 1e-30f ? front : 1e-30f) * meanOfExp;
+}
+
+/// slabLightTransmittance with the light's change across the layer given as @a logRatio =
+/// ln(front / back) (slabLightIntegral).
+inline float slabLightTransmittanceOfLogRatio(float tau, float absorbed, float front, float logRatio)
+{
     const float t = tau > 0.0f ? tau : 0.0f;
-    return f * meanOfExp(t + logRatio) / (t < 1e-3f ? series(t) : absorbed / t);
+    return slabLightIntegral(tau, front, logRatio) / (t < 1e-3f ? 1.0f - t * (0.5f - t / 6.0f) : absorbed / t);
 }
 
 /// ln(front / back) for slabLightTransmittanceOfLogRatio from the logarithms of the light's

@@ -304,8 +304,8 @@ private:
     }
 
     /// The passes' share of a slab at pixel p: Z crossing, deep sample, extra sources.
-    /// @a emission: the slab's lit emission per channel; @a lit: the scattering weight x light
-    /// transmittance per channel (the shadow pass's source).
+    /// @a emission: the slab's pre-shaded emission per channel; @a lit: the scattering weight x
+    /// the light integrated across the slab per channel (the shadow pass's source).
     void flushPasses(std::int64_t slab, int p, float meanBefore, const float* emission, const float* lit)
     {
         const std::size_t base = slot(slab) * C * kTilePixels + std::size_t(p);
@@ -317,9 +317,10 @@ private:
             for (int c = 0; c < C; ++c) {
                 // The beauty's transmittance before this slab, recovered per channel.
                 float t = mTBefore[c];
-                float source = mPassEmission[passIndex(slab, k, c) + std::size_t(p)];
-                if (k == 0 && mOptions.passes.shadow) source += lit[c];
-                compositeSlab(mTau[base + c * kTilePixels], source, mPassC[(std::size_t(k) * C + c) * kTilePixels + p], t);
+                const float source = mPassEmission[passIndex(slab, k, c) + std::size_t(p)];
+                const float tau = mTau[base + c * kTilePixels];
+                compositeSlab(tau, slabAbsorbed(tau), source, k == 0 && mOptions.passes.shadow ? lit[c] : 0.0f,
+                    mPassC[(std::size_t(k) * C + c) * kTilePixels + p], t);
             }
         if (mOptions.passes.deep) {
             // The slab on its own: colour and transmittance as if nothing were in front.
@@ -328,7 +329,8 @@ private:
             for (int c = 0; c < C; ++c) {
                 colour[c] = 0.0f;
                 t[c] = 1.0f;
-                compositeSlab(mTau[base + c * kTilePixels], emission[c], colour[c], t[c]);
+                const float tau = mTau[base + c * kTilePixels];
+                compositeSlab(tau, slabAbsorbed(tau), emission[c], mLightScale[c] * lit[c], colour[c], t[c]);
                 empty = empty && !(mTau[base + c * kTilePixels] > 0.0f);
             }
             if (!empty) {
@@ -419,6 +421,8 @@ private:
                         for (int c = 0; c < C; ++c) mTBefore[c] = mT[c * kTilePixels + p];
                         meanBefore = meanT(p);
                     }
+                    // emission: the splats' pre-shaded sources; lit: the scattering weight x the
+                    // light integrated across the slab (slabLightIntegral), per unit light colour.
                     float emission[C], lit[C];
                     for (int c = 0; c < C; ++c) {
                         const std::size_t i = base + c * kTilePixels + std::size_t(p);
@@ -434,7 +438,7 @@ private:
                         // Shading per slab sample (docs/numerics.md#shading-per-slab-sample): the
                         // slab's mass, as a uniform layer with the mean and variance of its
                         // position, lit by the light's transmittance at the layer's front and back
-                        // and integrated with the slab's own attenuation (slabLightTransmittance).
+                        // and integrated with the slab's own attenuation (slabLightIntegral).
                         const std::size_t m = slot(slab) * kTilePixels + std::size_t(p);
                         const float mean = std::clamp(mMoment[m] / mass, 0.0f, 1.0f);
                         const float half = std::sqrt(3.0f * std::max(mMoment2[m] / mass - mean * mean, 0.0f));
@@ -442,9 +446,8 @@ private:
                         lightAt(p, slab, std::max(mean - half, 0.0f), std::min(mean + half, 1.0f), front, logRatio);
                         for (int c = 0; c < C; ++c) {
                             const std::size_t i = base + c * kTilePixels + std::size_t(p);
-                            const float tl = slabLightTransmittanceOfLogRatio(mTau[i], absorbed[c], front[std::size_t(c)], logRatio[std::size_t(c)]);
-                            lit[c] = std::max(mScatter.empty() ? mTau[i] : mScatter[i], 0.0f) * tl;
-                            emission[c] += mLightScale[c] * lit[c];
+                            lit[c] = std::max(mScatter.empty() ? mTau[i] : mScatter[i], 0.0f) *
+                                     slabLightIntegral(mTau[i], front[std::size_t(c)], logRatio[std::size_t(c)]);
                         }
                     }
                     // vdb_render's ray termination: |T|^2 < cutoff (early termination, Sec. 5).
@@ -463,9 +466,13 @@ private:
                         for (int c = 0; c < C; ++c) {
                             const std::size_t i = base + c * kTilePixels + std::size_t(p);
                             mTau[i] *= u;
+                            const float before = absorbed[c];
                             absorbed[c] = slabAbsorbed(mTau[i]);
                             emission[c] *= u;
-                            lit[c] *= u;
+                            // The light kept its value across the slab, (1 - exp(-tau)) / tau of it
+                            // integrated (slabLightIntegral = slabLightTransmittance x that): the
+                            // front part keeps the same light with its own (1 - exp(-u tau)) / (u tau).
+                            lit[c] = before > 0.0f ? lit[c] * (absorbed[c] / before) : 0.0f;
                             for (int k = 0; k < mPassCount; ++k) mPassEmission[passIndex(slab, k, c) + std::size_t(p)] *= u;
                         }
                     }
@@ -473,7 +480,7 @@ private:
                     for (int c = 0; c < C; ++c) {
                         const std::size_t i = base + c * kTilePixels + std::size_t(p);
                         float& t = mT[c * kTilePixels + p];
-                        compositeSlab(mTau[i], absorbed[c], emission[c], mC[c * kTilePixels + p], t);
+                        compositeSlab(mTau[i], absorbed[c], emission[c], mLightScale[c] * lit[c], mC[c * kTilePixels + p], t);
                         t2 += t * t;
                     }
                     if (passes) flushPasses(slab, p, meanBefore, emission, lit);
