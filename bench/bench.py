@@ -18,7 +18,8 @@
                                                          PSNR against vdb_render's converged image
   bench/bench.py targets --cache DIR [--scene smoke] [--res 1920x1080] [--repeat 5]
                                                          issue 3's targets: vdb_render's defaults and
-                                                         the presets in interleaved rounds
+                                                         the presets in interleaved rounds (PSNR too
+                                                         where DIR holds a tradeoff run's references)
   bench/bench.py surfaces [--res 1920x1080] [--shader diffuse] [--repeat 3]
                                                          level sets: surface splats against vdb_render
   bench/bench.py output [--scene smoke] [--res 1920x1080] [--repeat 3]
@@ -390,7 +391,8 @@ def cmd_targets(args):
     common = ["-res", args.res, *cam.split()]
     conv, ref = reference_paths(args.cache, label, args.res)
     if not (os.path.exists(conv) and os.path.exists(ref)):
-        sys.exit(f"run `bench.py tradeoff --scenes {label} --res {args.res} --cache {args.cache}` first")
+        print(f"# no reference images in {args.cache}: times only (`bench.py tradeoff --scenes {label} "
+              f"--res {args.res} --cache {args.cache}` makes them)")
     configs = [("vdb_render defaults", ["vdb_render", path, os.path.join(tmp, "v.exr"), *common])]
     configs += [(f"quality {q}", [*EWA_RENDER, path, os.path.join(tmp, f"{q}.exr"), *common, "--quality", q])
                 for q in ("draft", "default", "high")]
@@ -405,8 +407,9 @@ def cmd_targets(args):
     for name, cmd in configs:
         t = statistics.median(times[name])
         out = next(a for a in cmd if a.endswith(".exr"))
+        psnr = [f"{diff(out, r)[1]:.1f}" if os.path.exists(r) else "-" for r in (ref, conv)]
         print(f"| {name} | {t:.2f} | {', '.join(f'{x:.2f}' for x in times[name])} | {base / t:.1f}x | "
-              f"{diff(out, ref)[1]:.1f} | {diff(out, conv)[1]:.1f} |", flush=True)
+              f"{psnr[0]} | {psnr[1]} |", flush=True)
 
 
 def cmd_output(args):
