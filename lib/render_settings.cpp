@@ -18,7 +18,9 @@ void RenderSettings::validate() const
     auto fail = [](const std::string& what) { throw ValueError(what); };
     if (!nonNegative3(medium.absorb)) fail("--absorb must be finite and >= 0");
     if (!nonNegative3(medium.scatter)) fail("--scatter must be finite and >= 0");
-    if (!finite3(light.direction) || !(glm::length(light.direction) > 0.0)) fail("--light direction must be a finite non-zero vector");
+    if (!finite3(light.direction) || (light.direction.x == 0.0 && light.direction.y == 0.0 && light.direction.z == 0.0)) {
+        fail("--light direction must be a finite non-zero vector");
+    }
     if (!nonNegative3(light.color)) fail("--light colour must be finite and >= 0");
     if (!nonNegative3(medium.emission)) fail("--emission must be finite and >= 0");
     for (int c = 0; c < 3; ++c) {
@@ -28,7 +30,7 @@ void RenderSettings::validate() const
     }
     if (!(shadow.gain >= 0.0) || !std::isfinite(shadow.gain)) fail("--gain must be finite and >= 0");
     if (!(cutoff >= 0.0 && cutoff < 1.0)) fail("--cutoff must be in [0, 1)");
-    if (!(shadow.step > 0.0) || !std::isfinite(shadow.step)) fail("--shadowstep must be > 0 voxels");
+    if (!(shadow.step >= 1e-3) || !std::isfinite(shadow.step)) fail("--shadowstep must be finite and >= 0.001 voxels");
     if (!(shadow.resolution >= 0.25 && shadow.resolution <= 16.0)) fail("--shadow-res must be in [0.25, 16] voxels");
     if (!(step >= 1e-3) || !std::isfinite(step)) fail("--step must be >= 0.001 voxels");
     if (!(splat.kernelSigma >= 0.1 && splat.kernelSigma <= 4.0)) fail("--kernel-sigma must be in [0.1, 4] voxels");

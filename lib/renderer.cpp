@@ -102,6 +102,13 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     progress.stage(10, 35);
     const detail::LightMap light(g, mSettings, &progress);
     stats.shadowSeconds = timer.lap();
+    if (light.shadowStep() != mSettings.shadow.step || light.shadowResolution() != mSettings.shadow.resolution) {
+        std::ostringstream w;
+        w << "--shadowstep raised from " << mSettings.shadow.step << " to " << light.shadowStep() << " and --shadow-res from "
+          << mSettings.shadow.resolution << " to " << light.shadowResolution()
+          << " voxels: the light map would not fit its budget of " << detail::kLightMapPointBudget << " points";
+        stats.warnings.push_back(w.str());
+    }
     progress.stage(35, 45);
     const std::vector<detail::Rgb> colors = detail::kernelColors(g, kernels);
     detail::SplatSet splats = detail::projectSplats(g, kernels, colors, camera, mSettings, passes, &progress);

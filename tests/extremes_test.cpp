@@ -235,6 +235,27 @@ TEST(Extremes, ShearWithNearZeroDeterminant)
     expectMatchesReference(grid, cam, 0.03, RenderSettings(), 0.02);
 }
 
+TEST(Extremes, LightDirectionOfAnyLength)
+{
+    // The light's direction is only a direction: 1e-300 or 1e300 long, it lights alike (its
+    // square once overflowed or vanished in the normalisation and built a light map of NaNs).
+    const GridSource cloud = makeSampleGrid(SampleGrid::Cloud, 0.05);
+    CameraSettings cam;
+    cam.width = 48;
+    cam.height = 36;
+    cam.translate = Vec3d(1.0, 0.5, 4.0);
+    const Camera camera(cam, cloud.worldCentre());
+    RenderSettings s;
+    s.light.direction = Vec3d(0.3, 0.3, 0.0);
+    const Image unit = Renderer(s).render(cloud, camera);
+    expectSane(unit);
+    for (const double scale : {1e-300, 1e300}) {
+        s.light.direction = Vec3d(0.3, 0.3, 0.0) * scale;
+        const Image img = Renderer(s).render(cloud, camera);
+        EXPECT_EQ(img.rgba, unit.rgba) << "light direction x " << scale;
+    }
+}
+
 TEST(Extremes, OnePixelAndHugeImages)
 {
     const GridSource g = makeSampleGrid(SampleGrid::Cloud, 0.08);

@@ -3,6 +3,7 @@
 ///        unity, tiles, anisotropic, sheared and frustum maps, thread-count independence.
 #include "fixtures.h"
 
+#include "shading/shading.h"
 #include "source/source.h"
 
 #include <gtest/gtest.h>
@@ -537,6 +538,36 @@ TEST(Renderer, QualityPresetsOrderTheirErrorAgainstTheReference)
         EXPECT_LT(e, previous);
         previous = e;
     }
+}
+
+TEST(Renderer, LightMapKeepsToItsBudget)
+{
+    // A light map finer than its budget allows (here 1e6 points; --shadowstep 0.01 would need
+    // about 2e8) is coarsened, step and ray spacing by the same factor, into the map the raised
+    // settings make directly.
+    const GridSource cloud = makeSampleGrid(SampleGrid::Cloud, 0.05);
+    RenderSettings s;
+    s.shadow.step = 0.01;
+    s.shadow.resolution = 0.25;
+    const detail::LightMap coarsened(cloud.impl(), s, nullptr, 1e6);
+    EXPECT_GT(coarsened.shadowStep(), 2.0 * s.shadow.step);
+    EXPECT_NEAR(coarsened.shadowStep() / s.shadow.step, coarsened.shadowResolution() / s.shadow.resolution, 1e-9);
+    EXPECT_LE(coarsened.latticePoints(), 1e6);
+    EXPECT_GT(coarsened.latticePoints(), 1e5);
+    RenderSettings raised = s;
+    raised.shadow.step = coarsened.shadowStep();
+    raised.shadow.resolution = coarsened.shadowResolution();
+    const detail::LightMap direct(cloud.impl(), raised, nullptr, 1e6);
+    EXPECT_EQ(direct.shadowStep(), raised.shadow.step);
+    int lit = 0;
+    for (double x = -0.8; x <= 0.8; x += 0.1)
+        for (double y = -0.8; y <= 0.8; y += 0.1) {
+            const Vec3d p = cloud.worldCentre() + Vec3d(x, y, 0.1);
+            const float d = coarsened.densityDepth(coarsened.coordinates(p));
+            ASSERT_EQ(d, direct.densityDepth(direct.coordinates(p)));
+            lit += d > 0.0f;
+        }
+    EXPECT_GT(lit, 10);
 }
 
 TEST(Renderer, LightMapConvergesAsItsRaysGetDenser)

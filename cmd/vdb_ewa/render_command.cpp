@@ -80,7 +80,7 @@ public:
         mApp->add_option("--gain", mGain, "shadow-ray extinction falls as 1/(1 + gain * distance in voxels) (default: " + fmt(rs.shadow.gain) + ")");
         mApp->add_option("--cutoff", mCutoff,
             "density cutoff, and rays stop where |transmittance RGB|^2 < cutoff (default: " + fmt(rs.cutoff) + ")");
-        mApp->add_option("--shadowstep", mShadowStep, "shadow-ray step in voxels (default: " + fmt(rs.shadow.step) + ")");
+        mApp->add_option("--shadowstep", mShadowStep, "shadow-ray step in voxels, >= 0.001; the light map's budget may raise it (docs/numerics.md) (default: " + fmt(rs.shadow.step) + ")");
         mApp->add_option("--shadow-res", mShadowRes, "light map: shadow rays every N voxels across the light, interpolated in between; range [0.25, 16] (default: " + fmt(rs.shadow.resolution) + ")");
         mApp->add_option("--step", mStep, "primary-ray step in voxels for --method raymarch (default: " + fmt(rs.step) + "); the splatter has no primary rays and ignores it");
         mApp->add_option("--method", mMethod, "splat (EWA volume splatting), raymarch (the reference: ray-marches the trilinear field with a shadow ray per sample, as vdb_render; slow) or raymarch-gaussian (diagnostic: ray-marches the splatter's own Gaussian reconstruction and per-kernel shadows) (default: splat)");

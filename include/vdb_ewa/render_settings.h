@@ -63,6 +63,14 @@ struct Light
 {
     Vec3d direction{0.3, 0.3, 0.0};   ///< direction *towards* the light, world space (normalised)
     Vec3d color{0.7, 0.7, 0.7};       ///< radiance of the directional light, RGB
+
+    /// The direction as a unit vector, for any finite non-zero length (1e-300 or 1e300 alike:
+    /// scaled by its largest component before it is squared).
+    Vec3d unitDirection() const
+    {
+        const double m = glm::max(glm::abs(direction.x), glm::max(glm::abs(direction.y), glm::abs(direction.z)));
+        return glm::normalize(direction / m);
+    }
 };
 
 /// The light's transmittance: shadow rays / light map.

@@ -27,7 +27,7 @@ void appendSurfaceSplats(SplatSet& set, const SurfaceSet& surfaces, const std::v
 {
     const ProjectionParams params = projectionParams(camera, settings.splat);
     const bool perspective = params.perspective;
-    const Vec3d toLight = glm::normalize(settings.light.direction);
+    const Vec3d toLight = settings.light.unitDirection();
     const double tauSurface = std::min(20.0, -std::log1p(-std::min(settings.surface.isoOpacity, 1.0)));
     const double sd = 0.25 * voxelLength; // a flattened kernel: about one slab deep
     for (std::size_t i = 0; i < surfaces.kernels.size(); ++i) {

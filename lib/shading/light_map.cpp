@@ -31,37 +31,52 @@ double ExponentialSum::operator()(double x) const
     return f;
 }
 
-LightMap::LightMap(const GridSource::Impl& grid, const RenderSettings& settings, Progress* progress)
+LightMap::LightMap(const GridSource::Impl& grid, const RenderSettings& settings, Progress* progress, double pointBudget)
     : mCutoff(float(settings.cutoff)), mLogCutoff(std::log(mCutoff)), mLogGreyFloor(0.5f * std::log(mCutoff / 3.0f))
 {
     const OpticalModel model(settings);
     for (int c = 0; c < 3; ++c) mExtinction[c] = float(model.extinction(c));
     mGrey = mExtinction[0] == mExtinction[1] && mExtinction[0] == mExtinction[2];
     mUnlit = model.unlit();
+    mShadowStep = settings.shadow.step;
+    mShadowResolution = settings.shadow.resolution;
     const openvdb::CoordBBox box = grid.field->evalActiveVoxelBoundingBox();
     setUnits(progress, 0);
     if (mUnlit || box.empty()) return;
 
     // Frame: e1, e2 across the light, l towards it; units h across, the step along (world
     // lengths in voxel lengths, as vdb_render's steps).
-    const double ell = grid.voxelLength, h = settings.shadow.resolution, step = settings.shadow.step;
-    const Vec3d l = glm::normalize(settings.light.direction);
+    const double ell = grid.voxelLength;
+    double h = settings.shadow.resolution, step = settings.shadow.step;
+    const Vec3d l = settings.light.unitDirection();
     const Vec3d e1 = glm::normalize(glm::cross(l, std::abs(l.x) < 0.6 ? Vec3d(1, 0, 0) : Vec3d(0, 1, 0)));
     const Vec3d e2 = glm::cross(l, e1);
-    mFromWorld = glm::transpose(Mat3d(e1 / (h * ell), e2 / (h * ell), l / (step * ell)));
-
-    // The padded active box (trilinear support) in map coordinates; lattice from its corner.
-    Vec3d lo(1e300), hi(-1e300);
-    for (int c = 0; c < 8; ++c) {
-        const Vec3d p((c & 1 ? box.max().x() + 1 : box.min().x() - 1), (c & 2 ? box.max().y() + 1 : box.min().y() - 1),
-            (c & 4 ? box.max().z() + 1 : box.min().z() - 1));
-        const Vec3d q = mFromWorld * grid.indexToWorld(p);
-        lo = glm::min(lo, q);
-        hi = glm::max(hi, q);
+    Vec3d lo, hi;
+    for (int attempt = 0;; ++attempt) {
+        mFromWorld = glm::transpose(Mat3d(e1 / (h * ell), e2 / (h * ell), l / (step * ell)));
+        // The padded active box (trilinear support) in map coordinates; lattice from its corner.
+        lo = Vec3d(1e300);
+        hi = Vec3d(-1e300);
+        for (int c = 0; c < 8; ++c) {
+            const Vec3d p((c & 1 ? box.max().x() + 1 : box.min().x() - 1), (c & 2 ? box.max().y() + 1 : box.min().y() - 1),
+                (c & 4 ? box.max().z() + 1 : box.min().z() - 1));
+            const Vec3d q = mFromWorld * grid.indexToWorld(p);
+            lo = glm::min(lo, q);
+            hi = glm::max(hi, q);
+        }
+        // Anchored at the box's corner, not at world multiples: the lattice moves with the grid,
+        // so the image does not depend on where in the world the scene is.
+        hi = lo + glm::ceil(hi - lo);
+        // Within the budget, or coarsened: a finer step or ray spacing than the grid's extent
+        // allows is raised, both by the same factor (docs/numerics.md#the-light-maps-budget).
+        const Vec3d n = hi - lo + Vec3d(1.0);
+        const double scale = std::max(std::cbrt(n.x * n.y * n.z / pointBudget), std::sqrt(n.x * n.y * 16.0 / pointBudget));
+        if (!(scale > 1.0) || attempt == 8) break;
+        h *= 1.01 * scale;
+        step *= 1.01 * scale;
     }
-    // Anchored at the box's corner, not at world multiples: the lattice moves with the grid,
-    // so the image does not depend on where in the world the scene is.
-    hi = lo + glm::ceil(hi - lo);
+    mShadowResolution = h;
+    mShadowStep = step;
     const Mat3d worldFromMap = glm::inverse(mFromWorld);
     mOrigin = worldFromMap * lo;
     mNu = int(hi.x - lo.x) + 1;

@@ -33,12 +33,26 @@ struct ExponentialSum
     double operator()(double x) const;
 };
 
+/// The light map's budget in lattice points (rays x steps along them), and a sixteenth of it
+/// in rays. A finer --shadowstep or --shadow-res than a grid's extent allows within it is
+/// raised, both by the same factor (LightMap::shadowStep, shadowResolution). Pig at --quality
+/// high holds 1.7e8 points.
+constexpr double kLightMapPointBudget = 5e8;
+
 class LightMap
 {
 public:
     /// March the lattice rays through @a grid's field. @a progress: one unit per lattice row;
     /// throws Cancelled.
-    LightMap(const GridSource::Impl& grid, const RenderSettings& settings, Progress* progress = nullptr);
+    LightMap(const GridSource::Impl& grid, const RenderSettings& settings, Progress* progress = nullptr,
+        double pointBudget = kLightMapPointBudget);
+
+    /// The shadow step and ray spacing used (voxel lengths): the settings', unless the budget
+    /// raised them.
+    double shadowStep() const { return mShadowStep; }
+    double shadowResolution() const { return mShadowResolution; }
+    /// Lattice points: rays x steps along them.
+    double latticePoints() const { return double(mNu) * double(mNv) * double(mNw); }
 
     /// Map coordinates of a world point: across the light in lattice units (u, v), along it in
     /// steps (w, increasing towards the light).
@@ -90,6 +104,7 @@ private:
     Mat3d mFromWorld{1.0}; ///< rows: e1 / h, e2 / h, l / step (world units)
     Vec3d mOrigin{0.0};    ///< world position of map coordinates (0, 0, 0)
     int mNu = 0, mNv = 0, mNw = 0;
+    double mShadowStep = 0.0, mShadowResolution = 0.0;
     std::vector<Ray> mRays; ///< [j * mNu + i]
     LargeArray<float> mDepth;
     float mExtinction[3];

@@ -17,7 +17,7 @@ namespace detail {
 ShadowMarcher::ShadowMarcher(const GridSource::Impl& grid, const RenderSettings& settings)
     : mGrid(grid), mSkipper(*grid.field, 0), mSettings(settings), mModel(settings)
 {
-    const Vec3d l = glm::normalize(settings.light.direction);
+    const Vec3d l = settings.light.unitDirection();
     mLightWorld = l;
     if (grid.linear) {
         // Index-space displacement per voxel length travelled towards the light.
