@@ -9,20 +9,26 @@ namespace vdb_ewa {
 namespace {
 
 bool finite3(const Vec3d& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
-bool nonNegative3(const Vec3d& v) { return finite3(v) && v.x >= 0.0 && v.y >= 0.0 && v.z >= 0.0; }
+/// Coefficients and light colours: 1e6 per voxel length is opaque within a micro-voxel, and
+/// keeps every source term, and the image, inside float's range (1e308 made Inf pixels).
+constexpr double kMaxCoefficient = 1e6;
+bool coefficient3(const Vec3d& v)
+{
+    return finite3(v) && glm::all(glm::greaterThanEqual(v, Vec3d(0.0))) && glm::all(glm::lessThanEqual(v, Vec3d(kMaxCoefficient)));
+}
 
 } // namespace
 
 void RenderSettings::validate() const
 {
     auto fail = [](const std::string& what) { throw ValueError(what); };
-    if (!nonNegative3(medium.absorb)) fail("--absorb must be finite and >= 0");
-    if (!nonNegative3(medium.scatter)) fail("--scatter must be finite and >= 0");
+    if (!coefficient3(medium.absorb)) fail("--absorb must be in [0, 1e6] per voxel length");
+    if (!coefficient3(medium.scatter)) fail("--scatter must be in [0, 1e6] per voxel length");
     if (!finite3(light.direction) || (light.direction.x == 0.0 && light.direction.y == 0.0 && light.direction.z == 0.0)) {
         fail("--light direction must be a finite non-zero vector");
     }
-    if (!nonNegative3(light.color)) fail("--light colour must be finite and >= 0");
-    if (!nonNegative3(medium.emission)) fail("--emission must be finite and >= 0");
+    if (!coefficient3(light.color)) fail("--light colour must be in [0, 1e6]");
+    if (!coefficient3(medium.emission)) fail("--emission must be in [0, 1e6] per voxel length");
     for (int c = 0; c < 3; ++c) {
         if (medium.emission[c] > 0.0 && !(medium.absorb[c] + medium.scatter[c] > 0.0)) {
             fail("--emission needs --absorb + --scatter > 0 in every channel that emits (the slab update divides by the optical depth)");

@@ -157,6 +157,11 @@ TEST_F(Cli, ArgumentAndOutputErrors)
     expectFailure("render " + mGrid + " " + out + " --color Cd", 3, "Cd");
     expectFailure("render " + mGrid + " " + out + " --iso 0.1 --iso-opacity 2", 2, "--iso-opacity");
     expectFailure("render " + mGrid + " " + out + " --bogus 3", 2, "bogus");
+    // Coefficients past 1e6 made Inf pixels; a shadow step of 1e-9 a light map past any memory.
+    expectFailure("render " + mGrid + " " + out + " --emission 1e308", 2, "--emission must be in [0, 1e6]");
+    expectFailure("render " + mGrid + " " + out + " --scatter 1e7", 2, "--scatter must be in [0, 1e6]");
+    expectFailure("render " + mGrid + " " + out + " --light 0,1,0,3e38,1,1", 2, "--light colour must be in [0, 1e6]");
+    expectFailure("render " + mGrid + " " + out + " --shadowstep 1e-9", 2, "--shadowstep must be finite and >= 0.001");
     expectFailure("render " + mGrid + " " + mDir.file("out.png"), 2, "unsupported output format");
     expectFailure("render " + mGrid + " " + mDir.file("no/such/dir/out.exr"), 3, "does not exist");
 }

@@ -69,13 +69,13 @@ public:
         mApp->add_option("--near", mNear, "near plane depth in world units (default: " + fmt(cs.near) + ")");
         mApp->add_option("--far", mFar, "far plane depth in world units (default: " + fmt(cs.far) + ")");
         // Optical model (vdb_render's dense-volume model).
-        mApp->add_option("--absorb", mAbsorb, "absorption R,G,B per unit density per voxel length (default: " + fmt3(rs.medium.absorb) + ")");
-        mApp->add_option("--scatter", mScatter, "scattering R,G,B per unit density per voxel length (default: " + fmt3(rs.medium.scatter) + ")");
+        mApp->add_option("--absorb", mAbsorb, "absorption R,G,B per unit density per voxel length, each in [0, 1e6] (default: " + fmt3(rs.medium.absorb) + ")");
+        mApp->add_option("--scatter", mScatter, "scattering R,G,B per unit density per voxel length, each in [0, 1e6] (default: " + fmt3(rs.medium.scatter) + ")");
         mApp->add_option("--light", mLight,
-            "direction towards the light X,Y,Z[,R,G,B] with optional colour (default: " + fmt3(rs.light.direction) + "," +
+            "direction towards the light X,Y,Z (any non-zero length)[,R,G,B] with optional colour, each in [0, 1e6] (default: " + fmt3(rs.light.direction) + "," +
                 fmt3(rs.light.color) + ")");
         mApp->add_option("--emission", mEmission,
-            "self-emission R,G,B per unit density per voxel length, added to the scattered light (default: " +
+            "self-emission R,G,B per unit density per voxel length, each in [0, 1e6], added to the scattered light (default: " +
                 fmt3(rs.medium.emission) + ")");
         mApp->add_option("--gain", mGain, "shadow-ray extinction falls as 1/(1 + gain * distance in voxels) (default: " + fmt(rs.shadow.gain) + ")");
         mApp->add_option("--cutoff", mCutoff,
