@@ -76,7 +76,15 @@ Camera::Camera(const CameraSettings& settings, const Vec3d& defaultTarget) : mSe
 
     // Camera axes in world space: right, up, and "back" (vdb_render's local +z).
     Vec3d right, up, back;
-    if (mSettings.rotate) {
+    // With no --lookat or --rotate the camera looks at the default target; where the eye is
+    // that very point (an empty or one-voxel grid at the origin, seen from the default eye),
+    // it looks down -z instead, vdb_render's frame without either option.
+    mLooksDownZ = !mSettings.rotate && !mSettings.lookAt && finite3(defaultTarget) && mEye == defaultTarget;
+    if (mLooksDownZ) {
+        right = Vec3d(1, 0, 0);
+        up = Vec3d(0, 1, 0);
+        back = Vec3d(0, 0, 1);
+    } else if (mSettings.rotate) {
         const Vec3d r = *mSettings.rotate;
         const Mat3d localToWorld = axisRotation(2, r.z) * axisRotation(1, r.y) * axisRotation(0, r.x);
         right = localToWorld[0];

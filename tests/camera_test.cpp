@@ -99,6 +99,17 @@ TEST(Camera, FieldOfViewAndFocalLengthAgreeWithOpenVDB)
     EXPECT_NEAR(s.fieldOfView(), 60.0, 1e-12);
 }
 
+TEST(Camera, EyeAtTheDefaultTargetLooksDownZ)
+{
+    // An empty or one-voxel grid at the origin, seen from the default eye (the origin): no
+    // target to aim at, so vdb_render's frame without --lookat, looking down -z.
+    const Camera c(CameraSettings(), Vec3d(0.0));
+    EXPECT_TRUE(c.looksDownZByDefault());
+    EXPECT_NEAR(c.cameraFromWorldPoint(Vec3d(0, 0, -1)).z, 1.0, 1e-12); // ahead: depth +1
+    EXPECT_NEAR(c.cameraFromWorldPoint(Vec3d(1, 0, 0)).x, 1.0, 1e-12);
+    EXPECT_FALSE(Camera(CameraSettings(), Vec3d(0, 0, -3)).looksDownZByDefault());
+}
+
 TEST(Camera, ImpossibleCamerasAreRejected)
 {
     auto expectRejected = [](CameraSettings s) { EXPECT_THROW(Camera(s, Vec3d(0.0)), ValueError); };

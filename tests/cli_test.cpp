@@ -166,6 +166,23 @@ TEST_F(Cli, ArgumentAndOutputErrors)
     expectFailure("render " + mGrid + " " + mDir.file("no/such/dir/out.exr"), 3, "does not exist");
 }
 
+TEST_F(Cli, EmptyAndOneVoxelGridsRenderWithTheDefaultCamera)
+{
+    // Centred at the origin, where the default eye is: once "impossible camera"; now the
+    // camera looks down -z, says so, and the empty grid renders black with a warning.
+    auto empty = openvdb::FloatGrid::create(0.0f);
+    empty->setName("density");
+    writeGrid(empty, mDir.file("empty.vdb"));
+    auto one = makeBoxGrid(openvdb::Coord(0), openvdb::Coord(0), 1.0f, 0.1);
+    one->setName("density");
+    writeGrid(one, mDir.file("one.vdb"));
+    for (const char* name : {"empty", "one"}) {
+        const CliRun r = runCli(mDir, "render " + mDir.file(std::string(name) + ".vdb") + " " + mDir.file("o.exr") + " --res 32x18");
+        EXPECT_EQ(r.code, 0) << name << ": " << r.err;
+        EXPECT_NE(r.err.find("looking down -z"), std::string::npos) << name << ": " << r.err;
+    }
+}
+
 TEST_F(Cli, FailureLeavesAnExistingOutputUntouched)
 {
     const std::string out = mDir.file("keep.exr");

@@ -233,6 +233,10 @@ private:
         const GridSource grid = mColor.empty() ? opened : opened.withColorGrid(mColor);
         const double loadSeconds = seconds(t0);
         const Camera camera(cam, grid.worldCentre());
+        if (camera.looksDownZByDefault() && verbosity != Verbosity::Quiet) {
+            std::cerr << "vdb_ewa: warning: " << input << ": the eye is at the grid's centre, the default target: looking down -z"
+                      << " (--translate or --lookat frame it)\n";
+        }
         const std::vector<Attributes> options = resolvedOptions(grid, camera, rs);
         if (verbosity >= Verbosity::Verbose && (first || verbosity >= Verbosity::Debug)) printSettings(grid, input, options);
 

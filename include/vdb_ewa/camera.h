@@ -42,8 +42,13 @@ class VDB_EWA_API Camera
 public:
     /// @param settings      camera options; validated (ValueError on an impossible camera)
     /// @param defaultTarget world point looked at when neither rotate nor lookAt is given
-    ///                      (vdb_render looks at the centre of the active voxel bounding box)
+    ///                      (vdb_render looks at the centre of the active voxel bounding box);
+    ///                      if the eye is at that point, the camera looks down -z
+    ///                      (looksDownZByDefault)
     Camera(const CameraSettings& settings, const Vec3d& defaultTarget);
+
+    /// True where the eye sat at the default target, so the camera looks down -z instead.
+    bool looksDownZByDefault() const { return mLooksDownZ; }
 
     const CameraSettings& settings() const { return mSettings; }
     Projection projection() const { return mSettings.projection; }
@@ -77,6 +82,7 @@ private:
     Vec3d mEye;
     Mat3d mCameraFromWorld;
     double mFocalPixels;
+    bool mLooksDownZ = false;
 };
 
 } // namespace vdb_ewa
