@@ -39,6 +39,12 @@ void validate(const CameraSettings& s)
         fail("--res must be between 1x1 and 65536x65536, got " + std::to_string(s.width) + "x" +
              std::to_string(s.height));
     }
+    // The frame's memory budget: 2^27 pixels (16384x8192) are 2 GiB of float RGBA, 7.5 GiB with
+    // every flat pass; 65536x65536 would have died in bad_alloc after the whole render.
+    if (double(s.width) * double(s.height) > double(kMaxPixels)) {
+        fail("--res " + std::to_string(s.width) + "x" + std::to_string(s.height) + " has more than " +
+             std::to_string(kMaxPixels) + " pixels (2^27, e.g. 16384x8192), the frame's memory budget");
+    }
     if (!finite3(s.translate)) fail("--translate is not finite");
     if (s.rotate && !finite3(*s.rotate)) fail("--rotate is not finite");
     if (s.lookAt && !finite3(*s.lookAt)) fail("--lookat is not finite");

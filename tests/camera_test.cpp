@@ -134,6 +134,12 @@ TEST(Camera, ImpossibleCamerasAreRejected)
     bad.focal = -1;
     expectRejected(bad);
     bad = s;
+    bad.width = bad.height = 65536; // 2^32 pixels: refused up front, not in bad_alloc after the render
+    expectRejected(bad);
+    bad.width = 16384;
+    bad.height = 8192; // 2^27: the budget itself
+    EXPECT_NO_THROW(Camera(bad, Vec3d(0.0)));
+    bad = s;
     bad.rotate = Vec3d(0.0);
     bad.lookAt = Vec3d(1.0);
     expectRejected(bad);

@@ -54,7 +54,7 @@ public:
             "output .exr file: premultiplied RGBA and Z, in the output colour space (docs/output.md)")->required();
         mApp->add_option("--name", mName, "grid to render (default: the first scalar float or double grid)");
         // Camera (vdb_render semantics).
-        mApp->add_option("--res", mRes, "image size in pixels, WxH (default: 1920x1080)");
+        mApp->add_option("--res", mRes, "image size in pixels, WxH, each in [1, 65536] and at most 2^27 pixels in all (16384x8192) (default: 1920x1080)");
         mApp->add_option("-t,--translate", mTranslate, "camera position X,Y,Z in world units (default: 0,0,0)");
         mApp->add_option("-r,--rotate", mRotate,
             "camera rotation X,Y,Z in degrees, applied about x, then y, then z (default: look at the "

@@ -37,6 +37,9 @@ struct VDB_EWA_API CameraSettings
     double fieldOfView() const;
 };
 
+/// Most pixels an image may have (the frame's memory budget): 2^27, e.g. 16384x8192.
+constexpr long long kMaxPixels = 1LL << 27;
+
 class VDB_EWA_API Camera
 {
 public:
