@@ -540,6 +540,27 @@ TEST(Renderer, QualityPresetsOrderTheirErrorAgainstTheReference)
     }
 }
 
+TEST(Renderer, LightMapKeepsTheLightsColourInDeepShadow)
+{
+    // vdb_render's floor scales the three channels alike to |T|^2 = cutoff: deep in a medium
+    // that absorbs red most, the light left is blue. Summed in float, |T|^2 underflowed past a
+    // light optical depth of 35 and the floor turned the light grey (0.041 in every channel).
+    const GridSource box = gridSourceFromOpenVDB(makeBoxGrid(openvdb::Coord(0, -10, -10), openvdb::Coord(99, 10, 10), 1.0f, 0.1));
+    RenderSettings s;
+    s.medium.absorb = Vec3d(0.0);
+    s.medium.scatter = Vec3d(1.6, 1.1, 0.6);
+    s.light.direction = Vec3d(1.0, 0.0, 0.0);
+    s.shadow.gain = 0.0;
+    const detail::LightMap light(box.impl(), s);
+    for (const double x : {5.0, 3.0, 1.0}) { // 49, 69 and 89 voxels deep
+        const std::array<float, 3> t = light.transmittance(light.coordinates(Vec3d(x * 0.1 + 0.05, 0.0, 0.0)));
+        const double t2 = double(t[0]) * t[0] + double(t[1]) * t[1] + double(t[2]) * t[2];
+        EXPECT_NEAR(t2, s.cutoff, 2e-3 * s.cutoff) << "x " << x;
+        EXPECT_GT(t[2], 0.99f * std::sqrt(float(s.cutoff))) << "x " << x;
+        EXPECT_LT(t[0], 1e-3f * t[2]) << "x " << x;
+    }
+}
+
 TEST(Renderer, LightMapKeepsToItsBudget)
 {
     // A light map finer than its budget allows (here 1e6 points; --shadowstep 0.01 would need

@@ -357,8 +357,9 @@ private:
         double t2[C], tau[C];
         for (int c = 0; c < C; ++c) {
             const double t = mT[c * kTilePixels + p];
-            t2[c] = t * t * double(3 / C); // C == 1: the three equal channels
-            tau[c] = double(mTau[base + std::size_t(c) * kTilePixels + std::size_t(p)]);
+            t2[c] = t * t;
+            // As composited: a slab's optical depth counts from 0 (halo kernels weigh negative).
+            tau[c] = std::max(double(mTau[base + std::size_t(c) * kTilePixels + std::size_t(p)]), 0.0);
         }
         const auto t2At = [&](double u, double* slope) {
             double f = 0.0, df = 0.0;
@@ -367,8 +368,9 @@ private:
                 f += e;
                 df -= 2.0 * tau[c] * e;
             }
-            if (slope) *slope = df;
-            return f;
+            // C == 1: the three equal channels, scaled after the sum as e + e + e == 3 e.
+            if (slope) *slope = df * double(3 / C);
+            return f * double(3 / C);
         };
         const double logCutoff = std::log(double(mCutoff));
         if (!(t2At(1.0, nullptr) < double(mCutoff)) || !(t2At(0.0, nullptr) >= double(mCutoff))) return 1.0f;
@@ -386,7 +388,7 @@ private:
 
     /// The light on pixel p's ray across the layer from fraction @a u0 to @a u1 of @a slab's
     /// thickness, for the C channels carried: its transmittance at the front, and ln(front /
-    /// back) (slabLightTransmittanceOfLogRatio).
+    /// back) (slabLightIntegral).
     void lightAt(int p, std::int64_t slab, float u0, float u1, std::array<float, 3>& front, std::array<float, 3>& logRatio) const
     {
         const double z = mOptions.slabs.start(slab);

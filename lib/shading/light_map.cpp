@@ -232,15 +232,18 @@ std::array<float, 3> LightMap::logTransmittanceOfDepth(float depth) const
         return logT;
     }
     if (!(depth > 0.0f)) return logT;
-    float t2 = 0.0f;
-    for (std::size_t c = 0; c < 3; ++c) {
-        logT[c] = -mExtinction[c] * depth;
-        t2 += std::exp(2.0f * logT[c]);
-    }
+    for (std::size_t c = 0; c < 3; ++c) logT[c] = -mExtinction[c] * depth;
     // vdb_render stops a shadow ray once |T|^2 < cutoff: the transmittance it keeps is about
-    // that threshold (every channel scaled alike), never darker.
-    if (t2 < mCutoff) {
-        for (std::size_t c = 0; c < 3; ++c) logT[c] = t2 > 1e-30f ? logT[c] + 0.5f * (mLogCutoff - std::log(t2)) : mLogGreyFloor;
+    // that threshold (every channel scaled alike, so the light keeps its colour), never
+    // darker. ln |T|^2 in the log domain, relative to the brightest channel: no underflow at
+    // any depth (summed in float, |T|^2 underflowed past a light optical depth of 35 and the
+    // light turned grey).
+    const float brightest = std::max({logT[0], logT[1], logT[2]});
+    float sum = 0.0f; // in [1, 3]
+    for (std::size_t c = 0; c < 3; ++c) sum += std::exp(2.0f * (logT[c] - brightest));
+    const float logT2 = 2.0f * brightest + std::log(sum);
+    if (logT2 < mLogCutoff) {
+        for (std::size_t c = 0; c < 3; ++c) logT[c] += 0.5f * (mLogCutoff - logT2);
     }
     return logT;
 }
