@@ -233,6 +233,10 @@ TEST_F(Batch, JobFileHoldsTheSettingsAndTheCommandLineOverridesIt)
     fails(R"({"output": "b.exr"})", 2, "give input and output");
     fails(R"({"input": )", 3, job + ": not a JSON job file");
     fails(R"([1, 2])", 2, job + ": a job file holds one JSON object");
+    fails(R"({"input": "a.vdb", "output": "b.exr", "scatter": [1e999, 1, 1]})", 3, job + ": not a JSON job file (");
+    const CliRun directory = runCli(mDir, "render --job " + mDir.file(""));
+    EXPECT_EQ(directory.code, 3) << directory.err;
+    EXPECT_NE(directory.err.find("not a regular file, so not a job file"), std::string::npos) << directory.err;
     const CliRun missing = runCli(mDir, "render --job " + mDir.file("nope.json"));
     EXPECT_EQ(missing.code, 3);
     EXPECT_NE(missing.err.find("nope.json: cannot open the job file"), std::string::npos) << missing.err;

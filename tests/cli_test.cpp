@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
 #include <sys/wait.h>
 
 #include <fstream>
@@ -164,6 +165,10 @@ TEST_F(Cli, ArgumentAndOutputErrors)
     expectFailure("render " + mGrid + " " + out + " --shadowstep 1e-9", 2, "--shadowstep must be finite and >= 0.001");
     expectFailure("render " + mGrid + " " + mDir.file("out.png"), 2, "unsupported output format");
     expectFailure("render " + mGrid + " " + mDir.file("no/such/dir/out.exr"), 3, "does not exist");
+    // A FIFO with no writer once blocked the open where no signal could stop it.
+    const std::string fifo = mDir.file("pipe.vdb");
+    ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+    expectFailure("render " + fifo + " " + out, 3, "pipe.vdb: not a regular file");
 }
 
 TEST_F(Cli, EmptyAndOneVoxelGridsRenderWithTheDefaultCamera)

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -38,13 +39,21 @@ std::string word(const nlohmann::json& v, const std::string& where)
 std::vector<std::string> jobArguments(const std::string& path, const std::vector<std::string>& knownOptions,
     const std::vector<std::string>& flags, const std::vector<std::string>& givenOnCommandLine, bool positionalsGiven)
 {
+    // A directory or a FIFO is not a job file: refused before it is opened (a FIFO with no
+    // writer would block the open).
+    std::error_code error;
+    const auto status = std::filesystem::status(path, error);
+    if (std::filesystem::exists(status) && !std::filesystem::is_regular_file(status)) {
+        throw IoError(path + ": not a regular file, so not a job file");
+    }
     std::ifstream in(path);
     if (!in) throw IoError(path + ": cannot open the job file");
     nlohmann::json job;
     try {
         job = nlohmann::json::parse(in);
-    } catch (const nlohmann::json::parse_error& e) {
-        throw IoError(path + ": not a JSON job file (" + std::string(e.what()) + ")");
+    } catch (const nlohmann::json::exception& e) {
+        // Parse errors and numbers out of range (1e999): one line, the library's words clipped.
+        throw IoError(path + ": not a JSON job file (" + std::string(e.what()).substr(0, 160) + ")");
     }
     if (!job.is_object()) throw ValueError(path + ": a job file holds one JSON object of option: value");
 

@@ -148,6 +148,9 @@ void checkReadable(const std::string& path)
     std::error_code ec;
     if (!std::filesystem::exists(path, ec)) throw IoError(path + ": no such file");
     if (std::filesystem::is_directory(path, ec)) throw IoError(path + ": is a directory, not a .vdb file");
+    // A FIFO, socket or device is not a .vdb file: refused before the open, which would block
+    // on a FIFO with no writer where no signal can stop it.
+    if (!std::filesystem::is_regular_file(path, ec)) throw IoError(path + ": not a regular file, so not a .vdb file");
     if (!std::ifstream(path, std::ios::binary)) throw IoError(path + ": cannot be read (permission denied?)");
 }
 
