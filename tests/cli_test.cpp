@@ -165,6 +165,12 @@ TEST_F(Cli, ArgumentAndOutputErrors)
     expectFailure("render " + mGrid + " " + out + " --shadowstep 1e-9", 2, "--shadowstep must be finite and >= 0.001");
     expectFailure("render " + mGrid + " " + mDir.file("out.png"), 2, "unsupported output format");
     expectFailure("render " + mGrid + " " + mDir.file("no/such/dir/out.exr"), 3, "does not exist");
+    // Every error is one line of at most 300 characters, whatever it quotes.
+    const CliRun longName = runCli(mDir, "render " + mGrid + " " + out + " --name " + std::string(5000, 'n'));
+    EXPECT_EQ(longName.code, 3) << longName.err;
+    EXPECT_EQ(std::count(longName.err.begin(), longName.err.end(), '\n'), 1) << longName.err;
+    EXPECT_LE(longName.err.size(), 301u) << longName.err;
+    EXPECT_NE(longName.err.find("..."), std::string::npos) << longName.err;
     // A FIFO with no writer once blocked the open where no signal could stop it.
     const std::string fifo = mDir.file("pipe.vdb");
     ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);

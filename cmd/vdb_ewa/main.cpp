@@ -8,6 +8,32 @@
 #include <vdb_ewa/vdb_ewa.h>
 
 #include <iostream>
+#include <new>
+#include <stdexcept>
+
+namespace {
+
+/// Every error is one line of at most 300 characters: "vdb_ewa: " and the message, control
+/// characters blanked (a file's garbage grid name once printed 1.6 GB), clipped at a UTF-8
+/// character boundary.
+void printError(const std::exception& e)
+{
+    std::string line = "vdb_ewa: ";
+    line += dynamic_cast<const std::bad_alloc*>(&e) ? "out of memory: the render needed more than this machine could give (std::bad_alloc)"
+                                                    : e.what();
+    for (char& c : line) {
+        if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = ' ';
+    }
+    constexpr std::size_t kMaxLine = 300;
+    if (line.size() > kMaxLine) {
+        std::size_t cut = kMaxLine - 3;
+        while (cut > 0 && (static_cast<unsigned char>(line[cut]) & 0xc0) == 0x80) --cut;
+        line = line.substr(0, cut) + "...";
+    }
+    std::cerr << line << "\n";
+}
+
+} // namespace
 
 int main(int argc, char* argv[])
 {
@@ -35,7 +61,7 @@ int main(int argc, char* argv[])
             rest.insert(rest.begin(), "render");
             args = std::move(rest);
         } catch (const std::exception& e) {
-            std::cerr << "vdb_ewa: " << e.what() << "\n";
+            printError(e);
             return exitCodeFor(e);
         }
     }
@@ -46,7 +72,7 @@ int main(int argc, char* argv[])
     } catch (const CLI::Success& e) { // --help, --help-all, --version
         return app.exit(e);
     } catch (const CLI::ParseError& e) {
-        std::cerr << "vdb_ewa: " << e.what() << " (see vdb_ewa --help)\n";
+        printError(std::runtime_error(std::string(e.what()) + " (see vdb_ewa --help)"));
         return kExitBadArguments;
     }
 
@@ -55,7 +81,7 @@ int main(int argc, char* argv[])
         try {
             return cmd->run();
         } catch (const std::exception& e) {
-            std::cerr << "vdb_ewa: " << e.what() << "\n";
+            printError(e);
             return exitCodeFor(e);
         }
     }
