@@ -108,8 +108,17 @@ Camera::Camera(const CameraSettings& settings, const Vec3d& defaultTarget) : mSe
         back = dir / len;
         const double upLen = glm::length(mSettings.up);
         if (!(upLen > 0.0)) throw ValueError("impossible camera: --up is the zero vector");
-        const Vec3d h = glm::cross(mSettings.up / upLen, back);
-        const double hLen = glm::length(h);
+        Vec3d h = glm::cross(mSettings.up / upLen, back);
+        double hLen = glm::length(h);
+        // Looking straight along the default --up at the default target (a grid right above or
+        // below the eye): another world axis becomes the image's up, +-z (or x where the view
+        // is along z). An explicit --lookat or --up along the view stays impossible.
+        if (!(hLen > 1e-9) && !mSettings.lookAt && mSettings.up == CameraSettings().up) {
+            const Vec3d alternative = std::abs(back.z) < 0.9 ? Vec3d(0, 0, back.y > 0.0 ? 1.0 : -1.0) : Vec3d(1, 0, 0);
+            h = glm::cross(alternative, back);
+            hLen = glm::length(h);
+            mUpReplaced = true;
+        }
         if (!(hLen > 1e-9)) {
             throw ValueError("impossible camera: --up " + str3(mSettings.up) +
                              " is parallel to the view direction");

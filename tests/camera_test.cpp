@@ -110,6 +110,21 @@ TEST(Camera, EyeAtTheDefaultTargetLooksDownZ)
     EXPECT_FALSE(Camera(CameraSettings(), Vec3d(0, 0, -3)).looksDownZByDefault());
 }
 
+TEST(Camera, DefaultTargetAlongUpGetsAnotherUp)
+{
+    // A grid right below the default eye (fog_tommy_v5): the view runs along --up. At the
+    // default target another world axis becomes the image's up; at an explicit --lookat the
+    // camera stays impossible.
+    const Camera below(CameraSettings(), Vec3d(0, -5, 0));
+    EXPECT_TRUE(below.upReplacedByDefault());
+    EXPECT_NEAR(below.cameraFromWorldPoint(Vec3d(0, -5, 0)).z, 5.0, 1e-12); // the target ahead
+    EXPECT_NEAR(below.cameraFromWorldPoint(Vec3d(0, -5, 0)).x, 0.0, 1e-12);
+    EXPECT_FALSE(Camera(CameraSettings(), Vec3d(0, 0, -5)).upReplacedByDefault());
+    CameraSettings explicitTarget;
+    explicitTarget.lookAt = Vec3d(0, -5, 0);
+    EXPECT_THROW(Camera(explicitTarget, Vec3d(0.0)), ValueError);
+}
+
 TEST(Camera, ImpossibleCamerasAreRejected)
 {
     auto expectRejected = [](CameraSettings s) { EXPECT_THROW(Camera(s, Vec3d(0.0)), ValueError); };

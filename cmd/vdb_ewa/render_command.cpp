@@ -237,6 +237,10 @@ private:
             std::cerr << "vdb_ewa: warning: " << input << ": the eye is at the grid's centre, the default target: looking down -z"
                       << " (--translate or --lookat frame it)\n";
         }
+        if (camera.upReplacedByDefault() && verbosity != Verbosity::Quiet) {
+            std::cerr << "vdb_ewa: warning: " << input << ": the grid's centre lies along --up from the eye: another world axis is"
+                      << " the image's up (--up, --translate or --lookat frame it)\n";
+        }
         const std::vector<Attributes> options = resolvedOptions(grid, camera, rs);
         if (verbosity >= Verbosity::Verbose && (first || verbosity >= Verbosity::Debug)) printSettings(grid, input, options);
 

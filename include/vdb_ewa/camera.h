@@ -52,6 +52,9 @@ public:
 
     /// True where the eye sat at the default target, so the camera looks down -z instead.
     bool looksDownZByDefault() const { return mLooksDownZ; }
+    /// True where the view of the default target ran along --up, so another world axis is the
+    /// image's up (z, or x where the view is along z).
+    bool upReplacedByDefault() const { return mUpReplaced; }
 
     const CameraSettings& settings() const { return mSettings; }
     Projection projection() const { return mSettings.projection; }
@@ -86,6 +89,7 @@ private:
     Mat3d mCameraFromWorld;
     double mFocalPixels;
     bool mLooksDownZ = false;
+    bool mUpReplaced = false;
 };
 
 } // namespace vdb_ewa
