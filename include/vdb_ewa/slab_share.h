@@ -68,71 +68,50 @@ inline void compositeSlab(float tau, float absorbed, float emission, float scatt
     transmittance *= 1.0f - absorbed;
 }
 
-/// compositeSlab with no integrated source.
-inline void compositeSlab(float tau, float absorbed, float emission, float& colour, float& transmittance)
-{
-    compositeSlab(tau, absorbed, emission, 0.0f, colour, transmittance);
-}
-
 inline void compositeSlab(float tau, float emission, float& colour, float& transmittance)
 {
-    compositeSlab(tau, slabAbsorbed(tau), emission, colour, transmittance);
+    compositeSlab(tau, slabAbsorbed(tau), emission, 0.0f, colour, transmittance);
 }
 
-/// The light transmittance that, used as one value for the whole slab, lights a uniform layer
-/// of optical depth @a tau (one channel) exactly when the light's transmittance along the
-/// viewing ray falls exponentially from @a front at the layer's front to @a back at its back
-/// (linear light optical depth, as between two light-map samples): compositeSlab(tau, a S T)
-/// then adds T a S int_0^1 T_L(u) e^(-tau u) du, T_L(u) = front (back / front)^u. That integral
-/// is front E(tau + k) with E(x) = (1 - e^-x) / x and k = ln(front / back), so the value
-/// returned is front E(tau + k) / E(tau): the light at the layer's front where it is optically
-/// thick (it is seen only there), the mean of the exponential where it is thin
-/// (docs/numerics.md#shading-per-slab-sample).
-/// In single precision (once per lit pixel and slab): 1e-6 relative. @a absorbed:
-/// slabAbsorbed(tau), which the compositor has at hand.
-inline float slabLightTransmittance(float tau, float absorbed, float front, float back);
+/// E(x) = (1 - e^-x) / x, the mean of e^(-x u) over u in [0, 1]; below |x| = 1e-3 its series
+/// to x^2 (error x^3 / 24 < 1e-10).
+inline float slabMeanOfExp(float x)
+{
+    return std::abs(x) < 1e-3f ? 1.0f - x * (0.5f - x / 6.0f) : -std::expm1(-x) / x;
+}
 
-/// The light a uniform layer of optical depth @a tau scatters towards the eye per unit
-/// scattering weight and light colour: int_0^1 T_L(u) e^(-tau u) du = front E(tau + k), with
-/// the light's transmittance falling exponentially from @a front at the layer's front by
-/// @a logRatio = k = ln(front / back) across it, the light's optical depth between the
-/// layer's back and front (known without a log where that optical depth is: lightLogRatio).
-/// compositeSlab's @a scattered is the scattering weight x the light's colour x this; it is
-/// slabLightTransmittance x E(tau), without the division. Values of the light below 1e-30 count
-/// as 1e-30, in @a front and in both logarithms behind @a logRatio.
+/// The light a uniform layer of optical depth @a tau (one channel) scatters towards the eye per
+/// unit scattering weight and light colour, when the light's transmittance along the viewing
+/// ray falls exponentially from @a front at the layer's front by @a logRatio = k =
+/// ln(front / back) across it (linear light optical depth, as between two light-map samples):
+/// int_0^1 T_L(u) e^(-tau u) du = front E(tau + k), T_L(u) = front e^(-k u). @a logRatio is the
+/// light's optical depth between the layer's back and front, known without a log where that
+/// optical depth is (lightLogRatio). compositeSlab's @a scattered is the scattering weight x the
+/// light's colour x this (docs/numerics.md#shading-per-slab-sample). In single precision (once
+/// per lit pixel and slab): 1e-6 relative. Values of the light below 1e-30 count as 1e-30, in
+/// @a front and in both logarithms behind @a logRatio.
 inline float slabLightIntegral(float tau, float front, float logRatio)
 {
-    // E(x) = (1 - e^-x) / x; below |x| = 1e-3 its series to x^2 (error x^3 / 24 < 1e-10).
-    const float x = (tau > 0.0f ? tau : 0.0f) + logRatio;
-    const float meanOfExp = std::abs(x) < 1e-3f ? 1.0f - x * (0.5f - x / 6.0f) : -std::expm1(-x) / x;
-    return (front > 1e-30f ? front : 1e-30f) * meanOfExp;
+    return (front > 1e-30f ? front : 1e-30f) * slabMeanOfExp((tau > 0.0f ? tau : 0.0f) + logRatio);
 }
 
-/// slabLightTransmittance with the light's change across the layer given as @a logRatio =
-/// ln(front / back) (slabLightIntegral).
-inline float slabLightTransmittanceOfLogRatio(float tau, float absorbed, float front, float logRatio)
-{
-    const float t = tau > 0.0f ? tau : 0.0f;
-    return slabLightIntegral(tau, front, logRatio) / (t < 1e-3f ? 1.0f - t * (0.5f - t / 6.0f) : absorbed / t);
-}
-
-/// ln(front / back) for slabLightTransmittanceOfLogRatio from the logarithms of the light's
-/// transmittance at the layer's front and back (each floored at ln 1e-30).
+/// ln(front / back) for slabLightIntegral from the logarithms of the light's transmittance at
+/// the layer's front and back (each floored at ln 1e-30).
 inline float lightLogRatio(float logFront, float logBack)
 {
     constexpr float kLogFloor = -69.0775528f; // ln 1e-30
     return (logFront > kLogFloor ? logFront : kLogFloor) - (logBack > kLogFloor ? logBack : kLogFloor);
 }
 
-inline float slabLightTransmittance(float tau, float absorbed, float front, float back)
-{
-    const float f = front > 1e-30f ? front : 1e-30f, b = back > 1e-30f ? back : 1e-30f;
-    return slabLightTransmittanceOfLogRatio(tau, absorbed, f, std::log(f / b));
-}
-
+/// The light transmittance that, used as one value for the whole slab, lights the same layer
+/// as slabLightIntegral, with the light given at the layer's front and back: compositeSlab(tau,
+/// a S T) then adds T a S int_0^1 T_L(u) e^(-tau u) du. The value is front E(tau + k) / E(tau):
+/// the light at the layer's front where it is optically thick (it is seen only there), the mean
+/// of the exponential where it is thin.
 inline float slabLightTransmittance(float tau, float front, float back)
 {
-    return slabLightTransmittance(tau, slabAbsorbed(tau), front, back);
+    const float f = front > 1e-30f ? front : 1e-30f, b = back > 1e-30f ? back : 1e-30f;
+    return slabLightIntegral(tau, f, std::log(f / b)) / slabMeanOfExp(tau > 0.0f ? tau : 0.0f);
 }
 
 /// Where a homogeneous slab's mean transmittance, falling exponentially from @a before at its

@@ -32,7 +32,7 @@ double ExponentialSum::operator()(double x) const
 }
 
 LightMap::LightMap(const GridSource::Impl& grid, const RenderSettings& settings, Progress* progress, double pointBudget)
-    : mCutoff(float(settings.cutoff)), mLogCutoff(std::log(mCutoff)), mLogGreyFloor(0.5f * std::log(mCutoff / 3.0f))
+    : mLogCutoff(std::log(float(settings.cutoff))), mLogGreyFloor(0.5f * std::log(float(settings.cutoff) / 3.0f))
 {
     const OpticalModel model(settings);
     for (int c = 0; c < 3; ++c) mExtinction[c] = float(model.extinction(c));

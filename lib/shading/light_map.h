@@ -108,8 +108,7 @@ private:
     std::vector<Ray> mRays; ///< [j * mNu + i]
     LargeArray<float> mDepth;
     float mExtinction[3];
-    float mCutoff;
-    float mLogCutoff;
+    float mLogCutoff;    ///< ln cutoff: vdb_render's |T|^2 floor
     float mLogGreyFloor; ///< ln sqrt(cutoff / 3): a grey medium's floor
     bool mGrey = true;   ///< the same extinction in R, G and B
     bool mUnlit;
