@@ -157,6 +157,7 @@ EWA_CONFIGS = [
     ("quality draft", ["--quality", "draft"]),
     ("quality default", ["--quality", "default"]),
     ("quality high", ["--quality", "high"]),
+    ("quality final", ["--quality", "final"]),
     ("quality draft --lod 0", ["--quality", "draft", "--lod", "0"]),
 ] + [(f"--cutoff-radius {v}", ["--cutoff-radius", v]) for v in ["2", "2.5", "4"]] \
   + [(f"--slab {v}", ["--slab", v]) for v in ["0.5", "2", "4"]] \
@@ -246,8 +247,8 @@ def cmd_plot(args):
 
 
 LADDER_EWA = [("quality draft", ["--quality", "draft"]), ("quality default", ["--quality", "default"]),
-              ("quality high", ["--quality", "high"]),
-              ("quality high --slab 0.25 --shadow-res 0.25", ["--quality", "high", "--slab", "0.25", "--shadow-res", "0.25"])]
+              ("quality high", ["--quality", "high"]), ("quality final", ["--quality", "final"]),
+              ("quality final --shadow-res 0.25", ["--quality", "final", "--shadow-res", "0.25"])]
 LADDER_VDB = VDB_CONFIGS + [("vdb_render -step 0.18 -shadowstep 0.5", ["-step", "0.18", "-shadowstep", "0.5"])]
 
 

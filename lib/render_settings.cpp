@@ -46,6 +46,7 @@ void RenderSettings::validate() const
     if (!(splat.cutoffRadius >= 1.0 && splat.cutoffRadius <= 6.0)) fail("--cutoff-radius must be in [1, 6] sigma");
     if (!(splat.slab >= 0.05 && splat.slab <= 1.0e4)) fail("--slab must be in [0.05, 10000] voxels");
     if (splat.tileKernelSpacing < 1 || splat.tileKernelSpacing > 64) fail("tile kernel spacing must be in [1, 64] voxels");
+    if (splat.refine < 1 || splat.refine > 4) fail("--refine must be in [1, 4]");
     if (!(splat.lodPixels >= 0.0 && splat.lodPixels <= 64.0)) fail("--lod must be in [0, 64] pixels");
     if (!std::isfinite(surface.isovalue)) fail("--isovalue must be finite");
     if (std::isinf(surface.iso)) fail("--iso must be finite");
@@ -75,6 +76,11 @@ RenderSettings RenderSettings::preset(Quality quality)
         s.splat.tileKernelSpacing = 2;
         s.splat.expEvaluation = ExpEvaluation::Exact;
         s.splat.lodPixels = 0.0;
+        break;
+    case Quality::Final: // high, with refined kernels where voxels span 2 pixels or more
+        s = preset(Quality::High);
+        s.splat.slab = 0.25;
+        s.splat.refine = 2;
         break;
     }
     return s;

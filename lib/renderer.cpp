@@ -97,7 +97,12 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     progress.stage(0, 10);
     const detail::LevelOfDetail lod(g, camera, mSettings.splat.lodPixels);
     detail::KernelSet kernels = detail::extractKernels(g, mSettings, &lod, &progress);
-    if (mSettings.splat.prefilter) stats.haloKernels = detail::quasiInterpolate(g, detail::quasiInterpolationAlpha(mSettings.splat.kernelSigma), kernels);
+    // Refined kernels where voxels are large on screen, quasi-interpolating weights for the rest.
+    const double alpha = mSettings.splat.prefilter ? detail::quasiInterpolationAlpha(mSettings.splat.kernelSigma) : 0.0;
+    openvdb::MaskGrid sampled(false);
+    const detail::Refinement refinement = detail::refineKernels(g, mSettings.splat.refine, alpha, float(mSettings.cutoff), lod, kernels, sampled, &progress);
+    stats.refinedVoxels = refinement.sampledVoxels;
+    if (alpha > 0.0) stats.haloKernels = detail::quasiInterpolate(g, alpha, kernels, &sampled);
     stats.kernelSeconds = timer.lap();
     progress.stage(10, 35);
     const detail::LightMap light(g, mSettings, &progress);
@@ -107,6 +112,12 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
         w << "--shadowstep raised from " << mSettings.shadow.step << " to " << light.shadowStep() << " and --shadow-res from "
           << mSettings.shadow.resolution << " to " << light.shadowResolution()
           << " voxels: the light map would not fit its budget of " << detail::kLightMapPointBudget << " points";
+        stats.warnings.push_back(w.str());
+    }
+    if (refinement.lowered) {
+        std::ostringstream w;
+        w << "--refine lowered from " << mSettings.splat.refine << " to " << refinement.n << ": the refined kernels would not fit their budget of "
+          << detail::kRefinedKernelBudget;
         stats.warnings.push_back(w.str());
     }
     progress.stage(35, 45);

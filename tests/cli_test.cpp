@@ -144,6 +144,7 @@ TEST_F(Cli, ArgumentAndOutputErrors)
     const std::string out = mDir.file("out.exr");
     expectFailure("render " + mGrid + " " + out + " --res 0x10", 2, "--res");
     expectFailure("render " + mGrid + " " + out + " --prefilter maybe", 2, "--prefilter");
+    expectFailure("render " + mGrid + " " + out + " --refine 5", 2, "--refine");
     expectFailure("render " + mGrid + " " + out + " --translate 1,2", 2, "--translate");
     expectFailure("render " + mGrid + " " + out + " --lookat 0,0,0 --rotate 0,0,0", 2, "not both");
     expectFailure("render " + mGrid + " " + out + " --fov 30 --focal 50", 2, "not both");
@@ -217,7 +218,7 @@ TEST_F(Cli, HelpDocumentsEveryOptionWithItsDefault)
     for (const char* opt : {"--res", "--translate", "--rotate", "--lookat", "--up", "--camera", "--fov", "--focal",
              "--aperture", "--frame", "--near", "--far", "--name", "--absorb", "--scatter", "--light", "--gain",
              "--cutoff", "--shadowstep", "--step", "--kernel-sigma", "--lowpass", "--aa", "--cutoff-radius", "--slab",
-             "--quality", "--exp", "--renormalize", "--prefilter", "--precision", "--tile-spacing", "--shadow-res", "--method",
+             "--quality", "--exp", "--renormalize", "--prefilter", "--precision", "--tile-spacing", "--refine", "--shadow-res", "--method",
              "--lod", "--threads", "--verbose", "--emission", "--ocio-config", "--working-space", "--output-space",
              "--preview", "--display", "--view", "--exr-type", "--compression", "--aov", "--deep", "--isovalue",
              "--shader", "--samples", "--color", "--iso", "--iso-opacity"}) {

@@ -532,7 +532,7 @@ TEST(Renderer, QualityPresetsOrderTheirErrorAgainstTheReference)
     ref.step = 0.125;
     const Image reference = renderSample(SampleGrid::Cloud, 0.05, ref);
     double previous = 1e30;
-    for (Quality q : {Quality::Draft, Quality::Default, Quality::High}) {
+    for (Quality q : {Quality::Draft, Quality::Default, Quality::High, Quality::Final}) {
         const double e = rmse(renderSample(SampleGrid::Cloud, 0.05, RenderSettings::preset(q)), reference);
         std::printf("quality preset %d: RMSE against the reference %.2e\n", int(q), e);
         EXPECT_LT(e, previous);

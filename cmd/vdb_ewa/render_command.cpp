@@ -31,7 +31,7 @@ std::string fmt(double v)
 
 std::string fmt3(const Vec3d& v) { return fmt(v.x) + "," + fmt(v.y) + "," + fmt(v.z); }
 
-const Choices<Quality> kQualities = {{"draft", Quality::Draft}, {"default", Quality::Default}, {"high", Quality::High}};
+const Choices<Quality> kQualities = {{"draft", Quality::Draft}, {"default", Quality::Default}, {"high", Quality::High}, {"final", Quality::Final}};
 const Choices<Method> kMethods = {{"splat", Method::Splat}, {"raymarch", Method::RayMarch}, {"raymarch-gaussian", Method::RayMarchGaussian}};
 const Choices<AntiAliasing> kAntiAliasing = {{"ewa", AntiAliasing::Ewa}, {"floor", AntiAliasing::Floor}, {"swan", AntiAliasing::Swan}, {"none", AntiAliasing::None}};
 const Choices<ExpEvaluation> kExpEvaluations = {
@@ -92,13 +92,14 @@ public:
         mApp->add_option("--cutoff-radius", mCutoffRadius, "footprint cut-off radius in std. deviations (default: " + fmt(rs.splat.cutoffRadius) + ")");
         mApp->add_option("--slab", mSlab, "image-aligned slab thickness in voxel lengths (default: " + fmt(rs.splat.slab) + ")");
         mApp->add_option("--quality", mQuality,
-            "preset of the speed/accuracy knobs: draft, default or high; explicit options override it "
+            "preset of the speed/accuracy knobs: draft, default, high or final (refined kernels); explicit options override it "
             "(values in docs/performance.md) (default: default)");
         mApp->add_option("--exp", mExp, "footprint exp(-r/2): incremental (forward differencing), exact or table (default: incremental)");
         mApp->add_option("--prefilter", mPrefilter, "on: quasi-interpolating kernel weights (the Gaussian sum keeps the trilinear field's sharpness; negative halo kernels at its faces); off: each kernel weighs its voxel's value (default: on)");
         mApp->add_option("--renormalize", mRenormalize, "on: divide footprints by the mass kept inside --cutoff-radius; off: keep the truncated mass (default: on)");
         mApp->add_option("--precision", mPrecision, "world-to-camera transform and covariances in double or float (default: double)");
         mApp->add_option("--tile-spacing", mTileSpacing, "largest kernel spacing in voxels for active tiles, 1 to voxelise them (default: 4)");
+        mApp->add_option("--refine", mRefine, "where voxels span N pixels or more, their kernels on a lattice N times finer: the trilinear field sampled every 1/N voxel, kernels N times narrower, N^3 as many; range [1, 4], 1 = off (default: " + std::to_string(rs.splat.refine) + ")");
         mApp->add_option("--lod", mLod, "level of detail: blocks of 2, 4 or 8 voxels a side become one kernel where the block projects to at most this many pixels; 0 = off (default: " + fmt(rs.splat.lodPixels) + ")");
         // Fog volumes with an iso-surface.
         mApp->add_option("--iso", mIso,
@@ -315,6 +316,7 @@ private:
         if (!mRenormalize.empty()) rs.splat.renormalize = parseChoice("renormalize", mRenormalize, kOnOff);
         if (!mPrefilter.empty()) rs.splat.prefilter = parseChoice("prefilter", mPrefilter, kOnOff);
         if (mTileSpacing) rs.splat.tileKernelSpacing = *mTileSpacing;
+        if (mRefine) rs.splat.refine = *mRefine;
         if (!mPrecision.empty()) rs.splat.doublePrecision = parseChoice("precision", mPrecision, kPrecisions);
         if (mSlab) rs.splat.slab = *mSlab;
         if (mLod) rs.splat.lodPixels = *mLod;
@@ -362,7 +364,7 @@ private:
                  {"aa", choiceName(rs.splat.antiAliasing, kAntiAliasing)}, {"cutoff-radius", fmt(rs.splat.cutoffRadius)},
                  {"renormalize", choiceName(rs.splat.renormalize, kOnOff)}, {"exp", choiceName(rs.splat.expEvaluation, kExpEvaluations)},
                  {"precision", choiceName(rs.splat.doublePrecision, kPrecisions)}, {"slab", fmt(rs.splat.slab)},
-                 {"tile-spacing", std::to_string(rs.splat.tileKernelSpacing)}, {"lod", fmt(rs.splat.lodPixels)},
+                 {"tile-spacing", std::to_string(rs.splat.tileKernelSpacing)}, {"refine", std::to_string(rs.splat.refine)}, {"lod", fmt(rs.splat.lodPixels)},
                  {"threads", std::to_string(rs.threads)}})
             method.emplace_back(k, v);
         return {cameraGroup, model, method, mOutputOptions.resolved()};
@@ -388,7 +390,7 @@ private:
     {
         std::cout << "vdb_ewa: " << s.activeVoxels << " active voxels and " << s.activeTiles << " active tiles read; "
                   << s.kernels << " kernels (" << s.voxelsMerged << " voxels merged into " << s.mergedKernels
-                  << " by --lod, " << s.haloKernels << " halo kernels by --prefilter), " << s.kernelsSkipped << " values skipped (below --cutoff or NaN), "
+                  << " by --lod, " << s.haloKernels << " halo kernels by --prefilter, " << s.refinedVoxels << " voxels sampled by --refine), " << s.kernelsSkipped << " values skipped (below --cutoff or NaN), "
                   << s.kernelsCulled << " kernels culled, " << s.splats << " splatted into " << s.splatTilePairs
                   << " (splat, tile) pairs; " << s.screenTilesOpaque << " of " << s.screenTiles
                   << " screen tiles turned opaque early, skipping " << s.splatTilePairsSkipped << " pairs\n"
@@ -400,7 +402,7 @@ private:
     CLI::App* mApp = nullptr;
     std::string mInput, mOutput, mName, mRes, mTranslate, mRotate, mLookAt, mUp, mCamera;
     std::string mAbsorb, mScatter, mEmission, mLight, mAa, mMethod, mQuality, mExp, mRenormalize, mPrefilter, mPrecision;
-    std::optional<int> mTileSpacing, mSamples;
+    std::optional<int> mTileSpacing, mRefine, mSamples;
     std::optional<double> mShadowRes;
     std::optional<double> mIsovalue, mIso, mIsoOpacity;
     std::string mShader, mColor;

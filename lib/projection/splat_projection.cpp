@@ -67,6 +67,8 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels, c
 {
     SplatSet out;
     const ProjectionParams params = projectionParams(camera, settings.splat);
+    ProjectionParams refinedParams = params;
+    refinedParams.lowpass /= double(settings.splat.refine) * settings.splat.refine;
     const bool perspective = params.perspective;
     const Mat3d R = camera.cameraFromWorld();
     const double ell = grid.voxelLength;
@@ -116,7 +118,10 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels, c
                     flags[i] = 1;
                     continue;
                 }
-                const Footprint fp = projectKernel(t, cov, params);
+                // Refined kernels (spacing 1/n, only where voxels span n pixels or more) take the
+                // low-pass floor scaled with their lattice: their sum is as smooth on the pixel
+                // grid as the voxels' (docs/numerics.md#refined-kernels).
+                const Footprint fp = projectKernel(t, cov, s < 1.0 ? refinedParams : params);
                 if (!fp.valid) continue;
                 flags[i] = std::uint8_t((fp.clampedNear ? 2 : 0) | (fp.clampedGrazing ? 4 : 0));
 

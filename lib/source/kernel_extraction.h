@@ -12,6 +12,7 @@
 
 #include <cstdint>
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 namespace vdb_ewa {
@@ -38,6 +39,15 @@ inline double kernelSigmaVoxels(const Kernel& k, double kernelSigma)
 {
     const double s = double(k.spacing);
     return (s > 1.0 ? std::max(kernelSigma, kCoarseKernelSigma) : kernelSigma) * s;
+}
+
+/// A kernel of the voxel lattice itself (a voxel, or an active tile's kernel at spacing 1).
+inline bool isUnitKernel(const Kernel& k) { return k.spacing == 1.0f; }
+
+/// The voxel a unit kernel stands for.
+inline openvdb::Coord voxelOf(const Kernel& k)
+{
+    return openvdb::Coord(int(std::lround(k.pIndex.x)), int(std::lround(k.pIndex.y)), int(std::lround(k.pIndex.z)));
 }
 
 struct KernelSet

@@ -13,13 +13,6 @@ namespace {
 const openvdb::Coord kFaceNeighbours[6] = {openvdb::Coord(-1, 0, 0), openvdb::Coord(1, 0, 0), openvdb::Coord(0, -1, 0),
     openvdb::Coord(0, 1, 0), openvdb::Coord(0, 0, -1), openvdb::Coord(0, 0, 1)};
 
-bool isUnitKernel(const Kernel& k) { return k.spacing == 1.0f; }
-
-openvdb::Coord coordOf(const Kernel& k)
-{
-    return openvdb::Coord(int(std::lround(k.pIndex.x)), int(std::lround(k.pIndex.y)), int(std::lround(k.pIndex.z)));
-}
-
 /// c = v + alpha sum_axes (2 v - v_- - v_+) at @a ijk, values from the field.
 template <typename Accessor>
 float prefiltered(Accessor& field, const openvdb::Coord& ijk, double alpha)
@@ -37,7 +30,7 @@ double quasiInterpolationAlpha(double sigma)
     return std::max(0.0, 0.5 * sigma * sigma - 1.0 / 12.0);
 }
 
-std::uint64_t quasiInterpolate(const GridSource::Impl& grid, double alpha, KernelSet& set)
+std::uint64_t quasiInterpolate(const GridSource::Impl& grid, double alpha, KernelSet& set, const openvdb::MaskGrid* sampled)
 {
     if (!(alpha > 0.0)) return 0;
     LargeArray<Kernel>& kernels = set.kernels;
@@ -46,7 +39,7 @@ std::uint64_t quasiInterpolate(const GridSource::Impl& grid, double alpha, Kerne
     {
         auto acc = mask.getAccessor();
         for (const Kernel& k : kernels) {
-            if (isUnitKernel(k)) acc.setValueOn(coordOf(k));
+            if (isUnitKernel(k)) acc.setValueOn(voxelOf(k));
         }
     }
     const std::size_t n = kernels.size();
@@ -57,18 +50,21 @@ std::uint64_t quasiInterpolate(const GridSource::Impl& grid, double alpha, Kerne
         auto field = grid.field->getConstAccessor();
         auto active = grid.grid->getConstAccessor();
         auto inMask = mask.getConstAccessor();
+        const openvdb::MaskGrid none(false);
+        auto isSampled = (sampled ? *sampled : none).getConstAccessor();
         for (std::size_t c = range.begin(); c < range.end(); ++c) {
             for (std::size_t i = c * grain; i < std::min(n, (c + 1) * grain); ++i) {
                 const Kernel& k = kernels[i];
                 weights[i] = k.density;
                 if (!isUnitKernel(k)) continue;
-                const openvdb::Coord ijk = coordOf(k);
+                const openvdb::Coord ijk = voxelOf(k);
                 weights[i] = prefiltered(field, ijk, alpha);
                 for (const openvdb::Coord& d : kFaceNeighbours) {
                     const openvdb::Coord h = ijk + d;
                     // A halo voxel: inactive (active ones have kernels of their own: voxels,
-                    // merged blocks, tiles), added once, by its first unit-kernel neighbour.
-                    if (inMask.isValueOn(h) || active.isValueOn(h)) continue;
+                    // merged blocks, tiles) and not sampled by refinement, added once, by its
+                    // first unit-kernel neighbour.
+                    if (inMask.isValueOn(h) || active.isValueOn(h) || isSampled.isValueOn(h)) continue;
                     openvdb::Coord first = ijk;
                     for (const openvdb::Coord& e : kFaceNeighbours) {
                         if (inMask.isValueOn(h + e)) {

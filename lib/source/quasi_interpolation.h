@@ -26,8 +26,10 @@ double quasiInterpolationAlpha(double sigma);
 /// Reweight the unit-spaced kernels of @a set (voxels and spacing-1 tile kernels) by the
 /// prefilter with @a alpha, reading neighbour values from @a grid's field, and append one
 /// halo kernel for each inactive face neighbour of theirs (in a deterministic order). Kernels
-/// on coarser lattices are left as they are. Returns the number of halo kernels added.
-std::uint64_t quasiInterpolate(const GridSource::Impl& grid, double alpha, KernelSet& set);
+/// on coarser lattices are left as they are; voxels in @a sampled (refineKernels) get no halo
+/// kernel. Returns the number of halo kernels added.
+std::uint64_t quasiInterpolate(const GridSource::Impl& grid, double alpha, KernelSet& set,
+    const openvdb::MaskGrid* sampled = nullptr);
 
 } // namespace detail
 } // namespace vdb_ewa

@@ -1,0 +1,49 @@
+/// @file kernel_refinement.h
+/// @brief Kernels on a lattice finer than the voxels: the trilinear field sampled n times a
+///        voxel per axis, one kernel of spacing 1/n per sample (docs/numerics.md#refined-kernels).
+///
+/// The Gaussian sum of the voxel kernels is not the trilinear field: across a dense face their
+/// profiles differ by about the kernel's width (sigma 0.5 voxel), and that difference, not the
+/// integration, bounds the splatter's accuracy (docs/numerics.md#dense-faces). Sampling the
+/// field itself every 1/n voxel and giving each sample a kernel of standard deviation sigma / n
+/// (Eq. 19 with V = (sigma / n)^2 I) shrinks the difference n-fold: the error goes to zero as n
+/// rises, at n^3 the kernels. The samples' weights are quasi-interpolating on the fine lattice
+/// (quasi_interpolation.h with the fine lattice's own neighbours), and the one-voxel shell
+/// around the kernels' voxels, where the trilinear field is not yet zero, is sampled too (its
+/// samples past the field's support are the fine lattice's halo).
+#pragma once
+
+#include "source/kernel_extraction.h"
+
+namespace vdb_ewa {
+namespace detail {
+
+/// Largest refinement accepted: n^3 kernels a voxel (64 at n = 4).
+inline constexpr int kMaxRefinement = 4;
+
+/// Refined kernels cost n^3 a voxel: at most this many (about 8 GB with their splats).
+inline constexpr double kRefinedKernelBudget = 4.0e7;
+
+/// What refineKernels did.
+struct Refinement
+{
+    int n = 1;                       ///< the lattice used (lowered from the one asked to fit the budget)
+    std::uint64_t sampledVoxels = 0; ///< voxels sampled on it
+    bool lowered = false;            ///< the budget lowered n
+};
+
+/// Replace the unit kernels of @a set (voxels and spacing-1 tile kernels) of the leaf nodes
+/// whose voxels span @a n pixels or more (@a scale's voxelPixels), where the field is not
+/// uniform around them, by the samples of @a grid's trilinear field every 1/@a n voxel over
+/// their voxels and the one-voxel shell around them, weighted by the prefilter with @a alpha
+/// (in fine-lattice units; 0 = the samples' values). Voxels that other kernels model are not
+/// sampled: unrefined unit kernels, active voxels with values >= @a cutoff under tiles or
+/// merged blocks. @a sampled receives the voxels that were (quasiInterpolate puts no halo kernel
+/// there). Where n^3 kernels a sampled voxel would exceed @a budget, n is lowered until they fit
+/// (n = 1: @a set stays as it is). Deterministic order: the kernels kept in their order, then the
+/// samples in tree order. @a progress: one unit per leaf node sampled; throws Cancelled.
+Refinement refineKernels(const GridSource::Impl& grid, int n, double alpha, float cutoff, const LevelOfDetail& scale,
+    KernelSet& set, openvdb::MaskGrid& sampled, Progress* progress = nullptr, double budget = kRefinedKernelBudget);
+
+} // namespace detail
+} // namespace vdb_ewa
