@@ -25,12 +25,13 @@ struct TileBins
     std::vector<std::uint32_t> maxSpan; ///< per tile, the largest span(splat) of its splats (0 if none)
 };
 
-/// Bins splats[order(0)], splats[order(1)], ... (n of them): every tile lists its splats in
-/// that order (a counting sort, stable, in parallel over fixed chunks of the order: the same
-/// lists for any thread count), and keeps the largest span(splat) of its splats.
-/// @tparam Splats an array of splats, each with an inclusive pixel box x0, y0, x1, y1 inside the image.
-template <typename Splats, typename Order, typename Span>
-TileBins binSplatsInOrder(const Splats& splats, std::size_t n, const Order& order, const Span& span, int width, int height)
+/// Bins n splats in the order k = 0 .. n - 1: boxOf(k) is the k-th splat's inclusive pixel box
+/// (x0, y0, x1, y1 inside the image), indexOf(k) the index listed for it and spanOf(k) its
+/// span. Every tile lists its splats in that order (a counting sort, stable, in parallel over
+/// fixed chunks of the order: the same lists for any thread count), and keeps the largest span
+/// of its splats.
+template <typename BoxOf, typename IndexOf, typename SpanOf>
+TileBins binInOrder(std::size_t n, const BoxOf& boxOf, const IndexOf& indexOf, const SpanOf& spanOf, int width, int height)
 {
     TileBins bins;
     bins.tilesX = (width + kTileSize - 1) / kTileSize;
@@ -49,9 +50,8 @@ TileBins binSplatsInOrder(const Splats& splats, std::size_t n, const Order& orde
         std::uint64_t* count = cursor.data() + c * tiles;
         std::uint32_t* most = chunkSpan.data() + c * tiles;
         for (std::size_t k = c * chunk; k < std::min(n, (c + 1) * chunk); ++k) {
-            const auto& s = splats[order(k)];
-            const std::uint32_t sp = span(s);
-            forEachTile(s, [&](std::size_t t) {
+            const std::uint32_t sp = spanOf(k);
+            forEachTile(boxOf(k), [&](std::size_t t) {
                 ++count[t];
                 most[t] = std::max(most[t], sp);
             });
@@ -74,8 +74,8 @@ TileBins binSplatsInOrder(const Splats& splats, std::size_t n, const Order& orde
     tbb::parallel_for(std::size_t(0), kChunks, [&](std::size_t c) {
         std::uint64_t* position = cursor.data() + c * tiles;
         for (std::size_t k = c * chunk; k < std::min(n, (c + 1) * chunk); ++k) {
-            const std::uint32_t i = order(k);
-            forEachTile(splats[i], [&](std::size_t t) { bins.indices[position[t]++] = i; });
+            const std::uint32_t i = indexOf(k);
+            forEachTile(boxOf(k), [&](std::size_t t) { bins.indices[position[t]++] = i; });
         }
     });
     return bins;
@@ -85,8 +85,9 @@ TileBins binSplatsInOrder(const Splats& splats, std::size_t n, const Order& orde
 template <typename Splats>
 TileBins binSplats(const Splats& splats, int width, int height)
 {
-    return binSplatsInOrder(
-        splats, splats.size(), [](std::size_t k) { return std::uint32_t(k); }, [](const auto&) { return std::uint32_t(1); }, width, height);
+    return binInOrder(
+        splats.size(), [&](std::size_t k) -> const auto& { return splats[k]; }, [](std::size_t k) { return std::uint32_t(k); },
+        [](std::size_t) { return std::uint32_t(1); }, width, height);
 }
 
 } // namespace detail

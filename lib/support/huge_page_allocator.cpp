@@ -4,6 +4,8 @@
 #include <sys/mman.h>
 
 #include <cstdint>
+#include <fstream>
+#include <string>
 
 namespace vdb_ewa {
 namespace detail {
@@ -12,6 +14,21 @@ namespace {
 constexpr std::size_t kHugePage = std::size_t(2) << 20;
 
 std::size_t roundUp(std::size_t bytes) { return (bytes + kHugePage - 1) / kHugePage * kHugePage; }
+
+/// Whether MADV_HUGEPAGE can be given without stalling page faults: where the kernel's THP
+/// defrag policy is "always", "madvise" (Debian's default) or "defer+madvise", a fault in an
+/// advised region compacts memory synchronously when no huge page is free, and on a busy
+/// machine that cost projection 0.2-0.45 s a frame (docs/performance.md#the-fast-end-1920x1080).
+bool adviseHugePages()
+{
+    static const bool advise = [] {
+        std::ifstream in("/sys/kernel/mm/transparent_hugepage/defrag");
+        std::string policy;
+        std::getline(in, policy);
+        return policy.find("[defer]") != std::string::npos;
+    }();
+    return advise;
+}
 
 } // namespace
 
@@ -29,7 +46,7 @@ void* mapHugeBlock(std::size_t bytes)
     if (tail > 0) munmap(reinterpret_cast<void*>(aligned + size), tail);
     void* block = reinterpret_cast<void*>(aligned);
 #ifdef MADV_HUGEPAGE
-    madvise(block, size, MADV_HUGEPAGE); // a hint: without transparent huge pages, 4 KiB pages
+    if (adviseHugePages()) madvise(block, size, MADV_HUGEPAGE); // a hint: otherwise the THP policy decides
 #endif
     return block;
 }

@@ -1,11 +1,13 @@
 /// @file huge_page_allocator.h
 /// @brief Storage for the pipeline's large arrays (kernels, splats, slab shares, tile bins, the
-///        light map): blocks of kHugeBlockBytes or more are mapped 2 MiB-aligned and marked
-///        MADV_HUGEPAGE, so that the first touch of a 100 MB array takes 50 page faults, not
-///        25,000. Where transparent huge pages are "madvise" (Debian's default), this made the
-///        kernel-extraction and projection stages 3-5x faster at 1080p (docs/performance.md).
-///        Smaller blocks use operator new; where MADV_HUGEPAGE is not defined, large blocks are
-///        still mapped, without the advice.
+///        light map): blocks of kHugeBlockBytes or more are mapped 2 MiB-aligned, so that the
+///        kernel can back them with transparent huge pages, and are advised MADV_HUGEPAGE only
+///        where the kernel's defrag policy lets an advised fault fall back instead of compacting
+///        memory synchronously ("defer"). Where it does not (Debian's "madvise"), advising made
+///        the first touch 50 faults instead of 25,000 a 100 MB array but stalled for compaction
+///        on a busy machine: 1080p smoke 4.2x faster than vdb_render with the advice, 4.9x
+///        without (docs/performance.md). Smaller blocks use operator new; where MADV_HUGEPAGE is
+///        not defined, large blocks are still mapped, without the advice.
 #pragma once
 
 #include <cstddef>
@@ -18,7 +20,8 @@ namespace detail {
 /// Blocks at least this large are mapped as huge pages.
 constexpr std::size_t kHugeBlockBytes = std::size_t(4) << 20;
 
-/// @a bytes (>= kHugeBlockBytes) of zeroed memory, 2 MiB-aligned and advised as huge pages;
+/// @a bytes (>= kHugeBlockBytes) of zeroed memory, 2 MiB-aligned (advised as huge pages where
+/// that cannot stall);
 /// throws std::bad_alloc.
 void* mapHugeBlock(std::size_t bytes);
 /// Unmap a block from mapHugeBlock of the same size.
