@@ -298,3 +298,53 @@ TEST_F(Cli, WritesPreviewAndDeepFiles)
     ASSERT_EQ(flat.rgba.size(), flattened.rgba.size());
     for (std::size_t i = 0; i < flat.rgba.size(); ++i) EXPECT_NEAR(flattened.rgba[i], flat.rgba[i], 1e-3) << i;
 }
+
+TEST_F(Cli, OutputsThatAreAnInputAreRefused)
+{
+    // The input under another name: through ./ and .., a symlink to it or to its folder, a hard
+    // link, a --preview path, the job file. Compared by device and inode, never by name; the
+    // input stays byte-identical and nothing is written.
+    namespace fs = std::filesystem;
+    const std::string exrGrid = mDir.file("grid.exr"), pngGrid = mDir.file("grid.png");
+    fs::copy_file(mGrid, exrGrid);
+    fs::copy_file(mGrid, pngGrid);
+    fs::create_directory(mDir.file("sub"));
+    fs::create_directory_symlink(mDir.file("."), mDir.file("sub/up"));
+    fs::create_symlink(exrGrid, mDir.file("link.exr"));
+    fs::create_hard_link(mGrid, mDir.file("hard.exr"));
+    const auto bytes = [](const std::string& path) {
+        std::ifstream in(path, std::ios::binary);
+        return std::string(std::istreambuf_iterator<char>(in), {});
+    };
+    const std::string original = bytes(mGrid);
+    const std::string cam = " --res 16x16 -translate 0,0,5";
+    const struct
+    {
+        std::string input, args;
+    } cases[] = {
+        {exrGrid, mDir.file("sub/../grid.exr")},
+        {exrGrid, mDir.file("sub/up/grid.exr")},
+        {exrGrid, mDir.file("link.exr")},
+        {mGrid, mDir.file("hard.exr")},
+        {pngGrid, mDir.file("o.exr") + " --preview " + mDir.file("sub/up/grid.png")},
+    };
+    for (const auto& c : cases) {
+        const CliRun r = runCli(mDir, "render " + c.input + " " + c.args + cam);
+        EXPECT_EQ(r.code, 2) << c.args << "\n" << r.err;
+        EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+        EXPECT_NE(r.err.find("is the same file as the input " + c.input), std::string::npos) << r.err;
+        EXPECT_FALSE(fs::exists(mDir.file("o.exr"))) << c.args;
+    }
+    EXPECT_EQ(bytes(mGrid), original);
+    EXPECT_EQ(bytes(exrGrid), original);
+    EXPECT_EQ(bytes(pngGrid), original);
+    EXPECT_TRUE(fs::is_symlink(mDir.file("link.exr")));
+    // A job file named as the output.
+    const std::string job = mDir.file("job.exr");
+    std::ofstream(job) << "{\"input\": \"" << mGrid << "\", \"res\": \"16x16\", \"translate\": \"0,0,5\"}\n";
+    const std::string jobText = bytes(job);
+    const CliRun r = runCli(mDir, "render --job " + job + " " + mGrid + " " + job);
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_NE(r.err.find("is the same file as the input"), std::string::npos) << r.err;
+    EXPECT_EQ(bytes(job), jobText);
+}

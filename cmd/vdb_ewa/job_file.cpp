@@ -145,6 +145,7 @@ std::vector<std::string> applyJobFile(const std::vector<std::string>& args, cons
     if (jobPath.empty()) return args;
     std::vector<std::string> out = jobArguments(jobPath, known, flags, given, positionals >= 2);
     out.insert(out.end(), rest.begin(), rest.end());
+    out.push_back("--job=" + jobPath); // kept for the render: outputs must not name the job file
     return out;
 }
 

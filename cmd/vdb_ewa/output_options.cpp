@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdlib>
+#include <filesystem>
 #include <sstream>
 
 namespace vdb_ewa::cli {
@@ -123,6 +125,20 @@ Attributes OutputOptions::resolved() const
         a.emplace_back("view", mView);
     }
     return a;
+}
+
+void OutputOptions::refuseInputs(const std::string& output, const std::string& preview, std::vector<std::string> inputs) const
+{
+    inputs.push_back(mConfigPath);
+    if (const char* env = std::getenv("OCIO")) inputs.emplace_back(env);
+    for (const std::string* out : {&output, &preview}) {
+        for (const std::string& in : inputs) {
+            std::error_code ec;
+            if (!out->empty() && !in.empty() && std::filesystem::equivalent(*out, in, ec) && !ec) {
+                throw ValueError(*out + ": is the same file as the input " + in + ": refusing to write over an input");
+            }
+        }
+    }
 }
 
 void OutputOptions::write(Frame& frame, const Camera& camera, const std::string& output, const std::string& preview,

@@ -38,6 +38,12 @@ public:
     /// The resolved options, as (option, value) pairs, for -v and the EXR's attributes.
     Attributes resolved() const;
 
+    /// Refuse to write @a output or @a preview (empty: none) over any of @a inputs or the OCIO
+    /// config: compared by device and inode, so a name through `./`, `..`, a symlink or a hard
+    /// link is the same file. Paths that do not exist yet are no input.
+    /// @throw ValueError naming the output and the input.
+    void refuseInputs(const std::string& output, const std::string& preview, std::vector<std::string> inputs) const;
+
     /// Convert @a frame from the working to the output space and write the EXR (flat or deep),
     /// then the preview @a preview (empty: none). @a attributes are added to the EXR header.
     void write(Frame& frame, const Camera& camera, const std::string& output, const std::string& preview,

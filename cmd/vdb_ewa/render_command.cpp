@@ -229,6 +229,8 @@ private:
         const std::string& output, ProgressReport& report, Verbosity verbosity, bool first) const
     {
         const std::string input = pathOf(mInput, frameNumber);
+        const std::string preview = pathOf(mOutputOptions.previewOption(), frameNumber);
+        mOutputOptions.refuseInputs(output, preview, {input, mJob});
         const auto t0 = std::chrono::steady_clock::now();
         const GridSource opened = GridSource::open(input, mName);
         const GridSource grid = mColor.empty() ? opened : opened.withColorGrid(mColor);
@@ -260,7 +262,7 @@ private:
                 if (key != "threads") attributes.emplace_back("vdb_ewa/" + key, value);
             }
         try {
-            mOutputOptions.write(frame, camera, output, pathOf(mOutputOptions.previewOption(), frameNumber), attributes);
+            mOutputOptions.write(frame, camera, output, preview, attributes);
         } catch (const IoError& e) {
             throw std::runtime_error(e.what()); // a failed write is a render failure (exit 4), not bad input
         }
