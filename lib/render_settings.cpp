@@ -12,6 +12,7 @@ bool finite3(const Vec3d& v) { return std::isfinite(v.x) && std::isfinite(v.y) &
 /// Coefficients and light colours: 1e6 per voxel length is opaque within a micro-voxel, and
 /// keeps every source term, and the image, inside float's range (1e308 made Inf pixels).
 constexpr double kMaxCoefficient = 1e6;
+constexpr double kMinMemoryBudget = 64.0 * 1024 * 1024;
 bool coefficient3(const Vec3d& v)
 {
     return finite3(v) && glm::all(glm::greaterThanEqual(v, Vec3d(0.0))) && glm::all(glm::lessThanEqual(v, Vec3d(kMaxCoefficient)));
@@ -53,6 +54,7 @@ void RenderSettings::validate() const
     if (!(surface.isoOpacity >= 0.0 && surface.isoOpacity <= 1.0)) fail("--iso-opacity must be in [0, 1]");
     if (!(surface.tolerance > 0.0 && surface.tolerance <= 100.0)) fail("surface depth tolerance must be in (0, 100] voxels");
     if (threads < 0) fail("--threads must be >= 0");
+    if (!(maxMemory == 0.0 || (maxMemory >= kMinMemoryBudget && maxMemory <= 1.0e18))) fail("--max-memory must be 0 (3/4 of the physical memory) or in [64M, 1e18] bytes");
 }
 
 RenderSettings RenderSettings::preset(Quality quality)

@@ -9,6 +9,7 @@
 #include "reference/reference.h"
 #include "shading/shading.h"
 #include "source/source.h"
+#include "support/memory_budget.h"
 #include "support/progress.h"
 
 #include <tbb/task_arena.h>
@@ -34,6 +35,13 @@ public:
 private:
     std::chrono::steady_clock::time_point mStart = std::chrono::steady_clock::now();
 };
+
+/// The frame's memory budget, naming the grid in its errors.
+detail::MemoryBudget budgetFor(const GridSource::Impl& grid, const RenderSettings& settings)
+{
+    return detail::MemoryBudget(settings.maxMemory,
+        (grid.path.empty() ? std::string("host grid") : grid.path) + ": grid '" + grid.name + "'");
+}
 
 std::string countLine(std::uint64_t n, const std::string& what)
 {
@@ -61,6 +69,8 @@ void Renderer::renderLevelSet(const GridSource::Impl& grid, const Camera& camera
     if (!std::isnan(mSettings.surface.iso)) throw ValueError("--iso is for fog volumes; a level set's surface is chosen with --isovalue");
     StageTimer timer;
     progress.stage(0, 60);
+    // At most one surface kernel an active voxel.
+    budgetFor(grid, mSettings).check(double(grid.activeVoxels), "active voxels (surface kernels)", detail::kBytesPerKernel);
     const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(grid, mSettings.surface.isovalue, mSettings.surface.sigma, false, &progress);
     stats.kernelSeconds = timer.lap();
     progress.stage(60, 100);
@@ -82,6 +92,7 @@ void Renderer::renderLevelSet(const GridSource::Impl& grid, const Camera& camera
 void Renderer::addIsoSurface(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes,
     const detail::LightMap& light, detail::SplatSet& splats, detail::Progress& progress) const
 {
+    budgetFor(grid, mSettings).check(double(grid.activeVoxels), "active voxels (surface kernels)", detail::kBytesPerKernel);
     const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(grid, mSettings.surface.iso, mSettings.surface.sigma, true, &progress);
     // The light's transmittance at the surface kernels, from the volume's light map.
     std::vector<detail::Rgb> shadows(surfaces.kernels.size());
@@ -95,29 +106,34 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     // Progress: the stages' typical shares of a frame (docs/performance.md).
     StageTimer timer;
     progress.stage(0, 10);
+    const detail::MemoryBudget budget = budgetFor(g, mSettings);
     const detail::LevelOfDetail lod(g, camera, mSettings.splat.lodPixels);
-    detail::KernelSet kernels = detail::extractKernels(g, mSettings, &lod, &progress);
+    detail::KernelSet kernels = detail::extractKernels(g, mSettings, &lod, &progress, &budget);
     // Refined kernels where voxels are large on screen, quasi-interpolating weights for the rest.
     const double alpha = mSettings.splat.prefilter ? detail::quasiInterpolationAlpha(mSettings.splat.kernelSigma) : 0.0;
     openvdb::MaskGrid sampled(false);
-    const detail::Refinement refinement = detail::refineKernels(g, mSettings.splat.refine, alpha, float(mSettings.cutoff), lod, kernels, sampled, &progress);
+    const double refinedWithin = std::min(detail::kRefinedKernelBudget, budget.itemsWithin(0.5, detail::kBytesPerKernel));
+    const detail::Refinement refinement = detail::refineKernels(g, mSettings.splat.refine, alpha, float(mSettings.cutoff), lod, kernels, sampled,
+        &progress, refinedWithin);
     stats.refinedVoxels = refinement.sampledVoxels;
     if (alpha > 0.0) stats.haloKernels = detail::quasiInterpolate(g, alpha, kernels, &sampled);
     stats.kernelSeconds = timer.lap();
     progress.stage(10, 35);
-    const detail::LightMap light(g, mSettings, &progress);
+    // The light map takes at most a quarter of the budget (4 bytes a lattice point).
+    const double lightPoints = std::min(detail::kLightMapPointBudget, budget.itemsWithin(0.25, 4.0));
+    const detail::LightMap light(g, mSettings, &progress, lightPoints);
     stats.shadowSeconds = timer.lap();
     if (light.shadowStep() != mSettings.shadow.step || light.shadowResolution() != mSettings.shadow.resolution) {
         std::ostringstream w;
         w << "--shadowstep raised from " << mSettings.shadow.step << " to " << light.shadowStep() << " and --shadow-res from "
           << mSettings.shadow.resolution << " to " << light.shadowResolution()
-          << " voxels: the light map would not fit its budget of " << detail::kLightMapPointBudget << " points";
+          << " voxels: the light map would not fit its budget of " << lightPoints << " points";
         stats.warnings.push_back(w.str());
     }
     if (refinement.lowered) {
         std::ostringstream w;
         w << "--refine lowered from " << mSettings.splat.refine << " to " << refinement.n << ": the refined kernels would not fit their budget of "
-          << detail::kRefinedKernelBudget;
+          << refinedWithin;
         stats.warnings.push_back(w.str());
     }
     progress.stage(35, 45);
@@ -127,7 +143,7 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     stats.projectSeconds = timer.lap();
     progress.stage(45, 100);
     detail::RasterStats raster;
-    frame = detail::rasterizeSplats(splats, camera, mSettings, passes, raster, &light, !colors.empty(), &progress);
+    frame = detail::rasterizeSplats(splats, camera, mSettings, passes, raster, &light, !colors.empty(), &progress, &budget);
     stats.rasterSeconds = timer.lap();
 
     stats.activeVoxels = kernels.activeVoxels;
@@ -182,6 +198,7 @@ Frame Renderer::renderFrame(const GridSource& grid, const Camera& camera, const 
     RenderStats stats;
     Frame frame;
     const GridSource::Impl& g = grid.impl();
+    budgetFor(g, mSettings).check(double(camera.width()) * double(camera.height()), "pixels", detail::kBytesPerPixel);
     auto run = [&] {
         if (grid.isLevelSet()) {
             renderLevelSet(g, camera, passes, frame, stats, progress);

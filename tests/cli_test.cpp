@@ -145,6 +145,11 @@ TEST_F(Cli, ArgumentAndOutputErrors)
     expectFailure("render " + mGrid + " " + out + " --res 0x10", 2, "--res");
     expectFailure("render " + mGrid + " " + out + " --prefilter maybe", 2, "--prefilter");
     expectFailure("render " + mGrid + " " + out + " --refine 5", 2, "--refine");
+    expectFailure("render " + mGrid + " " + out + " --max-memory 12Q", 2, "--max-memory: '12Q' is not a size in bytes");
+    expectFailure("render " + mGrid + " " + out + " --max-memory 10M", 2, "--max-memory must be");
+    // Over the budget: exit 5, one line naming the file, the grid, the count and the budget.
+    expectFailure("render " + mGrid + " " + out + " --res 2048x2048 -translate 0,0,5 --max-memory 64M", 5,
+        mGrid + ": grid 'density': 4194304 pixels need 384 MB, over the memory budget of 64 MB (--max-memory)");
     expectFailure("render " + mGrid + " " + out + " --translate 1,2", 2, "--translate");
     expectFailure("render " + mGrid + " " + out + " --lookat 0,0,0 --rotate 0,0,0", 2, "not both");
     expectFailure("render " + mGrid + " " + out + " --fov 30 --focal 50", 2, "not both");
@@ -219,7 +224,7 @@ TEST_F(Cli, HelpDocumentsEveryOptionWithItsDefault)
              "--aperture", "--frame", "--near", "--far", "--name", "--absorb", "--scatter", "--light", "--gain",
              "--cutoff", "--shadowstep", "--step", "--kernel-sigma", "--lowpass", "--aa", "--cutoff-radius", "--slab",
              "--quality", "--exp", "--renormalize", "--prefilter", "--precision", "--tile-spacing", "--refine", "--shadow-res", "--method",
-             "--lod", "--threads", "--verbose", "--emission", "--ocio-config", "--working-space", "--output-space",
+             "--lod", "--threads", "--max-memory", "--verbose", "--emission", "--ocio-config", "--working-space", "--output-space",
              "--preview", "--display", "--view", "--exr-type", "--compression", "--aov", "--deep", "--isovalue",
              "--shader", "--samples", "--color", "--iso", "--iso-opacity"}) {
         EXPECT_NE(r.out.find(opt), std::string::npos) << opt;

@@ -275,3 +275,45 @@ TEST(Extremes, OnePixelAndHugeImages)
     // Same framing: coverage scales with the pixel count.
     EXPECT_NEAR(alphaSum(huge) / 64.0, alphaSum(ref), 0.01 * alphaSum(ref));
 }
+
+TEST(Extremes, MemoryBudgetStopsEachStageBeforeItAllocates)
+{
+    // Each count is checked against RenderSettings::maxMemory before its arrays exist: the
+    // frame's pixels, the kernels of voxels and active tiles (a damaged file's thousands of
+    // 4096^3 tiles), and the splat-tile pairs of footprints that cover the image.
+    const auto message = [](const std::function<void()>& render) {
+        try {
+            render();
+        } catch (const BudgetError& e) {
+            return std::string(e.what());
+        }
+        return std::string("no BudgetError");
+    };
+    RenderSettings s;
+    s.maxMemory = 256.0 * 1024 * 1024;
+    const GridSource cloud = makeSampleGrid(SampleGrid::Cloud, 0.08);
+    const std::string pixels = message([&] {
+        Renderer(s).render(cloud, Camera(camera(Vec3d(1.5, 0.8, 4.5), Vec3d(0.0), 4096, 4096), cloud.worldCentre()));
+    });
+    EXPECT_NE(pixels.find("16777216 pixels need 1.5 GB, over the memory budget of 256 MB (--max-memory)"), std::string::npos) << pixels;
+    EXPECT_NE(pixels.find("grid 'density'"), std::string::npos) << pixels;
+
+    auto tiles = openvdb::FloatGrid::create(0.0f);
+    tiles->setName("density");
+    for (int i = 0; i < 64; ++i) tiles->tree().addTile(3, openvdb::Coord(4096 * i, 0, 0), 1.0f, true); // 64 x 4096^3 voxels
+    const GridSource tiled = gridSourceFromOpenVDB(tiles);
+    const std::string kernels = message([&] {
+        Renderer(s).render(tiled, Camera(camera(Vec3d(0.0, 0.0, 1e5), Vec3d(0.0), 64, 64), tiled.worldCentre()));
+    });
+    EXPECT_NE(kernels.find("voxel and active-tile kernels need"), std::string::npos) << kernels;
+
+    // 64^3 voxels (64 MB of kernels) of sigma 4 voxels, 15 pixels a voxel: each splat covers
+    // about 500 of the 1024^2 image's 4096 tiles, 1.3e8 pairs in all.
+    const GridSource box = gridSourceFromOpenVDB(cube(32, 0.01f, 0.1));
+    RenderSettings wide = s;
+    wide.splat.kernelSigma = 4.0;
+    const std::string pairs = message([&] {
+        Renderer(wide).render(box, Camera(camera(Vec3d(0.0, 0.0, 11.0), Vec3d(0.0), 1024, 1024), box.worldCentre()));
+    });
+    EXPECT_NE(pairs.find("splat-tile pairs need"), std::string::npos) << pairs;
+}

@@ -3,6 +3,7 @@
 
 #include <vdb_ewa/error.h>
 
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <sstream>
@@ -24,6 +25,21 @@ std::vector<double> parseNumbers(const std::string& option, const std::string& t
     }
     if (out.empty()) throw ValueError("--" + option + ": missing value");
     return out;
+}
+
+double parseBytes(const std::string& option, const std::string& text)
+{
+    char* end = nullptr;
+    double v = std::strtod(text.c_str(), &end);
+    std::string suffix(end ? end : "");
+    if (!suffix.empty() && (suffix.back() == 'B' || suffix.back() == 'b')) suffix.pop_back();
+    const std::string units = "KMGT";
+    const std::size_t u = suffix.size() == 1 ? units.find(char(std::toupper(static_cast<unsigned char>(suffix[0])))) : std::string::npos;
+    if (text.empty() || end == text.c_str() || (!suffix.empty() && u == std::string::npos) || !std::isfinite(v) || v < 0.0) {
+        throw ValueError("--" + option + ": '" + text + "' is not a size in bytes (a number with an optional K, M, G or T suffix)");
+    }
+    if (!suffix.empty()) v *= std::pow(1024.0, double(u + 1));
+    return v;
 }
 
 Vec3d parseVec3(const std::string& option, const std::string& text, bool allowBroadcast)

@@ -19,6 +19,10 @@ std::vector<double> parseNumbers(const std::string& option, const std::string& t
 Vec3d parseVec3(const std::string& option, const std::string& text, bool allowBroadcast);
 /// "WxH" or "W,H", both >= 1.
 void parseResolution(const std::string& text, int& width, int& height);
+
+/// A size in bytes: a number with an optional K, M, G or T suffix (powers of 1024; "16G",
+/// "512M", "1.5T"). @throw ValueError naming --@a option.
+double parseBytes(const std::string& option, const std::string& text);
 /// The named values of an option with a fixed set of words ("--exp incremental|exact|table").
 template <typename T>
 using Choices = std::vector<std::pair<std::string, T>>;

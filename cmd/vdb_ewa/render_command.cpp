@@ -118,6 +118,9 @@ public:
             "level sets: vdb_render's rays per pixel; accepted for compatibility, the EWA filter anti-aliases "
             "without extra samples (default: 1)");
         mApp->add_option("--threads,--cpus", mThreads, "worker threads, 0 = all cores (default: 0)");
+        mApp->add_option("--max-memory", mMaxMemory,
+            "memory budget of a frame in bytes, with an optional K, M, G or T suffix (powers of 1024), range [64M, 1e18]; "
+            "a frame that would need more stops before allocating it (exit 5) (default: 0 = 3/4 of the physical memory)");
         mOutputOptions.add(mApp);
         // Batch jobs.
         mApp->add_option("--frames", mFrames,
@@ -328,6 +331,7 @@ private:
         if (!mShader.empty()) rs.surface.shader = parseChoice("shader", mShader, kShaders);
         if (mSamples && *mSamples < 1) throw ValueError("--samples must be >= 1");
         rs.threads = mThreads;
+        if (!mMaxMemory.empty()) rs.maxMemory = parseBytes("max-memory", mMaxMemory);
     }
 
     /// The resolved options in groups (camera, optical model, method and splatting, output),
@@ -411,6 +415,7 @@ private:
     std::optional<double> mFov, mFocal, mAperture, mFrame, mNear, mFar, mGain, mCutoff, mShadowStep, mStep, mLod;
     std::optional<double> mKernelSigma, mSurfaceSigma, mLowpass, mCutoffRadius, mSlab;
     int mThreads = 0;
+    std::string mMaxMemory;
     int mVerbose = 0;
     bool mQuiet = false, mSkipExisting = false;
     std::string mFrames, mJob;

@@ -38,4 +38,12 @@ public:
     using Error::Error;
 };
 
+/// The render would need more memory than its budget allows (RenderSettings::maxMemory,
+/// --max-memory): found from the counts known before anything is allocated.
+class VDB_EWA_API BudgetError : public Error
+{
+public:
+    using Error::Error;
+};
+
 } // namespace vdb_ewa

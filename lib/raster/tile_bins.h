@@ -4,6 +4,7 @@
 #pragma once
 
 #include "support/huge_page_allocator.h"
+#include "support/memory_budget.h"
 
 #include <tbb/parallel_for.h>
 
@@ -29,9 +30,10 @@ struct TileBins
 /// (x0, y0, x1, y1 inside the image), indexOf(k) the index listed for it and spanOf(k) its
 /// span. Every tile lists its splats in that order (a counting sort, stable, in parallel over
 /// fixed chunks of the order: the same lists for any thread count), and keeps the largest span
-/// of its splats.
+/// of its splats. @a budget: the pairs are counted against it before they are stored.
 template <typename BoxOf, typename IndexOf, typename SpanOf>
-TileBins binInOrder(std::size_t n, const BoxOf& boxOf, const IndexOf& indexOf, const SpanOf& spanOf, int width, int height)
+TileBins binInOrder(std::size_t n, const BoxOf& boxOf, const IndexOf& indexOf, const SpanOf& spanOf, int width, int height,
+    const MemoryBudget* budget = nullptr)
 {
     TileBins bins;
     bins.tilesX = (width + kTileSize - 1) / kTileSize;
@@ -70,6 +72,7 @@ TileBins binInOrder(std::size_t n, const BoxOf& boxOf, const IndexOf& indexOf, c
         }
     }
     bins.offsets[tiles] = next;
+    if (budget) budget->check(double(next), "splat-tile pairs", double(sizeof(std::uint32_t)));
     bins.indices.resize(next);
     tbb::parallel_for(std::size_t(0), kChunks, [&](std::size_t c) {
         std::uint64_t* position = cursor.data() + c * tiles;
@@ -83,11 +86,11 @@ TileBins binInOrder(std::size_t n, const BoxOf& boxOf, const IndexOf& indexOf, c
 
 /// Bins splats in their own order.
 template <typename Splats>
-TileBins binSplats(const Splats& splats, int width, int height)
+TileBins binSplats(const Splats& splats, int width, int height, const MemoryBudget* budget = nullptr)
 {
     return binInOrder(
         splats.size(), [&](std::size_t k) -> const auto& { return splats[k]; }, [](std::size_t k) { return std::uint32_t(k); },
-        [](std::size_t) { return std::uint32_t(1); }, width, height);
+        [](std::size_t) { return std::uint32_t(1); }, width, height, budget);
 }
 
 } // namespace detail

@@ -698,7 +698,8 @@ DeepImage assembleDeep(std::vector<TileDeep>& tiles, const TileBins& bins, int w
 } // namespace
 
 Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSettings& settings,
-    const PassRequest& passes, RasterStats& stats, const LightMap* light, bool tinted, Progress* progress)
+    const PassRequest& passes, RasterStats& stats, const LightMap* light, bool tinted, Progress* progress,
+    const MemoryBudget* budget)
 {
     const OpticalModel model(settings);
     const int width = camera.width(), height = camera.height();
@@ -707,7 +708,7 @@ Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSet
     const std::vector<SweepEntry> sweep = sweepOrder(set);
     const TileBins bins = binInOrder(
         sweep.size(), [&](std::size_t k) -> const SweepEntry& { return sweep[k]; }, [&](std::size_t k) { return sweep[k].index; },
-        [&](std::size_t k) { return sweep[k].span; }, width, height);
+        [&](std::size_t k) { return sweep[k].span; }, width, height, budget);
     stats.splatTilePairs = bins.indices.size();
     const int tiles = bins.tilesX * bins.tilesY;
     std::vector<std::uint64_t> skipped(std::size_t(tiles), 0);

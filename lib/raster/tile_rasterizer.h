@@ -26,10 +26,11 @@ struct RasterStats
 /// the thread count.
 /// @a light: the light map that lights the splats' scattering weights at every (pixel, slab)
 /// sample (null: unlit); @a tinted: the splats' scattering weights carry material colours.
-/// @a progress: one unit per screen tile; throws Cancelled.
+/// @a progress: one unit per screen tile; throws Cancelled. @a budget: the splat-tile pairs are
+/// counted against it before they are stored (BudgetError).
 Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSettings& settings,
     const PassRequest& passes, RasterStats& stats, const LightMap* light = nullptr, bool tinted = false,
-    Progress* progress = nullptr);
+    Progress* progress = nullptr, const MemoryBudget* budget = nullptr);
 
 } // namespace detail
 } // namespace vdb_ewa

@@ -37,7 +37,7 @@ int tileLatticeSpacing(int tileDim, int maxSpacing)
 }
 
 KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& settings, const LevelOfDetail* lod,
-    Progress* progress)
+    Progress* progress, const MemoryBudget* budget)
 {
     using LeafT = openvdb::FloatTree::LeafNodeType;
     const openvdb::FloatTree& tree = grid.grid->tree();
@@ -53,6 +53,7 @@ KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& set
     std::vector<std::size_t> offsets(leaves.size() + 1, 0);
     for (std::size_t i = 0; i < leaves.size(); ++i) offsets[i + 1] = offsets[i] + leaves[i]->onVoxelCount();
     set.activeVoxels = offsets.back();
+    if (budget) budget->check(double(offsets.back()), "voxel kernels", kBytesPerKernel);
     LargeArray<Kernel> voxels(offsets.back(), Kernel{Vec3d(0.0), 0.0f, 1.0f});
     std::vector<std::uint64_t> counts(leaves.size() * 5, 0); // below cutoff, NaN, clamped, merged voxels, merged kernels
     setUnits(progress, leaves.size());
@@ -137,6 +138,8 @@ KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& set
         tiles.push_back({box.min(), dim, s, density, set.kernels.size() + tileKernels});
         const std::size_t n = std::size_t(dim / s);
         tileKernels += n * n * n;
+        // Checked tile by tile: a damaged file's millions of tiles stop here, not in the resize.
+        if (budget) budget->check(double(set.kernels.size() + tileKernels), "voxel and active-tile kernels", kBytesPerKernel);
     }
     set.kernels.resize(set.kernels.size() + tileKernels);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tiles.size()), [&](const tbb::blocked_range<std::size_t>& range) {

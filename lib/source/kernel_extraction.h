@@ -8,6 +8,7 @@
 #include "source/grid_source_impl.h"
 #include "source/level_of_detail.h"
 #include "support/huge_page_allocator.h"
+#include "support/memory_budget.h"
 #include "support/progress.h"
 
 #include <cstdint>
@@ -70,9 +71,10 @@ int tileLatticeSpacing(int tileDim, int maxSpacing);
 /// Build the kernels of every active voxel and tile, one TBB task per leaf node. With @a lod,
 /// a leaf node whose voxels project small enough becomes blocks of merged kernels (the
 /// block's mean density at the block's centre, spacing = block size: mass is kept).
-/// @a progress: one unit per leaf node; throws Cancelled.
+/// @a progress: one unit per leaf node; throws Cancelled. @a budget: the voxels' and the active
+/// tiles' kernels are counted against it before they are allocated (BudgetError).
 KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& settings,
-    const LevelOfDetail* lod = nullptr, Progress* progress = nullptr);
+    const LevelOfDetail* lod = nullptr, Progress* progress = nullptr, const MemoryBudget* budget = nullptr);
 
 } // namespace detail
 } // namespace vdb_ewa
