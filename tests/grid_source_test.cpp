@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <fstream>
 
 using namespace vdb_ewa;
@@ -113,4 +114,41 @@ TEST(GridSource, HostGridNeedsNoFile)
     EXPECT_EQ(s.activeVoxelCount(), 64u);
     EXPECT_NEAR(s.worldCentre().x, 0.75, 1e-12);
     EXPECT_THROW(gridSourceFromOpenVDB(nullptr), InputError);
+}
+
+TEST(GridSource, DamagedHeadersAreRefusedBeforeOpenVDBReadsThem)
+{
+    // OpenVDB takes lengths from bytes it never read: cuts of a 200 KB file between bytes 126
+    // and 350 made it allocate 1-20 GB for 1-30 s before its error. The header is walked first
+    // (lib/source/vdb_layout_check.h): every cut is "damaged VDB file", at once.
+    TempDir dir;
+    const std::string good = dir.file("good.vdb"), cut = dir.file("cut.vdb");
+    writeSampleGrid(SampleGrid::Cloud, good, 0.08);
+    std::ifstream in(good, std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    ASSERT_GT(bytes.size(), 2000u);
+    std::vector<std::size_t> lengths;
+    for (std::size_t n = 0; n < 600; ++n) lengths.push_back(n);
+    for (std::size_t k = 1; k < 40; ++k) lengths.push_back(600 + k * (bytes.size() - 601) / 40);
+    lengths.push_back(bytes.size() - 1);
+    const auto start = std::chrono::steady_clock::now();
+    for (const std::size_t n : lengths) {
+        std::ofstream(cut, std::ios::binary | std::ios::trunc) << bytes.substr(0, n);
+        const std::string m = messageOf<IoError>([&] { GridSource::open(cut); });
+        EXPECT_NE(m.find(cut + ": damaged VDB file: "), std::string::npos) << "cut at " << n << ": " << m;
+    }
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 10.0);
+
+    // Lengths and counts that claim more than the file has: the grid name's length, the grid
+    // count, the file metadata's count (the byte offsets of this writer's layout).
+    const std::size_t nameAt = bytes.find("density") - 4, countAt = nameAt - 4, metaAt = countAt - 4;
+    ASSERT_EQ(bytes.substr(metaAt, 4), std::string(4, '\0')) << "no file metadata: count 0";
+    for (const std::size_t at : {nameAt, countAt, metaAt}) {
+        std::string damaged = bytes;
+        damaged.replace(at, 4, "\xf0\xff\xff\x7f", 4);
+        std::ofstream(cut, std::ios::binary | std::ios::trunc) << damaged;
+        const std::string m = messageOf<IoError>([&] { GridSource::open(cut); });
+        EXPECT_NE(m.find("damaged VDB file"), std::string::npos) << "at " << at << ": " << m;
+        EXPECT_NE(m.find("claims"), std::string::npos) << "at " << at << ": " << m;
+    }
 }

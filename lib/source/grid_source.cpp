@@ -1,6 +1,7 @@
 /// @file grid_source.cpp
 /// @brief Reading grids from .vdb files and from host applications.
 #include "source/grid_source_impl.h"
+#include "source/vdb_layout_check.h"
 
 #include <vdb_ewa/error.h>
 #include <vdb_ewa/openvdb_grid.h>
@@ -161,6 +162,7 @@ openvdb::GridBase::Ptr readGrid(const std::string& path, std::string name, bool 
 {
     initializeOpenVDB();
     checkReadable(path);
+    detail::checkVdbLayout(path); // before OpenVDB reads lengths it never checks
     try {
         openvdb::io::File file(path);
         file.open(/*delayLoad=*/false); // read everything now, so truncation is caught here
