@@ -7,7 +7,7 @@
 
 #include <cstdint>
 #include <fstream>
-#include <set>
+#include <map>
 
 namespace vdb_ewa {
 namespace detail {
@@ -100,8 +100,20 @@ private:
     std::uint64_t mSize = 0, mPos = 0;
 };
 
-const std::set<std::string> kMapTypes = {"AffineMap", "UnitaryMap", "ScaleMap", "UniformScaleMap", "TranslationMap",
-    "ScaleTranslateMap", "UniformScaleTranslateMap", "NonlinearFrustumMap"};
+/// OpenVDB's map types and the bytes of their data (0: not walked further).
+const std::map<std::string, std::uint64_t> kMapBytes = {{"AffineMap", 128}, {"UnitaryMap", 128}, {"ScaleMap", 120},
+    {"UniformScaleMap", 120}, {"TranslationMap", 24}, {"ScaleTranslateMap", 144}, {"UniformScaleTranslateMap", 144},
+    {"NonlinearFrustumMap", 0}};
+
+/// Bytes of a tree's value type from its grid type name ("Tree_float_5_4_3"); 0 if unknown.
+std::uint64_t valueBytes(const std::string& type)
+{
+    for (const auto& [name, bytes] : std::map<std::string, std::uint64_t>{{"_float_", 4}, {"_double_", 8}, {"_int32_", 4},
+             {"_int64_", 8}, {"_vec3s_", 12}, {"_vec3d_", 24}, {"_vec3i_", 12}, {"_bool_", 1}}) {
+        if (type.rfind("Tree" + name, 0) == 0) return bytes;
+    }
+    return 0;
+}
 
 } // namespace
 
@@ -132,7 +144,7 @@ void checkVdbLayout(const std::string& path)
     if (!offsets) return; // a stream without offsets: grids follow one another, left to OpenVDB
     for (std::int32_t g = 0; g < grids; ++g) {
         in.string("grid name");
-        in.string("grid type");
+        const std::string type = in.string("grid type", true);
         if (version >= openvdb::OPENVDB_FILE_VERSION_GRID_INSTANCING) in.string("instance parent name");
         const std::uint64_t descriptorEnd = in.position() + 24;
         const std::int64_t gridPos = in.read<std::int64_t>("grid offset"), blockPos = in.read<std::int64_t>("data offset"),
@@ -147,7 +159,24 @@ void checkVdbLayout(const std::string& path)
         if (version >= openvdb::OPENVDB_FILE_VERSION_GRID_INSTANCING) {
             const std::uint64_t at = in.position();
             const std::string map = in.string("transform type", true);
-            if (!kMapTypes.count(map)) in.fail("the transform type at byte " + std::to_string(at) + " is not a map OpenVDB knows");
+            const auto known = kMapBytes.find(map);
+            if (known == kMapBytes.end()) in.fail("the transform type at byte " + std::to_string(at) + " is not a map OpenVDB knows");
+            // The root node's tile and child counts: OpenVDB reads 2^31 tiles one by one (34 s).
+            const std::uint64_t value = valueBytes(type);
+            if (known->second > 0 && value > 0 && version >= openvdb::OPENVDB_FILE_VERSION_ROOTNODE_MAP) {
+                in.skip(known->second, "transform");
+                if (in.read<std::int32_t>("tree buffer count") == 1) {
+                    in.skip(value, "background value");
+                    const std::uint64_t countsAt = in.position();
+                    const std::uint64_t tiles = in.read<std::uint32_t>("root tile count"),
+                                        children = in.read<std::uint32_t>("root child count");
+                    const std::uint64_t room = std::uint64_t(blockPos) - std::min<std::uint64_t>(in.position(), std::uint64_t(blockPos));
+                    if (tiles * (13 + value) + children * 12 > room) {
+                        in.fail("the root node at byte " + std::to_string(countsAt) + " claims " + std::to_string(tiles) + " tiles and " +
+                                std::to_string(children) + " children in " + std::to_string(room) + " bytes of topology");
+                    }
+                }
+            }
         }
         if (in.position() > std::uint64_t(blockPos)) in.fail("grid " + std::to_string(g) + "'s header runs into its data");
         in.seek(std::uint64_t(endPos), "grid end offset");

@@ -7,7 +7,7 @@
 /// byte 162 of a 200 KB file: 30 s and 20 GB before an error). The header's lengths, counts and
 /// offsets are walked here first, each against the bytes the file has: the file header, the
 /// file's metadata, each grid's descriptor (name, type, offsets), and at each grid's offset its
-/// compression flags, metadata and transform type.
+/// compression flags, metadata, transform type and root node counts.
 #pragma once
 
 #include <string>
