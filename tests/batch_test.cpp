@@ -241,3 +241,18 @@ TEST_F(Batch, JobFileHoldsTheSettingsAndTheCommandLineOverridesIt)
     EXPECT_EQ(missing.code, 3);
     EXPECT_NE(missing.err.find("nope.json: cannot open the job file"), std::string::npos) << missing.err;
 }
+
+TEST_F(Batch, SkipExistingRendersAFrameWhosePreviewIsMissing)
+{
+    // A job killed between a frame's EXR and its preview left the EXR alone: the frame is not
+    // done, and --skip-existing once skipped it, leaving the preview missing for good.
+    const std::string args = "render " + mDir.file("smoke.####.vdb") + " " + mDir.file("p.####.exr") + " --frames 1-2 --res 64x36" +
+                             " -translate 0,0,5 --quality draft --preview " + mDir.file("p.####.png") + " --skip-existing -v";
+    ASSERT_EQ(runCli(mDir, args).code, 0);
+    fs::remove(mDir.file("p.0001.png"));
+    const CliRun r = runCli(mDir, args);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(r.out.find(mDir.file("p.0001.exr") + " exists: skipped"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find(mDir.file("p.0002.exr") + " exists: skipped"), std::string::npos) << r.out;
+    EXPECT_TRUE(fs::exists(mDir.file("p.0001.png")));
+}

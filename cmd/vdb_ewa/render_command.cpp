@@ -127,7 +127,7 @@ public:
             "render a sequence: frames N, A-B, A-BxS (every S), comma-separated (1-10,20); IN and OUT (and "
             "--preview) hold a frame pattern, #### (padded to the number of #) or %04d (default: one frame)");
         mApp->add_flag("--skip-existing", mSkipExisting,
-            "skip frames whose output exists (outputs are written whole or not at all, so a killed job resumes)");
+            "skip frames whose output (and --preview, if given) exist (outputs are written whole or not at all, so a killed job resumes)");
         mApp->add_option("--job", mJob,
             "JSON job file of option: value pairs (long option names, plus input and output); options on the "
             "command line override it, unknown keys are an error (docs/batch.md)");
@@ -165,7 +165,9 @@ public:
         for (std::size_t i = 0; i < frames.size() && !stopRequested(); ++i) {
             report.beginFrame(int(i));
             const std::string output = pathOf(mOutput, frames[i]);
-            if (mSkipExisting && std::filesystem::exists(output)) {
+            // A frame is done when all its files are: an EXR without its --preview is rendered again.
+            const std::string preview = pathOf(mOutputOptions.previewOption(), frames[i]);
+            if (mSkipExisting && std::filesystem::exists(output) && (preview.empty() || std::filesystem::exists(preview))) {
                 ++skipped;
                 if (verbosity >= Verbosity::Verbose) std::cout << "vdb_ewa: " << output << " exists: skipped\n";
                 continue;
