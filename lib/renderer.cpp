@@ -217,6 +217,10 @@ Frame Renderer::renderFrame(const GridSource& grid, const Camera& camera, const 
         run();
     }
     progress.finish();
+    if (mSettings.splat.refine > 1 && (grid.isLevelSet() || mSettings.method != Method::Splat)) {
+        stats.warnings.push_back(std::string("--refine changes nothing here: it refines the splatter's fog-volume kernels, not ") +
+                                 (grid.isLevelSet() ? "a level set's surface kernels" : "the field --method raymarch integrates"));
+    }
     if (statsOut) *statsOut = std::move(stats);
     return frame;
 }

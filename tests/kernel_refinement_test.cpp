@@ -212,3 +212,26 @@ TEST(KernelRefinement, KeepsToItsBudget)
         }
     }
 }
+
+TEST(KernelRefinement, WhereItChangesNothingItSaysSo)
+{
+    // Level sets (surface kernels) and the ray-march reference have no voxel kernels to refine.
+    auto sphere = makeBoxGrid(openvdb::Coord(-2), openvdb::Coord(2), -0.1f, 0.1);
+    sphere->setGridClass(openvdb::GRID_LEVEL_SET);
+    CameraSettings cam;
+    cam.width = cam.height = 16;
+    cam.translate = Vec3d(0.0, 0.0, 3.0);
+    RenderSettings s;
+    s.splat.refine = 2;
+    RenderStats stats;
+    renderGrid(sphere, cam, s, &stats);
+    ASSERT_FALSE(stats.warnings.empty());
+    EXPECT_NE(stats.warnings.back().find("--refine changes nothing here"), std::string::npos) << stats.warnings.back();
+    s.method = Method::RayMarch;
+    renderGrid(makeBoxGrid(openvdb::Coord(0), openvdb::Coord(3), 1.0f, 0.1), cam, s, &stats);
+    ASSERT_FALSE(stats.warnings.empty());
+    EXPECT_NE(stats.warnings.back().find("--method raymarch"), std::string::npos) << stats.warnings.back();
+    s.method = Method::Splat;
+    renderGrid(makeBoxGrid(openvdb::Coord(0), openvdb::Coord(3), 1.0f, 0.1), cam, s, &stats);
+    for (const std::string& w : stats.warnings) EXPECT_EQ(w.find("--refine"), std::string::npos) << w;
+}
