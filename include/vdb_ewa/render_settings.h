@@ -98,8 +98,9 @@ struct SplatOptions
     bool doublePrecision = true; ///< world -> camera transform and covariances in double (false: float)
     double slab = 2.0;          ///< image-aligned slab thickness in voxel lengths
     int tileKernelSpacing = 4;  ///< largest kernel spacing (voxels) used to model active tiles
-    /// Voxel kernels on a lattice n times finer: the trilinear field sampled every 1/n voxel,
-    /// kernels of std. deviation kernelSigma / n (n^3 the kernels; docs/numerics.md#refined-kernels).
+    /// Where voxels span n pixels or more and the field varies, voxel kernels on a lattice n
+    /// times finer: the trilinear field sampled every 1/n voxel, kernels of std. deviation
+    /// kernelSigma / n (n^3 the kernels; 1 = off; docs/numerics.md#refined-kernels).
     int refine = 1;
     double lodPixels = 2.0;     ///< level of detail: merge blocks of 2^L voxels into one kernel where
                                 ///< the block spacing projects to at most this many pixels; 0 = off

@@ -6,8 +6,8 @@
 /// profiles differ by about the kernel's width (sigma 0.5 voxel), and that difference, not the
 /// integration, bounds the splatter's accuracy (docs/numerics.md#dense-faces). Sampling the
 /// field itself every 1/n voxel and giving each sample a kernel of standard deviation sigma / n
-/// (Eq. 19 with V = (sigma / n)^2 I) shrinks the difference n-fold: the error goes to zero as n
-/// rises, at n^3 the kernels. The samples' weights are quasi-interpolating on the fine lattice
+/// (Eq. 19 with V = (sigma / n)^2 I) shrinks the difference with n, at n^3 the kernels, down to
+/// the kernels' own ripple (3.4 % of the field at sigma = 0.5 lattice steps). The samples' weights are quasi-interpolating on the fine lattice
 /// (quasi_interpolation.h with the fine lattice's own neighbours), and the one-voxel shell
 /// around the kernels' voxels, where the trilinear field is not yet zero, is sampled too (its
 /// samples past the field's support are the fine lattice's halo).
@@ -21,7 +21,8 @@ namespace detail {
 /// Largest refinement accepted: n^3 kernels a voxel (64 at n = 4).
 inline constexpr int kMaxRefinement = 4;
 
-/// Refined kernels cost n^3 a voxel: at most this many (about 8 GB with their splats).
+/// Refined kernels cost n^3 a voxel: at most this many (about 10 GB through the pipeline, at
+/// kBytesPerKernel), and at most half the memory budget.
 inline constexpr double kRefinedKernelBudget = 4.0e7;
 
 /// What refineKernels did.
