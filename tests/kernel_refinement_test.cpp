@@ -3,6 +3,7 @@
 ///        (mass kept, error falling as the lattice refines), and the image converging.
 #include "fixtures.h"
 
+#include "projection/projection.h"
 #include "source/source.h"
 
 #include "support/openvdb_tools.h"
@@ -234,4 +235,27 @@ TEST(KernelRefinement, WhereItChangesNothingItSaysSo)
     s.method = Method::Splat;
     renderGrid(makeBoxGrid(openvdb::Coord(0), openvdb::Coord(3), 1.0f, 0.1), cam, s, &stats);
     for (const std::string& w : stats.warnings) EXPECT_EQ(w.find("--refine"), std::string::npos) << w;
+}
+
+TEST(KernelRefinement, LowPassFollowsTheLatticeTheKernelIsOn)
+{
+    // The budget may lower --refine 4 to a lattice of 1/2: those kernels take lowpass / 4, the
+    // floor of the lattice they are on, not lowpass / 16 (a 0.1-pixel kernel, floored either way).
+    const GridSource voxel = gridSourceFromOpenVDB(makeBoxGrid(openvdb::Coord(0), openvdb::Coord(0), 1.0f, 0.1));
+    CameraSettings cam;
+    cam.width = cam.height = 64;
+    cam.translate = Vec3d(0.0, 0.0, 20.0);
+    const Camera camera(cam, Vec3d(0.0));
+    detail::KernelSet set;
+    set.kernels.push_back({Vec3d(0.0), 1.0f, 0.5f});
+    float conic[2] = {0.0f, 0.0f};
+    for (const int n : {2, 4}) {
+        RenderSettings s;
+        s.splat.refine = n;
+        const detail::SplatSet splats = detail::projectSplats(voxel.impl(), set, {}, camera, s, PassRequest{});
+        ASSERT_EQ(splats.splats.size(), 1u);
+        conic[n / 4] = splats.splats[0].qa;
+    }
+    EXPECT_NEAR(conic[0], 4.0f, 1e-3f); // 1 / (lowpass / 4)
+    EXPECT_EQ(conic[1], conic[0]);
 }

@@ -67,8 +67,6 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels, c
 {
     SplatSet out;
     const ProjectionParams params = projectionParams(camera, settings.splat);
-    ProjectionParams refinedParams = params;
-    refinedParams.lowpass /= double(settings.splat.refine) * settings.splat.refine;
     const bool perspective = params.perspective;
     const Mat3d R = camera.cameraFromWorld();
     const double ell = grid.voxelLength;
@@ -96,6 +94,7 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels, c
     setUnits(progress, n);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096),
         [&](const tbb::blocked_range<std::size_t>& range) {
+            ProjectionParams refinedParams = params;
             for (std::size_t i = range.begin(); i < range.end(); ++i) {
                 const Kernel& k = kernels.kernels[i];
                 const Vec3d pWorld = grid.indexToWorld(k.pIndex);
@@ -118,9 +117,11 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels, c
                     flags[i] = 1;
                     continue;
                 }
-                // Refined kernels (spacing 1/n, only where voxels span n pixels or more) take the
-                // low-pass floor scaled with their lattice: their sum is as smooth on the pixel
-                // grid as the voxels' (docs/numerics.md#refined-kernels).
+                // Refined kernels (spacing s = 1/n, only where voxels span n pixels or more) take
+                // the low-pass floor scaled with their lattice, lowpass s^2: their sum is as
+                // smooth on the pixel grid as the voxels' (docs/numerics.md#refined-kernels).
+                // The lattice's own spacing, not --refine: the budget may have lowered n.
+                refinedParams.lowpass = params.lowpass * s * s;
                 const Footprint fp = projectKernel(t, cov, s < 1.0 ? refinedParams : params);
                 if (!fp.valid) continue;
                 flags[i] = std::uint8_t((fp.clampedNear ? 2 : 0) | (fp.clampedGrazing ? 4 : 0));
