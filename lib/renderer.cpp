@@ -70,12 +70,13 @@ void Renderer::renderLevelSet(const GridSource::Impl& grid, const Camera& camera
     StageTimer timer;
     progress.stage(0, 60);
     // At most one surface kernel an active voxel.
-    budgetFor(grid, mSettings).check(double(grid.activeVoxels), "active voxels (surface kernels)", detail::kBytesPerKernel);
+    const detail::MemoryBudget budget = budgetFor(grid, mSettings);
+    budget.check(double(grid.activeVoxels), "active voxels (surface kernels)", detail::kBytesPerKernel);
     const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(grid, mSettings.surface.isovalue, mSettings.surface.sigma, false, &progress);
     stats.kernelSeconds = timer.lap();
     progress.stage(60, 100);
     detail::SurfaceStats surfaceStats;
-    frame = detail::rasterizeSurfaces(surfaces, camera, mSettings, grid.voxelLength, passes, surfaceStats, &progress);
+    frame = detail::rasterizeSurfaces(surfaces, camera, mSettings, grid.voxelLength, passes, surfaceStats, &progress, &budget);
     stats.rasterSeconds = timer.lap();
     stats.activeVoxels = surfaces.activeVoxels;
     stats.kernels = surfaces.kernels.size();

@@ -9,6 +9,7 @@ packages=(
   libcli11-dev nlohmann-json3-dev libgtest-dev
   libopenvdb-tools   # vdb_render: the peer the tests and benchmarks compare against
   openimageio-tools  # oiiotool: EXR -> PNG previews and image diffs
+  clang libclang-rt-14-dev  # the sanitized test build and the libFuzzer harnesses (tests/fuzz)
 )
 missing=()
 for p in "${packages[@]}"; do

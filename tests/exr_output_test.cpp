@@ -316,3 +316,31 @@ TEST(ExrOutput, FailedWritesLeaveTheExistingFileByteIdentical)
     std::filesystem::create_directory(dir.file("folder.exr"));
     EXPECT_THROW(writeExr(frame, dir.file("folder.exr"), ExrOptions{}), IoError);
 }
+
+// removeTemporaryOutputs (a host's hard stop, e.g. the CLI's signal watchdog) removes the
+// temporary files of the writes in progress, and only those: a finished output and a file
+// being replaced stay byte-identical.
+TEST(ExrOutput, RemoveTemporaryOutputsRemovesOnlyTheWritesInProgress)
+{
+    TempDir dir;
+    const std::string path = dir.file("shot.exr"), other = dir.file("other.exr");
+    const Scene scene;
+    const Frame frame = renderAll(scene);
+    writeExr(frame, path, ExrOptions{});
+    writeExr(frame, other, ExrOptions{});
+    const std::string before = slurp(path), otherBefore = slurp(other);
+    removeTemporaryOutputs(); // nothing in progress: nothing removed
+    EXPECT_EQ(slurp(path), before);
+    std::string temporary;
+    EXPECT_THROW(detail::writeAtomically(path, "EXR", [&](const std::string& tmp) {
+        temporary = tmp;
+        std::ofstream(tmp) << "half a file";
+        ASSERT_TRUE(std::filesystem::exists(tmp));
+        removeTemporaryOutputs(); // the stop arrives mid-write
+        EXPECT_FALSE(std::filesystem::exists(tmp));
+    }), IoError) << "the rename of the removed file fails";
+    EXPECT_FALSE(temporary.empty());
+    EXPECT_EQ(slurp(path), before);
+    EXPECT_EQ(slurp(other), otherBefore);
+    EXPECT_EQ(folderContents(path), (std::vector<std::string>{"other.exr", "shot.exr"}));
+}

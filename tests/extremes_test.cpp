@@ -4,6 +4,9 @@
 ///        reference (--method raymarch) where the case is well posed.
 #include "fixtures.h"
 
+#include "raster/raster.h"
+#include "support/memory_budget.h"
+
 #include <gtest/gtest.h>
 
 #include <openvdb/math/Maps.h>
@@ -316,4 +319,16 @@ TEST(Extremes, MemoryBudgetStopsEachStageBeforeItAllocates)
         Renderer(wide).render(box, Camera(camera(Vec3d(0.0, 0.0, 11.0), Vec3d(0.0), 1024, 1024), box.worldCentre()));
     });
     EXPECT_NE(pairs.find("splat-tile pairs need"), std::string::npos) << pairs;
+
+    // The surface rasteriser too, before it bins: a sphere's surface kernels (about 3e4 of them,
+    // a few pixels wide) make tens of thousands of pairs, over a budget of 64 KB (16384 pairs).
+    const GridSource sphere = gridSourceFromOpenVDB(sphereLevelSet(1.0, 0.02));
+    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(sphere.impl(), 0.0, s.surface.sigma, false);
+    detail::SurfaceStats surfaceStats;
+    const detail::MemoryBudget small(65536.0, "sphere");
+    const std::string surfacePairs = message([&] {
+        detail::rasterizeSurfaces(surfaces, Camera(camera(Vec3d(0.0, 0.0, 3.0), Vec3d(0.0), 512, 512), Vec3d(0.0)), s,
+            sphere.impl().voxelLength, {}, surfaceStats, nullptr, &small);
+    });
+    EXPECT_NE(surfacePairs.find("splat-tile pairs need"), std::string::npos) << surfacePairs;
 }

@@ -16,6 +16,9 @@ class Command
 public:
     virtual ~Command() = default;
     virtual CLI::App* subcommand() const = 0;
+    /// Check the parsed arguments without reading or writing a file (run() checks them too).
+    /// @throw vdb_ewa::ValueError naming the option
+    virtual void validate() const = 0;
     /// @return an exit code (exit_codes.h); throws vdb_ewa::Error on failure.
     virtual int run() = 0;
 };

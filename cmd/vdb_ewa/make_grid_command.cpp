@@ -20,10 +20,12 @@ public:
                                         "sheared (rotated and sheared map) or tiles (constant core as active tiles)")
             ->required();
         mApp->add_option("output", mOutput, "output .vdb file")->required();
-        mApp->add_option("--voxel-size", mVoxelSize, "smallest voxel edge in world units (default: 0.04)");
+        mApp->add_option("--voxel-size", mVoxelSize, "smallest voxel edge in world units, range [0.01, 2.4] (default: 0.04)");
     }
 
     CLI::App* subcommand() const override { return mApp; }
+
+    void validate() const override { sampleGridFromName(mKind); }
 
     int run() override
     {

@@ -1,22 +1,78 @@
 /// @file progress_report.cpp
 #include "progress_report.h"
 
+#include "exit_codes.h"
+
+#include <vdb_ewa/output_file.h>
+
+#include <semaphore.h>
+#include <unistd.h>
+
 #include <atomic>
+#include <cerrno>
 #include <csignal>
 #include <cstdio>
-#include <unistd.h>
+#include <cstring>
+#include <ctime>
+#include <thread>
 
 namespace vdb_ewa::cli {
 namespace {
 
 std::atomic<ProgressReport*> gReport{nullptr};
 volatile std::sig_atomic_t gStop = 0;
+sem_t gStopPosted; // the handler's post wakes the watchdog
+std::atomic<int> gFramesWritten{0}, gFrames{1};
 
-extern "C" void onStopSignal(int signal)
+/// Append the decimal digits of @a value (>= 0) at @a out. Async-signal-safe.
+char* appendNumber(char* out, int value)
 {
+    char digits[12];
+    int n = 0;
+    do {
+        digits[n++] = char('0' + value % 10);
+        value /= 10;
+    } while (value > 0 && n < 12);
+    while (n > 0) *out++ = digits[--n];
+    return out;
+}
+
+/// End the process now: no temporary output left, exit 130, the same line as a cooperative
+/// stop ("interrupted: 3 of 10 frames written"). Async-signal-safe.
+[[noreturn]] void stopNow()
+{
+    removeTemporaryOutputs();
+    char line[96] = "vdb_ewa: interrupted: ";
+    char* end = line + std::strlen(line);
+    end = appendNumber(end, gFramesWritten.load());
+    std::memcpy(end, " of ", 4);
+    end = appendNumber(end + 4, gFrames.load());
+    static const char tail[] = " frames written\n";
+    std::memcpy(end, tail, sizeof tail - 1);
+    end += sizeof tail - 1;
+    [[maybe_unused]] const ssize_t n = ::write(STDERR_FILENO, line, std::size_t(end - line));
+    ::_exit(kExitInterrupted);
+}
+
+extern "C" void onStopSignal(int)
+{
+    if (gStop) stopNow(); // a second signal: at once
     gStop = 1;
     if (ProgressReport* report = gReport.load()) report->cancel();
-    std::signal(signal, SIG_DFL); // a second signal kills at once
+    sem_post(&gStopPosted);
+}
+
+/// After a stop signal the render ends at its next check (every 50 ms at most), but reading a
+/// grid (OpenVDB) and writing an image (OpenEXR) never check: a frame still running
+/// kStopGrace after the signal is ended here, its temporary outputs removed.
+void watchdog()
+{
+    while (sem_wait(&gStopPosted) != 0 && errno == EINTR) {
+    }
+    timespec grace{0, kStopGraceMs * 1000000L};
+    while (nanosleep(&grace, &grace) != 0 && errno == EINTR) {
+    }
+    stopNow();
 }
 
 } // namespace
@@ -24,7 +80,11 @@ extern "C" void onStopSignal(int signal)
 ProgressReport::ProgressReport(int frameCount, Verbosity verbosity)
     : mFrames(frameCount > 0 ? frameCount : 1), mTerminal(isatty(STDOUT_FILENO) == 1), mVerbosity(verbosity)
 {
+    gFrames.store(mFrames);
+    gFramesWritten.store(0);
 }
+
+void ProgressReport::framesWritten(int count) { gFramesWritten.store(count); }
 
 ProgressReport::~ProgressReport()
 {
@@ -68,6 +128,12 @@ void ProgressReport::show(int overall)
 void installStopHandlers(ProgressReport& report)
 {
     gReport.store(&report);
+    static const bool started = [] {
+        sem_init(&gStopPosted, 0, 0);
+        std::thread(watchdog).detach();
+        return true;
+    }();
+    (void)started;
     std::signal(SIGINT, onStopSignal);
     std::signal(SIGTERM, onStopSignal);
 }

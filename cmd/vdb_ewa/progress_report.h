@@ -23,6 +23,8 @@ public:
 
     /// The next frame (0-based) begins.
     void beginFrame(int index) { mFrame = index; }
+    /// @a count frames are written so far (for the line a stop signal prints).
+    void framesWritten(int count);
     /// 100 % after the last frame (unless cancelled); ends a terminal bar's line.
     void finishJob();
 
@@ -38,8 +40,13 @@ private:
     Verbosity mVerbosity;
 };
 
-/// SIGINT and SIGTERM cancel @a report (an atomic store) and set stopRequested(); a second
-/// signal kills the process at once (the default action is restored after the first).
+/// A stop signal ends the process at most this long after it arrived.
+constexpr long kStopGraceMs = 300;
+
+/// SIGINT and SIGTERM cancel @a report (an atomic store) and set stopRequested(); a frame
+/// still running kStopGraceMs later (reading and writing do not check the cancel) is ended by
+/// a watchdog thread, and so is everything at a second signal: the temporary outputs are
+/// removed (removeTemporaryOutputs) and the process exits 130.
 void installStopHandlers(ProgressReport& report);
 
 /// True once SIGINT or SIGTERM arrived.

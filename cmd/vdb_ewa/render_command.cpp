@@ -6,6 +6,7 @@
 #include "option_values.h"
 #include "output_options.h"
 #include "progress_report.h"
+#include "test_stall.h"
 
 #include <vdb_ewa/vdb_ewa.h>
 
@@ -139,6 +140,15 @@ public:
 
     CLI::App* subcommand() const override { return mApp; }
 
+    void validate() const override
+    {
+        CameraSettings cam;
+        RenderSettings rs;
+        resolve(cam, rs);
+        const Renderer renderer(rs); // validates the render settings
+        frameList();
+    }
+
     int run() override
     {
         const Verbosity verbosity = mQuiet ? Verbosity::Quiet
@@ -174,7 +184,7 @@ public:
             }
             try {
                 renderOneFrame(renderer, cam, rs, frames[i], output, report, verbosity, i == 0);
-                ++written;
+                report.framesWritten(++written);
             } catch (const Cancelled&) {
                 break;
             } catch (const std::exception& e) {
@@ -237,6 +247,7 @@ private:
         const std::string preview = pathOf(mOutputOptions.previewOption(), frameNumber);
         mOutputOptions.refuseInputs(output, preview, {input, mJob});
         const auto t0 = std::chrono::steady_clock::now();
+        stallForTests("read");
         const GridSource opened = GridSource::open(input, mName);
         const GridSource grid = mColor.empty() ? opened : opened.withColorGrid(mColor);
         const double loadSeconds = seconds(t0);

@@ -9,6 +9,7 @@
 
 #include <atomic>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 
 namespace vdb_ewa {
@@ -22,6 +23,46 @@ fs::path parentOf(const std::string& path)
     return parent.empty() ? fs::path(".") : parent;
 }
 
+/// The temporary files being written, for removeTemporaryOutputs (async-signal-safe: fixed
+/// slots, atomics, no allocation). A slot is Free, Writing (its path being copied in) or Held.
+/// A write with more slots in flight than kSlots, or a longer path, is not listed.
+struct TemporarySlot
+{
+    enum State : int { Free, Writing, Held };
+    std::atomic<int> state{Free};
+    char path[4096];
+};
+constexpr int kSlots = 64;
+TemporarySlot gTemporaries[kSlots];
+
+/// Lists @a path in a free slot for its lifetime.
+class ListedTemporary
+{
+public:
+    explicit ListedTemporary(const std::string& path)
+    {
+        if (path.size() >= sizeof(TemporarySlot::path)) return;
+        for (TemporarySlot& slot : gTemporaries) {
+            int expected = TemporarySlot::Free;
+            if (slot.state.compare_exchange_strong(expected, TemporarySlot::Writing)) {
+                std::memcpy(slot.path, path.c_str(), path.size() + 1);
+                slot.state.store(TemporarySlot::Held);
+                mSlot = &slot;
+                return;
+            }
+        }
+    }
+    ~ListedTemporary()
+    {
+        if (mSlot) mSlot->state.store(TemporarySlot::Free);
+    }
+    ListedTemporary(const ListedTemporary&) = delete;
+    ListedTemporary& operator=(const ListedTemporary&) = delete;
+
+private:
+    TemporarySlot* mSlot = nullptr;
+};
+
 /// A hidden name next to @a path, unique per process and call.
 std::string temporaryPathFor(const std::string& path)
 {
@@ -33,6 +74,13 @@ std::string temporaryPathFor(const std::string& path)
 }
 
 } // namespace
+
+void removeTemporaryOutputs() noexcept
+{
+    for (TemporarySlot& slot : gTemporaries) {
+        if (slot.state.load() == TemporarySlot::Held) ::unlink(slot.path);
+    }
+}
 
 void checkOutputWritable(const std::string& path)
 {
@@ -52,6 +100,7 @@ void writeAtomically(const std::string& path, const std::string& what,
 {
     checkOutputWritable(path);
     const std::string tmp = temporaryPathFor(path);
+    const ListedTemporary listed(tmp);
     try {
         write(tmp);
         std::error_code ec;

@@ -101,7 +101,7 @@ std::vector<SurfaceSplat> projectSurfaceSplats(const SurfaceSet& set, const Came
 } // namespace
 
 Frame rasterizeSurfaces(const SurfaceSet& set, const Camera& camera, const RenderSettings& settings,
-    double voxelLength, const PassRequest& passes, SurfaceStats& stats, Progress* progress)
+    double voxelLength, const PassRequest& passes, SurfaceStats& stats, Progress* progress, const MemoryBudget* budget)
 {
     const int width = camera.width(), height = camera.height();
     Frame frame = blankFrame(width, height, passes);
@@ -109,7 +109,7 @@ Frame rasterizeSurfaces(const SurfaceSet& set, const Camera& camera, const Rende
     const std::vector<SurfaceSplat> splats = projectSurfaceSplats(set, camera, settings);
     stats.splats = splats.size();
     stats.culled = set.kernels.size() - splats.size();
-    const TileBins bins = binSplats(splats, width, height);
+    const TileBins bins = binSplats(splats, width, height, budget);
     stats.splatTilePairs = bins.indices.size();
     const double tolerance = settings.surface.tolerance * voxelLength;
     const bool perspective = camera.projection() == Projection::Perspective;

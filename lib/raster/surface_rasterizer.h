@@ -30,9 +30,11 @@ struct SurfaceStats
 /// per cent). Z, where alpha >= 0.5: the weighted mean of the splats' tangent-plane depths
 /// along the pixel's ray. Passes: depth and transmittance (1 - alpha); the others are volume
 /// passes.
-/// @a progress: one unit per screen tile; throws Cancelled.
+/// @a progress: one unit per screen tile; throws Cancelled. @a budget: the splat-tile pairs are
+/// counted against it before they are stored (BudgetError).
 Frame rasterizeSurfaces(const SurfaceSet& surfaces, const Camera& camera, const RenderSettings& settings,
-    double voxelLength, const PassRequest& passes, SurfaceStats& stats, Progress* progress = nullptr);
+    double voxelLength, const PassRequest& passes, SurfaceStats& stats, Progress* progress = nullptr,
+    const MemoryBudget* budget = nullptr);
 
 } // namespace detail
 } // namespace vdb_ewa

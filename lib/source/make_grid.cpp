@@ -91,7 +91,10 @@ double sampleCloudDensity(const Vec3d& p)
 
 GridSource makeSampleGrid(SampleGrid kind, double voxelSize)
 {
-    if (!(voxelSize > 0.0)) throw ValueError("make-grid: --voxel-size must be > 0");
+    // The grid spans [-1.2, 1.2]^3: 0.01 gives 240^3 voxels to evaluate, a few seconds.
+    if (!(voxelSize >= 0.01 && voxelSize <= 2.4)) {
+        throw ValueError("make-grid: --voxel-size must be in [0.01, 2.4] world units");
+    }
     openvdb::initialize();
     auto grid = openvdb::FloatGrid::create(0.0f);
     grid->setTransform(sampleTransform(kind, voxelSize));

@@ -47,7 +47,7 @@ struct HugePageAllocator
     {
         const std::size_t bytes = n * sizeof(T);
         if (bytes >= kHugeBlockBytes) unmapHugeBlock(p, bytes);
-        else ::operator delete(p, bytes, std::align_val_t(alignof(T)));
+        else ::operator delete(p, std::align_val_t(alignof(T))); // unsized: clang has no sized delete by default
     }
     template <typename U>
     bool operator==(const HugePageAllocator<U>&) const noexcept { return true; }
