@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cstring>
 #include <fstream>
 
 using namespace vdb_ewa;
@@ -159,4 +160,84 @@ TEST(GridSource, DamagedHeadersAreRefusedBeforeOpenVDBReadsThem)
     std::ofstream(cut, std::ios::binary | std::ios::trunc) << damaged;
     const std::string m = messageOf<IoError>([&] { GridSource::open(cut); });
     EXPECT_NE(m.find("the root node at byte " + std::to_string(tilesAt) + " claims 2147483647 tiles"), std::string::npos) << m;
+
+    // OpenVDB's delayed-load metadata (type name, value size, leaf count, the mask's block size
+    // and bytes, ...): a leaf count of 2^32 made OpenVDB allocate 4 GB (found by fuzz_vdb_file),
+    // and so does a block size claiming more than the metadata holds.
+    const std::size_t delayedAt = bytes.find("__delayedload");
+    ASSERT_NE(delayedAt, std::string::npos);
+    const std::size_t leavesAt = delayedAt + 13 + 4, maskBytesAt = leavesAt + 4;
+    for (const std::size_t at : {leavesAt, maskBytesAt}) {
+        std::string delayed = bytes;
+        delayed.replace(at, 4, "\xff\xff\xff\x7f", 4);
+        std::ofstream(cut, std::ios::binary | std::ios::trunc) << delayed;
+        const std::string e = messageOf<IoError>([&] { GridSource::open(cut); });
+        EXPECT_NE(e.find("damaged VDB file: the delayed-load metadata"), std::string::npos) << "at " << at << ": " << e;
+    }
+}
+
+// Below the root node OpenVDB trusts its sizes too: a leaf's compressed-block size larger than
+// the file made it allocate that much, a raw block's size larger than the node overran its
+// buffer (heap corruption), a garbage child mask read thousands of nodes. The topology and the
+// leaf buffers are walked first (lib/source/vdb_layout_check.cpp), and every real asset and
+// seed still passes.
+TEST(GridSource, DamagedNodesAreRefusedBeforeOpenVDBReadsThem)
+{
+    TempDir dir;
+    const std::string good = dir.file("good.vdb"), bad = dir.file("bad.vdb");
+    writeSampleGrid(SampleGrid::Cloud, good, 0.08);
+    std::ifstream in(good, std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const auto int64At = [&](std::size_t at) {
+        std::int64_t v = 0;
+        std::memcpy(&v, bytes.data() + at, 8);
+        return v;
+    };
+    // The grid descriptor's offsets follow its type name and an empty instance-parent name.
+    const std::size_t offsetsAt = bytes.find("Tree_float_5_4_3") + 16 + 4;
+    const std::size_t dataAt = std::size_t(int64At(offsetsAt + 8));
+    // The first leaf's buffer: its value mask, the compression metadata (0: all values), the
+    // zip block's signed size.
+    ASSERT_EQ(bytes[dataAt + 64], '\0');
+    const std::size_t blockAt = dataAt + 65;
+    const std::int64_t block = int64At(blockAt);
+    ASSERT_NE(block, 0);
+    // The first root child's child mask: after the transform, the buffer count, the
+    // background, the tile and child counts (no tiles) and the child's origin.
+    const std::size_t childMaskAt = bytes.find("UniformScaleMap") + 15 + 120 + 4 + 4 + 8 + 12;
+    ASSERT_EQ(bytes.substr(childMaskAt - 20, 4), std::string(4, '\0')) << "no root tiles";
+
+    struct Damage
+    {
+        std::size_t at;
+        std::string with, expect;
+    };
+    const std::int64_t huge = std::int64_t(1) << 40, rawOverrun = -4096;
+    const std::vector<Damage> damages{
+        {blockAt, std::string(reinterpret_cast<const char*>(&huge), 8), "the compressed block at byte " + std::to_string(blockAt) + " claims"},
+        {blockAt, std::string(reinterpret_cast<const char*>(&rawOverrun), 8), "the raw block at byte " + std::to_string(blockAt) + " holds 4096 bytes"},
+        {childMaskAt, std::string(4096, '\xff'), "children"},
+        {dataAt + 3, std::string(1, char(bytes[dataAt + 3] ^ 1)), "differs from the tree's topology"},
+    };
+    for (const Damage& d : damages) {
+        std::string damaged = bytes;
+        damaged.replace(d.at, d.with.size(), d.with);
+        std::ofstream(bad, std::ios::binary | std::ios::trunc) << damaged;
+        const std::string m = messageOf<IoError>([&] { GridSource::open(bad); });
+        EXPECT_NE(m.find(bad + ": damaged VDB file: "), std::string::npos) << m;
+        EXPECT_NE(m.find(d.expect), std::string::npos) << m;
+    }
+    // A cut anywhere in the leaf buffers.
+    for (std::size_t k = 1; k < 20; ++k) {
+        std::ofstream(bad, std::ios::binary | std::ios::trunc) << bytes.substr(0, dataAt + k * (bytes.size() - dataAt) / 20);
+        EXPECT_NE(messageOf<IoError>([&] { GridSource::open(bad); }).find("damaged VDB file"), std::string::npos) << k;
+    }
+    // No false alarms: the undamaged file and every shared asset open.
+    EXPECT_NO_THROW(GridSource::open(good));
+    const std::string assets = assetsDir();
+    if (assets.empty()) return;
+    for (const auto& e : std::filesystem::directory_iterator(assets)) {
+        if (e.path().extension() != ".vdb") continue;
+        EXPECT_NO_THROW(GridSource::open(e.path().string())) << e.path();
+    }
 }

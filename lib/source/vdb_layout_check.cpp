@@ -5,24 +5,36 @@
 
 #include "support/openvdb.h"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <array>
 #include <cstdint>
-#include <fstream>
+#include <cstring>
 #include <map>
+#include <vector>
 
 namespace vdb_ewa {
 namespace detail {
 namespace {
 
-/// A bounds-checked reader over the file: every read names what it reads.
+/// A bounds-checked reader over the file: every read names what it reads. Reads go through a
+/// 64 KB window filled by pread(2), so the walk costs a system call a window, not two a field.
 class LayoutReader
 {
 public:
-    explicit LayoutReader(const std::string& path) : mPath(path), mIn(path, std::ios::binary)
+    explicit LayoutReader(const std::string& path) : mPath(path), mFd(::open(path.c_str(), O_RDONLY | O_CLOEXEC))
     {
-        mIn.seekg(0, std::ios::end);
-        mSize = std::uint64_t(std::max<std::streamoff>(mIn.tellg(), 0));
-        mIn.seekg(0);
+        struct stat st {};
+        if (mFd >= 0 && ::fstat(mFd, &st) == 0) mSize = std::uint64_t(std::max<off_t>(st.st_size, 0));
     }
+    ~LayoutReader()
+    {
+        if (mFd >= 0) ::close(mFd);
+    }
+    LayoutReader(const LayoutReader&) = delete;
+    LayoutReader& operator=(const LayoutReader&) = delete;
 
     std::uint64_t size() const { return mSize; }
     std::uint64_t position() const { return mPos; }
@@ -37,18 +49,13 @@ public:
     {
         if (bytes > mSize - mPos) fail(std::string(what) + " at byte " + std::to_string(mPos) + " needs " + std::to_string(bytes) + " bytes");
         mPos += bytes;
-        mIn.seekg(std::streamoff(mPos));
     }
 
     template <typename T>
     T read(const char* what)
     {
         T value{};
-        const std::uint64_t at = mPos;
-        skip(sizeof(T), what);
-        mIn.seekg(std::streamoff(at));
-        mIn.read(reinterpret_cast<char*>(&value), sizeof(T));
-        if (!mIn) fail(std::string("cannot read ") + what + " at byte " + std::to_string(at));
+        bytes(&value, sizeof(T), what);
         return value;
     }
 
@@ -63,17 +70,37 @@ public:
         std::string text;
         if (keep) {
             text.resize(length);
-            mIn.read(text.data(), std::streamsize(length));
+            bytes(text.data(), length, what);
+        } else {
+            skip(length, what);
         }
-        skip(length, what);
         return text;
+    }
+
+    /// Read @a count bytes of @a what into @a out.
+    void bytes(void* out, std::uint64_t count, const char* what)
+    {
+        const std::uint64_t at = mPos;
+        skip(count, what);
+        char* dst = static_cast<char*>(out);
+        for (std::uint64_t done = 0; done < count;) {
+            const std::uint64_t from = at + done;
+            if (from < mWindowAt || from >= mWindowAt + mWindowBytes) {
+                const ssize_t got = ::pread(mFd, mWindow.data(), mWindow.size(), off_t(from));
+                if (got <= 0) fail(std::string("cannot read ") + what + " at byte " + std::to_string(at));
+                mWindowAt = from;
+                mWindowBytes = std::uint64_t(got);
+            }
+            const std::uint64_t n = std::min(count - done, mWindowAt + mWindowBytes - from);
+            std::memcpy(dst + done, mWindow.data() + (from - mWindowAt), n);
+            done += n;
+        }
     }
 
     void seek(std::uint64_t position, const char* what)
     {
         if (position > mSize) fail(std::string(what) + " " + std::to_string(position) + " lies past the end");
         mPos = position;
-        mIn.seekg(std::streamoff(mPos));
     }
 
     /// A MetaMap: a count, then (name, type name, 32-bit byte count, bytes) per entry.
@@ -86,18 +113,55 @@ public:
         }
         for (std::uint32_t i = 0; i < count; ++i) {
             string("metadata name");
-            string("metadata type");
+            const std::string type = string("metadata type", true);
             const std::uint64_t valueAt = mPos;
             const std::uint32_t bytes = read<std::uint32_t>("metadata value size");
             if (bytes > mSize - mPos) fail("a metadata value at byte " + std::to_string(valueAt) + " claims " + std::to_string(bytes) + " bytes");
-            skip(bytes, "metadata value");
+            const std::uint64_t end = mPos + bytes;
+            if (type == "__delayedload" && bytes > 0) delayedLoadMetadata(end);
+            seek(end, "metadata value end");
+        }
+    }
+
+    /// OpenVDB's delayed-load metadata (io::DelayedLoadMetadata::readValue), ending at @a end:
+    /// a leaf count, then a mask of one byte a leaf and the leaves' compressed sizes (8 bytes
+    /// each), each raw or blosc-compressed behind a 32-bit byte count. OpenVDB allocates all
+    /// three by what the file says: a count or a blosc header of 2^32 took 4 GB.
+    void delayedLoadMetadata(std::uint64_t end)
+    {
+        const std::uint64_t at = mPos;
+        const std::uint64_t leaves = read<std::uint32_t>("delayed-load leaf count");
+        // Every leaf takes at least a byte of the file, so a larger count is damage.
+        if (leaves > mSize) fail("the delayed-load metadata at byte " + std::to_string(at) + " claims " + std::to_string(leaves) + " leaves");
+        for (const std::uint64_t itemBytes : {std::uint64_t(1), std::uint64_t(8)}) {
+            const std::uint64_t blockAt = mPos;
+            const std::uint32_t bytes = read<std::uint32_t>("delayed-load block size");
+            if (itemBytes == 8 && bytes == 0xffffffffu) break; // no compressed sizes stored
+            if (bytes > 0 && bytes < 16) fail("the delayed-load metadata block at byte " + std::to_string(blockAt) + " is shorter than a blosc header");
+            const std::uint64_t stored = bytes > 0 ? bytes : leaves * itemBytes;
+            if (stored > end - std::min(end, mPos)) {
+                fail("the delayed-load metadata block at byte " + std::to_string(blockAt) + " claims " + std::to_string(stored) + " bytes");
+            }
+            if (bytes >= 16) { // a blosc header: its 32-bit uncompressed size at byte 4
+                skip(4, "blosc header");
+                const std::uint64_t unpacked = read<std::uint32_t>("blosc uncompressed size");
+                if (unpacked > leaves * itemBytes + 64) {
+                    fail("the delayed-load metadata block at byte " + std::to_string(blockAt) + " unpacks to " + std::to_string(unpacked) +
+                         " bytes for " + std::to_string(leaves) + " leaves");
+                }
+                skip(stored - 8, "delayed-load block");
+            } else {
+                skip(stored, "delayed-load block");
+            }
         }
     }
 
 private:
     std::string mPath;
-    std::ifstream mIn;
+    int mFd;
     std::uint64_t mSize = 0, mPos = 0;
+    std::array<char, 65536> mWindow{};
+    std::uint64_t mWindowAt = 0, mWindowBytes = 0;
 };
 
 /// OpenVDB's map types and the bytes of their data (0: not walked further).
@@ -105,15 +169,165 @@ const std::map<std::string, std::uint64_t> kMapBytes = {{"AffineMap", 128}, {"Un
     {"UniformScaleMap", 120}, {"TranslationMap", 24}, {"ScaleTranslateMap", 144}, {"UniformScaleTranslateMap", 144},
     {"NonlinearFrustumMap", 0}};
 
-/// Bytes of a tree's value type from its grid type name ("Tree_float_5_4_3"); 0 if unknown.
-std::uint64_t valueBytes(const std::string& type)
+/// A tree's value type, from its grid type name ("Tree_float_5_4_3", "_HalfFloat" when saved
+/// as half floats): bytes in memory, components, whether half applies (RealToHalf), and
+/// whether the tree is one whose nodes are walked (5_4_3 trees of non-bool values).
+struct TreeType
 {
-    for (const auto& [name, bytes] : std::map<std::string, std::uint64_t>{{"_float_", 4}, {"_double_", 8}, {"_int32_", 4},
-             {"_int64_", 8}, {"_vec3s_", 12}, {"_vec3d_", 24}, {"_vec3i_", 12}, {"_bool_", 1}}) {
-        if (type.rfind("Tree" + name, 0) == 0) return bytes;
+    std::uint64_t valueBytes = 0; ///< 0: unknown, not walked below the root's counts
+    std::uint64_t components = 1;
+    bool real = false;
+    bool walked = false;
+    bool half = false;
+
+    explicit TreeType(const std::string& type)
+    {
+        struct Known { const char* name; std::uint64_t bytes, components; bool real; };
+        for (const Known& k : {Known{"_float_", 4, 1, true}, Known{"_double_", 8, 1, true}, Known{"_int32_", 4, 1, false},
+                 Known{"_int64_", 8, 1, false}, Known{"_vec3s_", 12, 3, true}, Known{"_vec3d_", 24, 3, true},
+                 Known{"_vec3i_", 12, 3, false}, Known{"_bool_", 1, 1, false}}) {
+            if (type.rfind(std::string("Tree") + k.name, 0) != 0) continue;
+            valueBytes = k.bytes;
+            components = k.components;
+            real = k.real;
+            const std::string rest = type.substr(4 + std::strlen(k.name));
+            half = real && rest == "5_4_3_HalfFloat";
+            walked = std::string(k.name) != "_bool_" && (rest == "5_4_3" || half);
+        }
     }
-    return 0;
-}
+    /// Bytes of a value as stored in node buffers.
+    std::uint64_t storedBytes() const { return half ? 2 * components : valueBytes; }
+};
+
+/// Walks a 5-4-3 tree's topology and buffers the way OpenVDB 10 reads them (RootNode,
+/// InternalNode and LeafNode readTopology and readBuffers, io::readCompressedValues), each
+/// count, mask and block size against the bytes left. Masks are read whole; compressed blocks
+/// are seeked over, never decompressed.
+class TreeWalk
+{
+public:
+    TreeWalk(LayoutReader& in, const TreeType& type, std::uint32_t compression) : mIn(in), mType(type), mCompression(compression) {}
+
+    /// The topology, which must end by @a end (the grid's data offset); below the root's counts
+    /// only when @a deep.
+    void topology(std::uint64_t end, bool deep)
+    {
+        mIn.skip(mType.valueBytes, "background value");
+        const std::uint64_t countsAt = mIn.position();
+        const std::uint64_t tiles = mIn.read<std::uint32_t>("root tile count"), children = mIn.read<std::uint32_t>("root child count");
+        const std::uint64_t room = end - std::min(end, mIn.position());
+        // OpenVDB reads 2^31 tiles one by one (34 s); a child is at least its origin (and masks).
+        if (tiles * (13 + mType.valueBytes) + children * (12 + (deep ? 2 * kMaskBytes[0] : 0)) > room) {
+            mIn.fail("the root node at byte " + std::to_string(countsAt) + " claims " + std::to_string(tiles) + " tiles and " +
+                     std::to_string(children) + " children in " + std::to_string(room) + " bytes of topology");
+        }
+        if (!deep) return;
+        mIn.skip(tiles * (13 + mType.valueBytes), "root tiles");
+        for (std::uint64_t c = 0; c < children; ++c) {
+            Child child;
+            mIn.bytes(child.origin.data(), 12, "root child origin");
+            child.firstLeaf = mLeafActive.size();
+            internalTopology(0);
+            child.leaves = mLeafActive.size() - child.firstLeaf;
+            mChildren[child.origin] = child; // a repeated origin replaces the earlier child, as in RootNode's table
+            if (mIn.position() > end) mIn.fail("the tree's topology runs past its data offset " + std::to_string(end));
+        }
+    }
+
+    /// The leaf buffers, from @a begin (the grid's data offset) to at most @a end, in the order
+    /// RootNode::readBuffers visits them (its table: root children sorted by origin).
+    void buffers(std::uint64_t begin, std::uint64_t end)
+    {
+        mIn.seek(begin, "data offset");
+        for (const auto& [origin, child] : mChildren) {
+            for (std::uint64_t leaf = child.firstLeaf; leaf < child.firstLeaf + child.leaves; ++leaf) {
+                std::uint64_t mask[8];
+                mIn.bytes(mask, sizeof mask, "leaf value mask");
+                if (countOn(mask, 8) != mLeafActive[leaf]) {
+                    mIn.fail("a leaf's value mask at byte " + std::to_string(mIn.position() - 64) + " differs from the tree's topology");
+                }
+                compressedValues(512, mLeafActive[leaf]);
+            }
+        }
+        if (mIn.position() > end) mIn.fail("the tree's data runs past its end offset " + std::to_string(end));
+    }
+
+private:
+    static constexpr std::uint64_t kMaskBytes[3] = {4096, 512, 64}; ///< 32^3, 16^3 and 8^3 bits
+    static constexpr std::uint64_t kNodeValues[3] = {32768, 4096, 512};
+
+    struct Child
+    {
+        std::array<std::int32_t, 3> origin{};
+        std::uint64_t firstLeaf = 0, leaves = 0;
+    };
+
+    static std::uint64_t countOn(const std::uint64_t* words, std::size_t n)
+    {
+        std::uint64_t on = 0;
+        for (std::size_t i = 0; i < n; ++i) on += std::uint64_t(__builtin_popcountll(words[i]));
+        return on;
+    }
+
+    /// InternalNode::readTopology at @a level (0: 32^3, 1: 16^3), then its children.
+    void internalTopology(int level)
+    {
+        std::vector<std::uint64_t> childMask(kMaskBytes[level] / 8), valueMask(kMaskBytes[level] / 8);
+        mIn.bytes(childMask.data(), kMaskBytes[level], "child mask");
+        mIn.bytes(valueMask.data(), kMaskBytes[level], "value mask");
+        compressedValues(kNodeValues[level], countOn(valueMask.data(), valueMask.size()));
+        const std::uint64_t children = countOn(childMask.data(), childMask.size());
+        if (children * kMaskBytes[level + 1] > mIn.size() - mIn.position()) {
+            mIn.fail("a node at byte " + std::to_string(mIn.position()) + " claims " + std::to_string(children) + " children");
+        }
+        for (std::uint64_t c = 0; c < children; ++c) {
+            if (level == 1) { // LeafNode::readTopology: its value mask
+                std::uint64_t mask[8];
+                mIn.bytes(mask, sizeof mask, "leaf value mask");
+                mLeafActive.push_back(std::uint16_t(countOn(mask, 8)));
+            } else {
+                internalTopology(level + 1);
+            }
+        }
+    }
+
+    /// io::readCompressedValues of a node of @a values values, @a active of them active.
+    void compressedValues(std::uint64_t values, std::uint64_t active)
+    {
+        const std::uint64_t at = mIn.position();
+        const auto metadata = mIn.read<std::uint8_t>("node compression metadata");
+        if (metadata > 6) mIn.fail("the node compression metadata at byte " + std::to_string(at) + " is " + std::to_string(metadata));
+        // 2, 4, 5: one or two inactive values; 3, 4, 5: a selection mask; 6: all values.
+        if (metadata == 2 || metadata == 4 || metadata == 5) mIn.skip(mType.valueBytes * (metadata == 5 ? 2 : 1), "inactive values");
+        if (metadata >= 3 && metadata <= 5) mIn.skip(values / 8, "selection mask");
+        const bool maskCompressed = (mCompression & 0x2) != 0;
+        const std::uint64_t count = maskCompressed && metadata != 6 ? active : values;
+        const std::uint64_t bytes = count * mType.storedBytes();
+        if (mType.half && count == 0) return; // HalfReader::read reads nothing for no values
+        if ((mCompression & 0x5) == 0) { // neither blosc (4) nor zip (1): raw values
+            mIn.skip(bytes, "node values");
+            return;
+        }
+        // zipFromStream / bloscFromStream: a signed byte count; <= 0 means raw.
+        const std::uint64_t sizeAt = mIn.position();
+        const std::int64_t stored = mIn.read<std::int64_t>("compressed block size");
+        if (stored <= 0 && std::uint64_t(-stored) != bytes) {
+            mIn.fail("the raw block at byte " + std::to_string(sizeAt) + " holds " + std::to_string(-stored) + " bytes for " +
+                     std::to_string(bytes) + " bytes of values");
+        }
+        const std::uint64_t length = stored <= 0 ? bytes : std::uint64_t(stored);
+        if (length > mIn.size() - mIn.position()) {
+            mIn.fail("the compressed block at byte " + std::to_string(sizeAt) + " claims " + std::to_string(length) + " bytes");
+        }
+        mIn.skip(length, "compressed block");
+    }
+
+    LayoutReader& mIn;
+    TreeType mType;
+    std::uint32_t mCompression;
+    std::vector<std::uint16_t> mLeafActive; ///< active voxels of each leaf, in topology order
+    std::map<std::array<std::int32_t, 3>, Child> mChildren;
+};
 
 } // namespace
 
@@ -154,26 +368,25 @@ void checkVdbLayout(const std::string& path)
                     std::to_string(endPos) + " are out of order or past the end");
         }
         in.seek(std::uint64_t(gridPos), "grid offset");
-        if (version >= openvdb::OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION) in.skip(4, "grid compression flags");
+        std::uint32_t compression = openvdb::io::COMPRESS_ZIP; // before per-grid flags: zip
+        if (version >= openvdb::OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION) compression = in.read<std::uint32_t>("grid compression flags");
         in.metaMap("grid metadata");
         if (version >= openvdb::OPENVDB_FILE_VERSION_GRID_INSTANCING) {
             const std::uint64_t at = in.position();
             const std::string map = in.string("transform type", true);
             const auto known = kMapBytes.find(map);
             if (known == kMapBytes.end()) in.fail("the transform type at byte " + std::to_string(at) + " is not a map OpenVDB knows");
-            // The root node's tile and child counts: OpenVDB reads 2^31 tiles one by one (34 s).
-            const std::uint64_t value = valueBytes(type);
-            if (known->second > 0 && value > 0 && version >= openvdb::OPENVDB_FILE_VERSION_ROOTNODE_MAP) {
+            const TreeType tree(type);
+            if (known->second > 0 && tree.valueBytes > 0 && version >= openvdb::OPENVDB_FILE_VERSION_ROOTNODE_MAP) {
                 in.skip(known->second, "transform");
                 if (in.read<std::int32_t>("tree buffer count") == 1) {
-                    in.skip(value, "background value");
-                    const std::uint64_t countsAt = in.position();
-                    const std::uint64_t tiles = in.read<std::uint32_t>("root tile count"),
-                                        children = in.read<std::uint32_t>("root child count");
-                    const std::uint64_t room = std::uint64_t(blockPos) - std::min<std::uint64_t>(in.position(), std::uint64_t(blockPos));
-                    if (tiles * (13 + value) + children * 12 > room) {
-                        in.fail("the root node at byte " + std::to_string(countsAt) + " claims " + std::to_string(tiles) + " tiles and " +
-                                std::to_string(children) + " children in " + std::to_string(room) + " bytes of topology");
+                    // Below the root's counts only where the layout is the one walked here.
+                    const bool deep = tree.walked && version >= openvdb::OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION;
+                    TreeWalk walk(in, tree, compression);
+                    walk.topology(std::uint64_t(blockPos), deep);
+                    if (deep) {
+                        walk.buffers(std::uint64_t(blockPos), std::uint64_t(endPos));
+                        in.seek(std::uint64_t(blockPos), "data offset");
                     }
                 }
             }

@@ -4,10 +4,14 @@
 ///
 /// OpenVDB's reader does not check its stream after each read: a file cut or damaged in its
 /// header makes it take a length from bytes it never read and allocate that much (a cut at
-/// byte 162 of a 200 KB file: 30 s and 20 GB before an error). The header's lengths, counts and
-/// offsets are walked here first, each against the bytes the file has: the file header, the
-/// file's metadata, each grid's descriptor (name, type, offsets), and at each grid's offset its
-/// compression flags, metadata, transform type and root node counts.
+/// byte 162 of a 200 KB file: 30 s and 20 GB before an error), and a damaged block size below
+/// the root overruns its buffers. The file's lengths, counts and offsets are walked here first,
+/// each against the bytes the file has: the file header, the file's metadata, each grid's
+/// descriptor (name, type, offsets), and at each grid's offset its compression flags, metadata
+/// (the delayed-load metadata's counts and blocks too), transform type and root node counts;
+/// for 5-4-3 trees of non-bool values (format 222 and later) also every node's masks and
+/// compressed blocks and every leaf buffer, in OpenVDB's reading order. 1-4 % of the time
+/// OpenVDB takes to read the shared assets.
 #pragma once
 
 #include <string>
