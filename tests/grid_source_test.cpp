@@ -227,6 +227,28 @@ TEST(GridSource, DamagedNodesAreRefusedBeforeOpenVDBReadsThem)
         EXPECT_NE(m.find(bad + ": damaged VDB file: "), std::string::npos) << m;
         EXPECT_NE(m.find(d.expect), std::string::npos) << m;
     }
+    // A tree buffer count other than 1 (OpenVDB warns and reads on: with a garbage root behind
+    // it, 20 GB and 60 s) does not stop the walk.
+    const std::size_t bufferCountAt = childMaskAt - 12 - 8 - 4 - 4;
+    std::string twice = bytes;
+    twice.replace(bufferCountAt, 4, "\x02\0\0\0", 4);
+    twice.replace(blockAt, 8, std::string(reinterpret_cast<const char*>(&huge), 8));
+    std::ofstream(bad, std::ios::binary | std::ios::trunc) << twice;
+    EXPECT_NE(messageOf<IoError>([&] { GridSource::open(bad); }).find("the compressed block at byte"), std::string::npos);
+    // A root tile's active flag is read as a bool: anything but 0 or 1 is undefined behaviour.
+    auto tiled = openvdb::FloatGrid::create(0.0f);
+    tiled->setName("density");
+    tiled->tree().addTile(3, openvdb::Coord(8192, 0, 0), 1.0f, true);
+    tiled->tree().setValueOn(openvdb::Coord(1, 2, 3), 0.5f);
+    writeGrid(tiled, bad);
+    std::ifstream tin(bad, std::ios::binary);
+    std::string tile((std::istreambuf_iterator<char>(tin)), std::istreambuf_iterator<char>());
+    tin.close();
+    const std::size_t activeAt = tile.find("UniformScaleMap") + 15 + 120 + 4 + 4 + 8 + 12 + 4;
+    ASSERT_EQ(tile[activeAt], '\1');
+    tile[activeAt] = '\x7f';
+    std::ofstream(bad, std::ios::binary | std::ios::trunc) << tile;
+    EXPECT_NE(messageOf<IoError>([&] { GridSource::open(bad); }).find("a root tile's active flag"), std::string::npos);
     // A cut anywhere in the leaf buffers.
     for (std::size_t k = 1; k < 20; ++k) {
         std::ofstream(bad, std::ios::binary | std::ios::trunc) << bytes.substr(0, dataAt + k * (bytes.size() - dataAt) / 20);

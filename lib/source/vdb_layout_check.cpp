@@ -119,6 +119,9 @@ public:
             if (bytes > mSize - mPos) fail("a metadata value at byte " + std::to_string(valueAt) + " claims " + std::to_string(bytes) + " bytes");
             const std::uint64_t end = mPos + bytes;
             if (type == "__delayedload" && bytes > 0) delayedLoadMetadata(end);
+            if (type == "bool" && bytes == 1 && read<std::uint8_t>("bool metadata") > 1) { // reading it as a bool is undefined
+                fail("a bool metadata value at byte " + std::to_string(valueAt + 4) + " is neither 0 nor 1");
+            }
             seek(end, "metadata value end");
         }
     }
@@ -222,7 +225,11 @@ public:
                      std::to_string(children) + " children in " + std::to_string(room) + " bytes of topology");
         }
         if (!deep) return;
-        mIn.skip(tiles * (13 + mType.valueBytes), "root tiles");
+        for (std::uint64_t t = 0; t < tiles; ++t) { // origin, value, active flag (a bool: 0 or 1)
+            mIn.skip(12 + mType.valueBytes, "root tile");
+            const auto active = mIn.read<std::uint8_t>("root tile active flag");
+            if (active > 1) mIn.fail("a root tile's active flag at byte " + std::to_string(mIn.position() - 1) + " is " + std::to_string(active));
+        }
         for (std::uint64_t c = 0; c < children; ++c) {
             Child child;
             mIn.bytes(child.origin.data(), 12, "root child origin");
@@ -379,15 +386,14 @@ void checkVdbLayout(const std::string& path)
             const TreeType tree(type);
             if (known->second > 0 && tree.valueBytes > 0 && version >= openvdb::OPENVDB_FILE_VERSION_ROOTNODE_MAP) {
                 in.skip(known->second, "transform");
-                if (in.read<std::int32_t>("tree buffer count") == 1) {
-                    // Below the root's counts only where the layout is the one walked here.
-                    const bool deep = tree.walked && version >= openvdb::OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION;
-                    TreeWalk walk(in, tree, compression);
-                    walk.topology(std::uint64_t(blockPos), deep);
-                    if (deep) {
-                        walk.buffers(std::uint64_t(blockPos), std::uint64_t(endPos));
-                        in.seek(std::uint64_t(blockPos), "data offset");
-                    }
+                in.skip(4, "tree buffer count"); // OpenVDB warns when it is not 1, and reads on
+                // Below the root's counts only where the layout is the one walked here.
+                const bool deep = tree.walked && version >= openvdb::OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION;
+                TreeWalk walk(in, tree, compression);
+                walk.topology(std::uint64_t(blockPos), deep);
+                if (deep) {
+                    walk.buffers(std::uint64_t(blockPos), std::uint64_t(endPos));
+                    in.seek(std::uint64_t(blockPos), "data offset");
                 }
             }
         }
