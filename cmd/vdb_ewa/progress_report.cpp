@@ -64,7 +64,7 @@ extern "C" void onStopSignal(int)
 
 /// After a stop signal the render ends at its next check (every 50 ms at most), but reading a
 /// grid (OpenVDB) and writing an image (OpenEXR) never check: a frame still running
-/// kStopGrace after the signal is ended here, its temporary outputs removed.
+/// kStopGraceMs after the signal is ended here, its temporary outputs removed.
 void watchdog()
 {
     while (sem_wait(&gStopPosted) != 0 && errno == EINTR) {
