@@ -263,3 +263,166 @@ TEST(GridSource, DamagedNodesAreRefusedBeforeOpenVDBReadsThem)
         EXPECT_NO_THROW(GridSource::open(e.path().string())) << e.path();
     }
 }
+
+namespace {
+
+/// The bytes of the file at @a path.
+std::string fileBytes(const std::string& path)
+{
+    std::ifstream in(path, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+/// @a bytes with the 8 bytes at @a at replaced by @a v.
+std::string withInt64(std::string bytes, std::size_t at, std::int64_t v)
+{
+    std::memcpy(bytes.data() + at, &v, 8);
+    return bytes;
+}
+
+std::int64_t int64In(const std::string& bytes, std::size_t at)
+{
+    std::int64_t v = 0;
+    std::memcpy(&v, bytes.data() + at, 8);
+    return v;
+}
+
+/// The message GridSource::open gives for a file holding @a bytes (empty when it opens).
+std::string openMessage(const std::string& path, const std::string& bytes, const std::string& grid = "")
+{
+    std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
+    try {
+        GridSource::open(path, grid);
+    } catch (const std::exception& e) {
+        return e.what();
+    }
+    return "";
+}
+
+} // namespace
+
+// The same damage below the root with every compression OpenVDB writes (none, zip, blosc, each
+// with and without active-mask compression) and with half floats: a zip or blosc block size
+// claiming more than the file, a garbage child mask, cuts in the buffers.
+TEST(GridSource, DamagedNodesAreRefusedWhateverTheCompression)
+{
+    TempDir dir;
+    const std::string sample = dir.file("sample.vdb"), file = dir.file("variant.vdb");
+    writeSampleGrid(SampleGrid::Tiles, sample, 0.08);
+    openvdb::io::File src(sample);
+    src.open();
+    const auto grid = src.readGrid("density");
+    src.close();
+    grid->clearGridClass(); // Archive::setGridCompression drops zip for fog volumes
+    namespace io = openvdb::io;
+    for (const std::uint32_t compression : std::initializer_list<std::uint32_t>{io::COMPRESS_NONE, io::COMPRESS_ACTIVE_MASK,
+             io::COMPRESS_ZIP, io::COMPRESS_ZIP | io::COMPRESS_ACTIVE_MASK, io::COMPRESS_BLOSC, io::COMPRESS_BLOSC | io::COMPRESS_ACTIVE_MASK}) {
+        for (const bool half : {false, true}) {
+            SCOPED_TRACE("compression " + std::to_string(compression) + (half ? ", half floats" : ""));
+            grid->setSaveFloatAsHalf(half);
+            {
+                io::File out(file);
+                out.setCompression(compression);
+                out.write({grid});
+            }
+            const std::string bytes = fileBytes(file);
+            EXPECT_EQ(openMessage(file, bytes), "");
+            const std::size_t offsetsAt = bytes.find("Tree_float_5_4_3") + 16 + (half ? 10 : 0) + 4;
+            const std::size_t dataAt = std::size_t(int64In(bytes, offsetsAt + 8));
+            // The first root child's child mask (no root tiles).
+            const std::size_t countsAt = bytes.find("UniformScaleMap") + 15 + 120 + 4 + 4;
+            ASSERT_EQ(bytes.substr(countsAt, 4), std::string(4, '\0'));
+            std::string damaged = bytes;
+            damaged.replace(countsAt + 8 + 12, 4096, 4096, '\xff');
+            const std::string mask = openMessage(file, damaged);
+            EXPECT_NE(mask.find(file + ": damaged VDB file: "), std::string::npos) << mask;
+            // The first leaf's buffer: value mask, compression metadata, inactive values and
+            // selection mask as io::readCompressedValues reads them, then the block size.
+            const int meta = bytes[dataAt + 64];
+            std::size_t blockAt = dataAt + 65 + (meta == 2 || meta == 4 ? 4 : meta == 5 ? 8 : 0) + (meta >= 3 && meta <= 5 ? 64 : 0);
+            if (compression & (io::COMPRESS_ZIP | io::COMPRESS_BLOSC)) {
+                const std::string huge = openMessage(file, withInt64(bytes, blockAt, std::int64_t(1) << 40));
+                EXPECT_NE(huge.find(file + ": damaged VDB file: the compressed block at byte " + std::to_string(blockAt) + " claims"),
+                          std::string::npos) << huge;
+            }
+            for (std::size_t k = 1; k < 8; ++k) {
+                const std::string cut = openMessage(file, bytes.substr(0, dataAt + k * (bytes.size() - dataAt) / 8));
+                EXPECT_NE(cut.find(file + ": damaged VDB file: "), std::string::npos) << k << ": " << cut;
+            }
+        }
+    }
+}
+
+// The walk reads what OpenVDB 10 reads, where the two could part: an instance grid (no
+// topology of its own), the half-float flag (the grid's is_saved_as_half_float metadata, not
+// the type name), fixed-size metadata (TypedMetadata reads sizeof(T) whatever the stored size),
+// a blosc header's own block length (blosc_decompress_ctx trusts it), and the data offset
+// (OpenVDB reads the buffers straight after the topology).
+TEST(GridSource, LayoutWalkReadsWhatOpenVDBReads)
+{
+    TempDir dir;
+    const std::string file = dir.file("grid.vdb");
+    auto grid = makeBoxGrid(openvdb::Coord(0), openvdb::Coord(40), 0.5f, 0.1);
+    auto instance = grid->copyGrid(); // shares the tree: written as an instance of "density"
+    instance->setName("copy");
+    {
+        openvdb::io::File out(file);
+        out.write({grid, instance});
+    }
+    const std::string instanced = fileBytes(file);
+    ASSERT_NE(instanced.find("copy"), std::string::npos);
+    EXPECT_EQ(openMessage(file, instanced, "copy"), "");
+    EXPECT_EQ(openMessage(file, instanced, "density"), "");
+
+    grid->setSaveFloatAsHalf(true);
+    writeGrid(grid, file);
+    const std::string half = fileBytes(file);
+    EXPECT_EQ(openMessage(file, half), "");
+    // is_saved_as_half_float: name, type "bool", size 1, value 1. At 0 OpenVDB reads 4-byte
+    // floats where the nodes hold halves (the walk used to take the flag from the type name).
+    const std::size_t flagAt = half.find("is_saved_as_half_float") + 22 + 4 + 4 + 4;
+    ASSERT_EQ(half.substr(flagAt - 8, 9), std::string("bool\1\0\0\0\1", 9));
+    std::string full = half;
+    full[flagAt] = '\0';
+    const std::string asFull = openMessage(file, full);
+    EXPECT_NE(asFull.find(file + ": damaged VDB file: "), std::string::npos) << asFull;
+
+    grid->setSaveFloatAsHalf(false);
+    writeGrid(grid, file);
+    const std::string bytes = fileBytes(file);
+    const std::size_t offsetsAt = bytes.find("Tree_float_5_4_3") + 16 + 4;
+    const std::size_t dataAt = std::size_t(int64In(bytes, offsetsAt + 8));
+
+    // An int64 value stored as 12 bytes, the grid's offsets moved to match: OpenVDB reads 8 and
+    // takes the other 4 as the next name's length.
+    const std::size_t countAt = bytes.find("file_voxel_count");
+    ASSERT_NE(countAt, std::string::npos);
+    const std::size_t sizeAt = countAt + 16 + 4 + 5;
+    ASSERT_EQ(bytes.substr(sizeAt - 5, 9), std::string("int64\x08\0\0\0", 9));
+    std::string longer = bytes;
+    longer[sizeAt] = '\x0c';
+    longer.insert(sizeAt + 4 + 8, std::string(4, '\0'));
+    longer = withInt64(longer, offsetsAt + 8, std::int64_t(dataAt) + 4);
+    longer = withInt64(longer, offsetsAt + 16, int64In(bytes, offsetsAt + 16) + 4);
+    EXPECT_NE(openMessage(file, longer).find("damaged VDB file: a int64 metadata value at byte " + std::to_string(sizeAt) +
+                                             " claims 12 bytes, not 8"),
+              std::string::npos);
+
+    // The first leaf's blosc block (value mask, metadata 0, size, then blosc's 16-byte header
+    // with the block's length at byte 12) claiming 64 bytes more than it holds.
+    ASSERT_EQ(bytes[dataAt + 64], '\0');
+    const std::size_t blockAt = dataAt + 65;
+    std::uint32_t length = 0;
+    std::memcpy(&length, bytes.data() + blockAt + 8 + 12, 4);
+    ASSERT_EQ(std::int64_t(length), int64In(bytes, blockAt));
+    std::string header = bytes;
+    length += 64;
+    std::memcpy(header.data() + blockAt + 8 + 12, &length, 4);
+    EXPECT_NE(openMessage(file, header).find("damaged VDB file: the blosc block at byte " + std::to_string(blockAt) + " holds"),
+              std::string::npos);
+
+    // A data offset other than the topology's end.
+    EXPECT_NE(openMessage(file, withInt64(bytes, offsetsAt + 8, std::int64_t(dataAt) + 8))
+                  .find("damaged VDB file: the tree's topology ends at byte " + std::to_string(dataAt)),
+              std::string::npos);
+}

@@ -40,8 +40,10 @@ private:
     Verbosity mVerbosity;
 };
 
-/// A stop signal ends the process at most this long after it arrived.
-constexpr long kStopGraceMs = 300;
+/// A stop signal ends the process this long after it arrived at the latest, plus the kernel's
+/// time to end the threads (up to 0.13 s measured, where a thread was unmapping a frame's
+/// arrays): four times the render's cancel checks (50 ms), within 0.5 s with a margin.
+constexpr long kStopGraceMs = 200;
 
 /// SIGINT and SIGTERM cancel @a report (an atomic store) and set stopRequested(); a frame
 /// still running kStopGraceMs later (reading and writing do not check the cancel) is ended by

@@ -19,6 +19,13 @@ namespace vdb_ewa {
 namespace detail {
 namespace {
 
+/// The bytes TypedMetadata<T>::readValue reads for the metadata types openvdb::initialize()
+/// registers with a fixed size (MetaTypes, ptidx32/64); strings and delayed-load metadata
+/// read their stored size.
+const std::map<std::string, std::uint32_t> kFixedMetadataBytes = {{"bool", 1}, {"float", 4}, {"double", 8}, {"int32", 4},
+    {"int64", 8}, {"ptidx32", 4}, {"ptidx64", 8}, {"vec2i", 8}, {"vec2s", 8}, {"vec2d", 16}, {"vec3i", 12}, {"vec3s", 12},
+    {"vec3d", 24}, {"vec4i", 16}, {"vec4s", 16}, {"vec4d", 32}, {"mat4s", 64}, {"mat4d", 128}};
+
 /// A bounds-checked reader over the file: every read names what it reads. Reads go through a
 /// 64 KB window filled by pread(2), so the walk costs a system call a window, not two a field.
 class LayoutReader
@@ -103,27 +110,42 @@ public:
         mPos = position;
     }
 
-    /// A MetaMap: a count, then (name, type name, 32-bit byte count, bytes) per entry.
-    void metaMap(const char* what)
+    /// A MetaMap (MetaMap::readMeta): a count, then (name, type name, 32-bit byte count, bytes)
+    /// per entry. Returns GridBase::saveFloatAsHalf() of the map read: the last
+    /// "is_saved_as_half_float" entry, 0 or 1 for a bool, -1 (unknown) for another type.
+    int metaMap(const char* what)
     {
         const std::uint64_t at = mPos;
         const std::uint32_t count = read<std::uint32_t>(what);
         if (count > (mSize - mPos) / 12) {
             fail(std::string(what) + " at byte " + std::to_string(at) + " claims " + std::to_string(count) + " entries");
         }
+        int half = 0;
         for (std::uint32_t i = 0; i < count; ++i) {
-            string("metadata name");
+            const bool halfFlag = string("metadata name", true) == "is_saved_as_half_float";
             const std::string type = string("metadata type", true);
             const std::uint64_t valueAt = mPos;
             const std::uint32_t bytes = read<std::uint32_t>("metadata value size");
             if (bytes > mSize - mPos) fail("a metadata value at byte " + std::to_string(valueAt) + " claims " + std::to_string(bytes) + " bytes");
+            // TypedMetadata::readValue reads sizeof(T) whatever the size says: another size
+            // would put OpenVDB's next read elsewhere than this walk's.
+            const auto fixed = kFixedMetadataBytes.find(type);
+            if (fixed != kFixedMetadataBytes.end() && bytes != fixed->second) {
+                fail("a " + type + " metadata value at byte " + std::to_string(valueAt) + " claims " + std::to_string(bytes) +
+                     " bytes, not " + std::to_string(fixed->second));
+            }
             const std::uint64_t end = mPos + bytes;
             if (type == "__delayedload" && bytes > 0) delayedLoadMetadata(end);
-            if (type == "bool" && bytes == 1 && read<std::uint8_t>("bool metadata") > 1) { // reading it as a bool is undefined
-                fail("a bool metadata value at byte " + std::to_string(valueAt + 4) + " is neither 0 nor 1");
+            if (type == "bool") {
+                const auto value = read<std::uint8_t>("bool metadata");
+                if (value > 1) fail("a bool metadata value at byte " + std::to_string(valueAt + 4) + " is neither 0 nor 1"); // UB as a bool
+                if (halfFlag) half = value;
+            } else if (halfFlag) {
+                half = -1; // Metadata::asBool of another type: left to OpenVDB
             }
             seek(end, "metadata value end");
         }
+        return half;
     }
 
     /// OpenVDB's delayed-load metadata (io::DelayedLoadMetadata::readValue), ending at @a end:
@@ -145,19 +167,32 @@ public:
             if (stored > end - std::min(end, mPos)) {
                 fail("the delayed-load metadata block at byte " + std::to_string(blockAt) + " claims " + std::to_string(stored) + " bytes");
             }
-            if (bytes >= 16) { // a blosc header: its 32-bit uncompressed size at byte 4
-                skip(4, "blosc header");
-                const std::uint64_t unpacked = read<std::uint32_t>("blosc uncompressed size");
+            if (bytes >= 16) {
+                const std::uint64_t unpacked = bloscHeader(blockAt, bytes);
                 // OpenVDB's bloscCompress pads inputs shorter than 128 bytes to 128.
                 if (unpacked > std::max<std::uint64_t>(leaves * itemBytes, 128) + 64) {
                     fail("the delayed-load metadata block at byte " + std::to_string(blockAt) + " unpacks to " + std::to_string(unpacked) +
                          " bytes for " + std::to_string(leaves) + " leaves");
                 }
-                skip(stored - 8, "delayed-load block");
+                skip(stored - 16, "delayed-load block");
             } else {
                 skip(stored, "delayed-load block");
             }
         }
+    }
+
+    /// The 16-byte blosc header of a block of @a stored bytes (at byte @a at) that OpenVDB hands
+    /// to blosc_decompress_ctx, which takes the block's length from the header: a length other
+    /// than @a stored would read past the block OpenVDB allocated. Returns the unpacked size.
+    std::uint64_t bloscHeader(std::uint64_t at, std::uint64_t stored)
+    {
+        std::uint32_t header[4];
+        bytes(header, sizeof header, "blosc header");
+        if (header[3] != stored) {
+            fail("the blosc block at byte " + std::to_string(at) + " holds " + std::to_string(stored) + " bytes, its header says " +
+                 std::to_string(header[3]));
+        }
+        return header[1];
     }
 
 private:
@@ -173,9 +208,10 @@ const std::map<std::string, std::uint64_t> kMapBytes = {{"AffineMap", 128}, {"Un
     {"UniformScaleMap", 120}, {"TranslationMap", 24}, {"ScaleTranslateMap", 144}, {"UniformScaleTranslateMap", 144},
     {"NonlinearFrustumMap", 0}};
 
-/// A tree's value type, from its grid type name ("Tree_float_5_4_3", "_HalfFloat" when saved
-/// as half floats): bytes in memory, components, whether half applies (RealToHalf), and
-/// whether the tree is one whose nodes are walked (5_4_3 trees of non-bool values).
+/// A tree's value type, from its grid type name ("Tree_float_5_4_3"; GridDescriptor::read drops
+/// a "_HalfFloat" suffix): bytes in memory, components, whether half applies (RealToHalf and
+/// the grid metadata's is_saved_as_half_float, as GridBase::saveFloatAsHalf), and whether the
+/// tree is one whose nodes are walked (5_4_3 trees of non-bool values, the half flag known).
 struct TreeType
 {
     std::uint64_t valueBytes = 0; ///< 0: unknown, not walked below the root's counts
@@ -184,7 +220,7 @@ struct TreeType
     bool walked = false;
     bool half = false;
 
-    explicit TreeType(const std::string& type)
+    TreeType(const std::string& type, int savedAsHalf)
     {
         struct Known { const char* name; std::uint64_t bytes, components; bool real; };
         for (const Known& k : {Known{"_float_", 4, 1, true}, Known{"_double_", 8, 1, true}, Known{"_int32_", 4, 1, false},
@@ -195,8 +231,8 @@ struct TreeType
             components = k.components;
             real = k.real;
             const std::string rest = type.substr(4 + std::strlen(k.name));
-            half = real && rest == "5_4_3_HalfFloat";
-            walked = std::string(k.name) != "_bool_" && (rest == "5_4_3" || half);
+            half = real && savedAsHalf == 1;
+            walked = std::string(k.name) != "_bool_" && (rest == "5_4_3" || rest == "5_4_3_HalfFloat") && savedAsHalf >= 0;
         }
     }
     /// Bytes of a value as stored in node buffers.
@@ -243,10 +279,13 @@ public:
     }
 
     /// The leaf buffers, from @a begin (the grid's data offset) to at most @a end, in the order
-    /// RootNode::readBuffers visits them (its table: root children sorted by origin).
+    /// RootNode::readBuffers visits them (its table: root children sorted by origin). OpenVDB
+    /// reads them straight after the topology (Archive's doReadGrid), so that must end at @a begin.
     void buffers(std::uint64_t begin, std::uint64_t end)
     {
-        mIn.seek(begin, "data offset");
+        if (mIn.position() != begin) {
+            mIn.fail("the tree's topology ends at byte " + std::to_string(mIn.position()) + ", not at its data offset " + std::to_string(begin));
+        }
         for (const auto& [origin, child] : mChildren) {
             for (std::uint64_t leaf = child.firstLeaf; leaf < child.firstLeaf + child.leaves; ++leaf) {
                 std::uint64_t mask[8];
@@ -327,6 +366,16 @@ private:
         if (length > mIn.size() - mIn.position()) {
             mIn.fail("the compressed block at byte " + std::to_string(sizeAt) + " claims " + std::to_string(length) + " bytes");
         }
+        if (stored > 0 && (mCompression & 0x4) != 0) { // bloscFromStream: blosc_decompress_ctx
+            if (stored < 16) mIn.fail("the blosc block at byte " + std::to_string(sizeAt) + " is shorter than a blosc header");
+            const std::uint64_t unpacked = mIn.bloscHeader(sizeAt, length);
+            if (unpacked != bytes) {
+                mIn.fail("the blosc block at byte " + std::to_string(sizeAt) + " unpacks to " + std::to_string(unpacked) + " bytes for " +
+                         std::to_string(bytes) + " bytes of values");
+            }
+            mIn.skip(length - 16, "compressed block");
+            return;
+        }
         mIn.skip(length, "compressed block");
     }
 
@@ -367,25 +416,31 @@ void checkVdbLayout(const std::string& path)
     for (std::int32_t g = 0; g < grids; ++g) {
         in.string("grid name");
         const std::string type = in.string("grid type", true);
-        if (version >= openvdb::OPENVDB_FILE_VERSION_GRID_INSTANCING) in.string("instance parent name");
+        // An instance shares its parent's tree: Archive::writeGridInstance writes no topology and
+        // leaves the data offset 0, and Archive's doReadGrid reads no topology for it.
+        bool instance = false;
+        if (version >= openvdb::OPENVDB_FILE_VERSION_GRID_INSTANCING) instance = !in.string("instance parent name", true).empty();
         const std::uint64_t descriptorEnd = in.position() + 24;
-        const std::int64_t gridPos = in.read<std::int64_t>("grid offset"), blockPos = in.read<std::int64_t>("data offset"),
+        const std::int64_t gridPos = in.read<std::int64_t>("grid offset"), storedBlockPos = in.read<std::int64_t>("data offset"),
                            endPos = in.read<std::int64_t>("grid end offset");
+        const std::int64_t blockPos = instance ? endPos : storedBlockPos;
         if (gridPos < std::int64_t(descriptorEnd) || blockPos < gridPos || endPos < blockPos || std::uint64_t(endPos) > in.size()) {
-            in.fail("grid " + std::to_string(g) + "'s offsets " + std::to_string(gridPos) + ", " + std::to_string(blockPos) + ", " +
+            in.fail("grid " + std::to_string(g) + "'s offsets " + std::to_string(gridPos) + ", " + std::to_string(storedBlockPos) + ", " +
                     std::to_string(endPos) + " are out of order or past the end");
         }
         in.seek(std::uint64_t(gridPos), "grid offset");
         std::uint32_t compression = openvdb::io::COMPRESS_ZIP; // before per-grid flags: zip
         if (version >= openvdb::OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION) compression = in.read<std::uint32_t>("grid compression flags");
-        in.metaMap("grid metadata");
+        const int half = in.metaMap("grid metadata");
         if (version >= openvdb::OPENVDB_FILE_VERSION_GRID_INSTANCING) {
             const std::uint64_t at = in.position();
             const std::string map = in.string("transform type", true);
             const auto known = kMapBytes.find(map);
             if (known == kMapBytes.end()) in.fail("the transform type at byte " + std::to_string(at) + " is not a map OpenVDB knows");
-            const TreeType tree(type);
-            if (known->second > 0 && tree.valueBytes > 0 && version >= openvdb::OPENVDB_FILE_VERSION_ROOTNODE_MAP) {
+            const TreeType tree(type, half);
+            if (instance) {
+                in.skip(known->second, "transform");
+            } else if (known->second > 0 && tree.valueBytes > 0 && version >= openvdb::OPENVDB_FILE_VERSION_ROOTNODE_MAP) {
                 in.skip(known->second, "transform");
                 in.skip(4, "tree buffer count"); // OpenVDB warns when it is not 1, and reads on
                 // Below the root's counts only where the layout is the one walked here.

@@ -8,10 +8,12 @@
 /// the root overruns its buffers. The file's lengths, counts and offsets are walked here first,
 /// each against the bytes the file has: the file header, the file's metadata, each grid's
 /// descriptor (name, type, offsets), and at each grid's offset its compression flags, metadata
-/// (the delayed-load metadata's counts and blocks too), transform type and root node counts;
-/// for 5-4-3 trees of non-bool values (format 222 and later) also every node's masks and
-/// compressed blocks and every leaf buffer, in OpenVDB's reading order. 1-4 % of the time
-/// OpenVDB takes to read the shared assets.
+/// (fixed-size values at their size, the delayed-load metadata's counts and blocks too),
+/// transform type and root node counts; for 5-4-3 trees of non-bool values (format 222 and
+/// later) also every node's masks and compressed blocks (blosc headers included) and every
+/// leaf buffer, in OpenVDB's reading order, half floats as the grid's is_saved_as_half_float
+/// says. Instances (no tree of their own) stop after the transform. 4-7 % of the time OpenVDB
+/// takes to read the shared assets.
 #pragma once
 
 #include <string>
