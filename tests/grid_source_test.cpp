@@ -426,3 +426,34 @@ TEST(GridSource, LayoutWalkReadsWhatOpenVDBReads)
                   .find("damaged VDB file: the tree's topology ends at byte " + std::to_string(dataAt)),
               std::string::npos);
 }
+
+// Files older than format 222 (OpenVDB 2.0) are refused with one line before OpenVDB reads
+// them: the walk does not know their layout, and a damaged one (a fuzzing finding, version 0)
+// made OpenVDB read for 10 s and allocate 3.4 GB.
+TEST(GridSource, FormatsOlderThanOpenVDB2AreRefused)
+{
+    TempDir dir;
+    const std::string file = dir.file("old.vdb");
+    writeGrid(makeBoxGrid(openvdb::Coord(0), openvdb::Coord(8), 0.5f, 0.1), file);
+    const std::string bytes = fileBytes(file);
+    EXPECT_EQ(openMessage(file, bytes), "");
+    for (const std::uint32_t version : {0u, 211u, 221u}) {
+        std::string old = bytes;
+        std::memcpy(old.data() + 8, &version, 4);
+        EXPECT_EQ(openMessage(file, old), file + ": VDB file format version " + std::to_string(version) +
+                                              " is older than OpenVDB 2.0's (222) and is not read; re-save it with OpenVDB 2.0 or later");
+    }
+}
+
+// The grid's centre is taken in double: two voxels near +-1.4e9 (a fuzzing finding) overflowed
+// CoordBBox::getCenter's int sum, UB that put the default camera's target far off the grid.
+TEST(GridSource, CentreOfAGridNearTheIndexLimitsIsExact)
+{
+    auto grid = openvdb::FloatGrid::create(0.0f);
+    grid->tree().setValueOn(openvdb::Coord(1400000000, -1400000000, 7), 1.0f);
+    grid->tree().setValueOn(openvdb::Coord(1400000010, -1400000010, 9), 1.0f);
+    const Vec3d c = gridSourceFromOpenVDB(grid).worldCentre();
+    EXPECT_DOUBLE_EQ(c.x, 1400000005.0);
+    EXPECT_DOUBLE_EQ(c.y, -1400000005.0);
+    EXPECT_DOUBLE_EQ(c.z, 8.0);
+}

@@ -114,7 +114,9 @@ void GridSource::Impl::derive()
     activeVoxels = grid->tree().activeLeafVoxelCount();
     activeTiles = grid->tree().activeTileCount();
     const openvdb::CoordBBox bbox = grid->evalActiveVoxelBoundingBox();
-    const openvdb::Vec3d cIndex = bbox.empty() ? openvdb::Vec3d(0.0) : bbox.getCenter();
+    // In double: CoordBBox::getCenter adds the corners as ints, which overflows past 2^30
+    // (a fuzzing finding: UBSan, signed overflow).
+    const openvdb::Vec3d cIndex = bbox.empty() ? openvdb::Vec3d(0.0) : 0.5 * (bbox.min().asVec3d() + bbox.max().asVec3d());
     const openvdb::Vec3d cWorld = xform.indexToWorld(cIndex);
     worldCentre = Vec3d(cWorld.x(), cWorld.y(), cWorld.z());
     indexToWorldLinear = detail::indexToWorldJacobian(xform, cIndex);

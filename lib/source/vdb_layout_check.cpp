@@ -393,19 +393,18 @@ void checkVdbLayout(const std::string& path)
     LayoutReader in(path);
     if (in.size() < 8) in.fail("shorter than a VDB header");
     if (in.read<std::int64_t>("magic number") != openvdb::OPENVDB_MAGIC) return; // OpenVDB says "not a VDB file"
-    std::uint32_t version = in.read<std::uint32_t>("file format version");
-    if (version < 211) {
-        in.skip(8, "file format minor and patch versions");
-        return; // too old to walk further: left to OpenVDB
+    const std::uint32_t version = in.read<std::uint32_t>("file format version");
+    // Older formats (OpenVDB before 2.0, 2013) have no per-grid compression flags nor node
+    // mask compression and are not walked; left to OpenVDB, a damaged one read for 10 s and
+    // 3.4 GB (a fuzzing finding, version 0). Refused instead: no current tool writes them.
+    if (version < openvdb::OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION) {
+        throw IoError(path + ": VDB file format version " + std::to_string(version) + " is older than OpenVDB 2.0's (" +
+                      std::to_string(openvdb::OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION) +
+                      ") and is not read; re-save it with OpenVDB 2.0 or later");
     }
     in.skip(8, "library version");
-    bool offsets = true;
-    if (version >= 212) offsets = in.read<char>("grid offsets flag") != 0;
-    if (version >= openvdb::OPENVDB_FILE_VERSION_SELECTIVE_COMPRESSION &&
-        version < openvdb::OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION) {
-        in.skip(1, "compression flag");
-    }
-    in.skip(version >= openvdb::OPENVDB_FILE_VERSION_BOOST_UUID ? 36 : 16, "file UUID");
+    const bool offsets = in.read<char>("grid offsets flag") != 0;
+    in.skip(36, "file UUID");
     in.metaMap("file metadata");
     const std::uint64_t countAt = in.position();
     const std::int32_t grids = in.read<std::int32_t>("grid count");
@@ -418,8 +417,7 @@ void checkVdbLayout(const std::string& path)
         const std::string type = in.string("grid type", true);
         // An instance shares its parent's tree: Archive::writeGridInstance writes no topology and
         // leaves the data offset 0, and Archive's doReadGrid reads no topology for it.
-        bool instance = false;
-        if (version >= openvdb::OPENVDB_FILE_VERSION_GRID_INSTANCING) instance = !in.string("instance parent name", true).empty();
+        const bool instance = !in.string("instance parent name", true).empty();
         const std::uint64_t descriptorEnd = in.position() + 24;
         const std::int64_t gridPos = in.read<std::int64_t>("grid offset"), storedBlockPos = in.read<std::int64_t>("data offset"),
                            endPos = in.read<std::int64_t>("grid end offset");
@@ -429,10 +427,9 @@ void checkVdbLayout(const std::string& path)
                     std::to_string(endPos) + " are out of order or past the end");
         }
         in.seek(std::uint64_t(gridPos), "grid offset");
-        std::uint32_t compression = openvdb::io::COMPRESS_ZIP; // before per-grid flags: zip
-        if (version >= openvdb::OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION) compression = in.read<std::uint32_t>("grid compression flags");
+        const std::uint32_t compression = in.read<std::uint32_t>("grid compression flags");
         const int half = in.metaMap("grid metadata");
-        if (version >= openvdb::OPENVDB_FILE_VERSION_GRID_INSTANCING) {
+        { // the transform, then the tree
             const std::uint64_t at = in.position();
             const std::string map = in.string("transform type", true);
             const auto known = kMapBytes.find(map);
@@ -440,11 +437,11 @@ void checkVdbLayout(const std::string& path)
             const TreeType tree(type, half);
             if (instance) {
                 in.skip(known->second, "transform");
-            } else if (known->second > 0 && tree.valueBytes > 0 && version >= openvdb::OPENVDB_FILE_VERSION_ROOTNODE_MAP) {
+            } else if (known->second > 0 && tree.valueBytes > 0) {
                 in.skip(known->second, "transform");
                 in.skip(4, "tree buffer count"); // OpenVDB warns when it is not 1, and reads on
                 // Below the root's counts only where the layout is the one walked here.
-                const bool deep = tree.walked && version >= openvdb::OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION;
+                const bool deep = tree.walked;
                 TreeWalk walk(in, tree, compression);
                 walk.topology(std::uint64_t(blockPos), deep);
                 if (deep) {

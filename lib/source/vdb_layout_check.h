@@ -9,11 +9,11 @@
 /// each against the bytes the file has: the file header, the file's metadata, each grid's
 /// descriptor (name, type, offsets), and at each grid's offset its compression flags, metadata
 /// (fixed-size values at their size, the delayed-load metadata's counts and blocks too),
-/// transform type and root node counts; for 5-4-3 trees of non-bool values (format 222 and
-/// later) also every node's masks and compressed blocks (blosc headers included) and every
+/// transform type and root node counts; for 5-4-3 trees of non-bool values also every node's masks and compressed blocks (blosc headers included) and every
 /// leaf buffer, in OpenVDB's reading order, half floats as the grid's is_saved_as_half_float
 /// says. Instances (no tree of their own) stop after the transform. 4-7 % of the time OpenVDB
-/// takes to read the shared assets.
+/// takes to read the shared assets. Formats older than 222 (OpenVDB 2.0) are refused; streams
+/// without grid offsets (io::Stream) get the header checks only.
 #pragma once
 
 #include <string>
