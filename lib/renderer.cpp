@@ -222,6 +222,15 @@ Frame Renderer::renderFrame(const GridSource& grid, const Camera& camera, const 
         stats.warnings.push_back(std::string("--refine changes nothing here: it refines the splatter's fog-volume kernels, not ") +
                                  (grid.isLevelSet() ? "a level set's surface kernels" : "the field --method raymarch integrates"));
     }
+    // Options of the level-set path change nothing on a fog volume (an --iso surface inside
+    // one is lit like the volume): say so rather than ignore them.
+    const SurfaceOptions surfaceDefaults;
+    if (!grid.isLevelSet() && mSettings.surface.shader != surfaceDefaults.shader) {
+        stats.warnings.push_back("--shader changes nothing here: it shades level sets; a fog volume and its --iso surface are lit by --light");
+    }
+    if (!grid.isLevelSet() && mSettings.surface.isovalue != surfaceDefaults.isovalue) {
+        stats.warnings.push_back("--isovalue changes nothing here: it picks a level set's surface; a fog volume's surface is --iso");
+    }
     if (statsOut) *statsOut = std::move(stats);
     return frame;
 }

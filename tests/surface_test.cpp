@@ -391,3 +391,35 @@ TEST(Surface, IsoSurfaceInsideAFogVolumeIsOccludingAndTinted)
     }
     EXPECT_LT(plate.transmittance[3 * i], 0.8 * plate.transmittance[3 * i + 2]) << "the plate tints: red is absorbed most";
 }
+
+// --shader and --isovalue shade and pick a level set's surface: on a fog volume (with or
+// without --iso) they change nothing, and the render says so instead of ignoring them.
+TEST(Surface, LevelSetOptionsOnAFogVolumeWarn)
+{
+    auto fog = makeBoxGrid(openvdb::Coord(0), openvdb::Coord(3), 1.0f, 0.1);
+    auto sphere = makeBoxGrid(openvdb::Coord(-2), openvdb::Coord(2), -0.1f, 0.1);
+    sphere->setGridClass(openvdb::GRID_LEVEL_SET);
+    CameraSettings cam;
+    cam.width = cam.height = 16;
+    cam.translate = Vec3d(0.0, 0.0, 3.0);
+    auto warned = [&](openvdb::FloatGrid::Ptr grid, const RenderSettings& s, const std::string& option) {
+        RenderStats stats;
+        renderGrid(grid, cam, s, &stats);
+        for (const std::string& w : stats.warnings) {
+            if (w.rfind(option + " changes nothing here", 0) == 0) return true;
+        }
+        return false;
+    };
+    RenderSettings s;
+    EXPECT_FALSE(warned(fog, s, "--shader"));
+    EXPECT_FALSE(warned(fog, s, "--isovalue"));
+    s.surface.shader = SurfaceShader::Normal;
+    EXPECT_TRUE(warned(fog, s, "--shader"));
+    EXPECT_FALSE(warned(sphere, s, "--shader"));
+    s.surface.iso = 0.5;
+    EXPECT_TRUE(warned(fog, s, "--shader")); // the --iso surface is lit, not shaded
+    s = RenderSettings();
+    s.surface.isovalue = 0.05;
+    EXPECT_TRUE(warned(fog, s, "--isovalue"));
+    EXPECT_FALSE(warned(sphere, s, "--isovalue"));
+}
