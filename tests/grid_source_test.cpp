@@ -3,6 +3,7 @@
 #include "fixtures.h"
 
 #include <gtest/gtest.h>
+#include <openvdb/io/Stream.h>
 
 #include <chrono>
 #include <cstring>
@@ -456,4 +457,46 @@ TEST(GridSource, CentreOfAGridNearTheIndexLimitsIsExact)
     EXPECT_DOUBLE_EQ(c.x, 1400000005.0);
     EXPECT_DOUBLE_EQ(c.y, -1400000005.0);
     EXPECT_DOUBLE_EQ(c.z, 8.0);
+}
+
+// io::Stream writes no grid offsets: each grid follows its descriptor inline and File::open
+// streams them all in. One flipped offsets flag put a file outside the layout walk, and a bool
+// metadata byte of 'y' (a fuzzing finding) reached GridBase::saveFloatAsHalf() as an undefined
+// bool. Such streams are walked grid after grid.
+TEST(GridSource, StreamsWithoutOffsetsAreWalkedToo)
+{
+    TempDir dir;
+    const std::string file = dir.file("stream.vdb");
+    auto fog = makeBoxGrid(openvdb::Coord(0), openvdb::Coord(20), 0.5f, 0.1);
+    fog->setName("fog");
+    auto density = makeBoxGrid(openvdb::Coord(-9), openvdb::Coord(9), 1.0f, 0.1);
+    density->setName("density");
+    density->setSaveFloatAsHalf(false); // written as bool metadata
+    {
+        std::ofstream out(file, std::ios::binary);
+        openvdb::io::Stream(out).write(openvdb::GridCPtrVec{fog, density});
+    }
+    const std::string bytes = fileBytes(file);
+    ASSERT_EQ(bytes[20], '\0') << "the header's grid offsets flag";
+    EXPECT_EQ(openMessage(file, bytes, "density"), "") << "an undamaged stream opens";
+    EXPECT_EQ(GridSource::open(file, "density").activeVoxelCount(), density->activeVoxelCount());
+
+    // The second grid's half-float flag: a bool whose byte is 'y'.
+    const std::string flag = "is_saved_as_half_float";
+    const std::size_t secondFlag = bytes.find(flag, bytes.find("Tree_float_5_4_3", bytes.find("Tree_float_5_4_3") + 1));
+    ASSERT_NE(secondFlag, std::string::npos);
+    const std::size_t valueAt = secondFlag + flag.size() + 4 + 4 + 4;
+    ASSERT_EQ(bytes.substr(valueAt - 8, 4), "bool");
+    std::string badFlag = bytes;
+    badFlag[valueAt] = 'y';
+    EXPECT_NE(openMessage(file, badFlag, "density").find(file + ": damaged VDB file: a bool metadata value at byte " +
+                                                          std::to_string(valueAt) + " is neither 0 nor 1"),
+        std::string::npos)
+        << openMessage(file, badFlag, "density");
+
+    // The second grid's buffers cut short: found by walking past the first grid's data, whose
+    // end is not written down.
+    std::string truncated = bytes.substr(0, bytes.size() - 100);
+    EXPECT_NE(openMessage(file, truncated, "density").find(file + ": damaged VDB file: "), std::string::npos)
+        << openMessage(file, truncated, "density");
 }

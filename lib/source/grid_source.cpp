@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
@@ -40,11 +41,23 @@ void initializeOpenVDB()
 
 bool isScalarFloatType(const std::string& type) { return type == "float" || type == "double"; }
 
+/// GridBase::saveFloatAsHalf() without its undefined behaviour: a damaged file's bool
+/// metadata may hold any byte, and a bool that is neither 0 nor 1 is undefined (clang's code
+/// indexed a string literal by it: a fuzzing finding). Read the byte as a byte.
+bool savedAsHalf(const openvdb::GridBase& grid)
+{
+    const auto meta = grid.getMetadata<openvdb::BoolMetadata>(openvdb::GridBase::META_SAVE_HALF_FLOAT);
+    if (!meta) return grid.saveFloatAsHalf(); // another type: Metadata::asBool, no bool read
+    unsigned char byte = 0;
+    std::memcpy(&byte, &meta->value(), 1);
+    return byte != 0;
+}
+
 /// Convert any supported grid to the float grid the renderer works on.
 openvdb::FloatGrid::ConstPtr asFloatGrid(const openvdb::GridBase::ConstPtr& base, std::string& storedType)
 {
     if (auto f = openvdb::GridBase::constGrid<openvdb::FloatGrid>(base)) {
-        storedType = f->saveFloatAsHalf() ? "half" : "float";
+        storedType = savedAsHalf(*f) ? "half" : "float";
         return f;
     }
     if (auto d = openvdb::GridBase::constGrid<openvdb::DoubleGrid>(base)) {

@@ -411,7 +411,10 @@ void checkVdbLayout(const std::string& path)
     if (grids < 0 || std::uint64_t(grids) > (in.size() - in.position()) / 36) {
         in.fail("the grid count at byte " + std::to_string(countAt) + " claims " + std::to_string(grids) + " grids");
     }
-    if (!offsets) return; // a stream without offsets: grids follow one another, left to OpenVDB
+    // Without offsets (io::Stream's layout) File::open streams every grid in: each follows its
+    // descriptor, its data follows its topology, and the next grid follows its data. The walk
+    // follows as far as it can place the next grid; past a tree it does not walk, the rest is
+    // left to OpenVDB.
     for (std::int32_t g = 0; g < grids; ++g) {
         in.string("grid name");
         const std::string type = in.string("grid type", true);
@@ -422,11 +425,13 @@ void checkVdbLayout(const std::string& path)
         const std::int64_t gridPos = in.read<std::int64_t>("grid offset"), storedBlockPos = in.read<std::int64_t>("data offset"),
                            endPos = in.read<std::int64_t>("grid end offset");
         const std::int64_t blockPos = instance ? endPos : storedBlockPos;
-        if (gridPos < std::int64_t(descriptorEnd) || blockPos < gridPos || endPos < blockPos || std::uint64_t(endPos) > in.size()) {
+        if (offsets && (gridPos < std::int64_t(descriptorEnd) || blockPos < gridPos || endPos < blockPos || std::uint64_t(endPos) > in.size())) {
             in.fail("grid " + std::to_string(g) + "'s offsets " + std::to_string(gridPos) + ", " + std::to_string(storedBlockPos) + ", " +
                     std::to_string(endPos) + " are out of order or past the end");
         }
-        in.seek(std::uint64_t(gridPos), "grid offset");
+        if (offsets) in.seek(std::uint64_t(gridPos), "grid offset");
+        // Where the topology must end and the data must: the offsets, else the file's end.
+        const std::uint64_t dataBegin = offsets ? std::uint64_t(blockPos) : in.size(), dataEnd = offsets ? std::uint64_t(endPos) : in.size();
         const std::uint32_t compression = in.read<std::uint32_t>("grid compression flags");
         const int half = in.metaMap("grid metadata");
         { // the transform, then the tree
@@ -443,13 +448,17 @@ void checkVdbLayout(const std::string& path)
                 // Below the root's counts only where the layout is the one walked here.
                 const bool deep = tree.walked;
                 TreeWalk walk(in, tree, compression);
-                walk.topology(std::uint64_t(blockPos), deep);
+                walk.topology(dataBegin, deep);
+                if (!deep && !offsets) return;
                 if (deep) {
-                    walk.buffers(std::uint64_t(blockPos), std::uint64_t(endPos));
-                    in.seek(std::uint64_t(blockPos), "data offset");
+                    walk.buffers(offsets ? dataBegin : in.position(), dataEnd);
+                    if (offsets) in.seek(dataBegin, "data offset");
                 }
+            } else if (!offsets) {
+                return;
             }
         }
+        if (!offsets) continue; // the next grid follows
         if (in.position() > std::uint64_t(blockPos)) in.fail("grid " + std::to_string(g) + "'s header runs into its data");
         in.seek(std::uint64_t(endPos), "grid end offset");
     }

@@ -12,8 +12,9 @@
 /// transform type and root node counts; for 5-4-3 trees of non-bool values also every node's masks and compressed blocks (blosc headers included) and every
 /// leaf buffer, in OpenVDB's reading order, half floats as the grid's is_saved_as_half_float
 /// says. Instances (no tree of their own) stop after the transform. 4-7 % of the time OpenVDB
-/// takes to read the shared assets. Formats older than 222 (OpenVDB 2.0) are refused; streams
-/// without grid offsets (io::Stream) get the header checks only.
+/// takes to read the shared assets. Formats older than 222 (OpenVDB 2.0) are refused. Streams
+/// without grid offsets (io::Stream's layout: each grid inline after its descriptor) are walked
+/// grid after grid up to the first tree not walked (its end is not known without offsets).
 #pragma once
 
 #include <string>
