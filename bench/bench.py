@@ -22,14 +22,20 @@
                                                          where DIR holds a tradeoff run's references)
   bench/bench.py surfaces [--res 1920x1080] [--shader diffuse] [--repeat 3]
                                                          level sets: surface splats against vdb_render
+  bench/bench.py holes [--res 640x480] [--only sphere,cube] [--keep DIR]
+                                                         issue 16's coverage: IoU and holes against
+                                                         vdb_render's hit mask (-shader matte), level
+                                                         sets from far, default, ortho, close-up and
+                                                         grazing cameras, and the time of both
   bench/bench.py output [--scene smoke] [--res 1920x1080] [--repeat 3]
                                                          issue 4's output stage: EXR pixel types,
                                                          compressions, passes and deep files, with
                                                          vdb_render's defaults in the same rounds
 
-Needs a Release build in build/ (scripts/setup.sh), vdb_render and the shared assets
+Needs a Release build in build/ (scripts/setup.sh; $VDB_EWA_BIN names another vdb_ewa), vdb_render and the shared assets
 ($VDB_EWA_ASSETS, default ../shared/grids); the Pareto plot needs python3-matplotlib, the
-analytic field python3-numpy and python3-openvdb (Debian's; run with /usr/bin/python3).
+analytic field and `holes` python3-numpy, python3-openvdb and python3-openimageio (Debian's:
+scripts/install-deps.sh --bench; run with /usr/bin/python3).
 Machines are noisy: compare ratios, not seconds.
 """
 import argparse
@@ -44,7 +50,7 @@ import time
 nan = float("nan")
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-EWA = os.path.join(ROOT, "build", "cmd", "vdb_ewa", "vdb_ewa")
+EWA = os.environ.get("VDB_EWA_BIN", os.path.join(ROOT, "build", "cmd", "vdb_ewa", "vdb_ewa"))
 # The speed and accuracy verbs write float EXRs, vdb_render's file type, so that both pay the
 # same for the file and PSNR is not capped by half precision; `output` measures the file types.
 EWA_RENDER = [EWA, "render", "--exr-type", "float"]
@@ -481,6 +487,51 @@ def cmd_surfaces(args):
               f"{st.get('rasterise', nan):.2f} | {st.get('write', nan):.2f} |", flush=True)
 
 
+def cmd_holes(args):
+    """Issue 16: closed level sets against vdb_render's hit mask, every camera (bench/coverage.py)."""
+    import coverage
+    tmp = args.keep or tempfile.mkdtemp(prefix="vdb_ewa_holes_")
+    os.makedirs(tmp, exist_ok=True)
+    grids = coverage.write_generated(tmp)
+    # (label, file, centre, size, default eye, where the close-up and grazing views look)
+    sets = [("sphere", grids["sphere"], (0, 0, 0), 2.0, (1.2, 1.5, 3.8), (0, 0, 0)),
+            ("torus", grids["torus"], (0, 0, 0), 2.7, (0.4, 2.5, 3.0), (1, 0, 0)),
+            ("cube", f"{ASSETS}/cube_levelset.vdb", (0, 0, 0), 11.0, (10, 12, 18), (0, 0, 0)),
+            ("bunny", f"{ASSETS}/bunny_levelset.vdb", (0, 0, 0), 2.0, (0, 0, 4.859), (0, 0, 0))]
+    only = set(args.only.split(",")) if args.only else None
+    print(f"# level sets against vdb_render's hits (-shader matte), {args.res}, {os.cpu_count()} cores")
+    print("| level set | camera | IoU | holes (2 px in) | holes (1 px in) | hit pixels | vdb_render (s) | vdb_ewa (s) | time ratio |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for label, path, centre, size, eye, focus in sets:
+        if (only and label not in only) or not os.path.exists(path):
+            continue
+        for cam, camargs in coverage.cameras(path, centre, size, eye, focus).items():
+            common = ["-res", args.res, "-shader", "matte", *camargs.split()]
+            tag = f"{label}_{cam.split()[0]}"
+            theirs, ours = os.path.join(tmp, tag + "_vr.exr"), os.path.join(tmp, tag + "_ewa.exr")
+            t_vr = run(["vdb_render", path, theirs, *common])[0]
+            t_ewa = run([*EWA_RENDER, path, ours, *common])[0]
+            iou, h2, h1, hits = coverage.coverage(ours, theirs)
+            print(f"| {label} | {cam} | {iou:.4f} | {h2} | {h1} | {hits} | {t_vr:.2f} | {t_ewa:.2f} | {t_ewa / t_vr:.2f} |",
+                  flush=True)
+    # The shaders against vdb_render's, at the default camera.
+    print(f"\n# PSNR (dB) of vdb_ewa's RGB against vdb_render's, default camera, {args.res}")
+    print("| level set | diffuse | matte | normal | position |")
+    print("|---|---|---|---|---|")
+    for label, path, centre, size, eye, focus in sets:
+        if (only and label not in only) or not os.path.exists(path):
+            continue
+        cam = coverage.cameras(path, centre, size, eye, focus)["default"]
+        row = []
+        for shader in ("diffuse", "matte", "normal", "position"):
+            common = ["-res", args.res, "-shader", shader, *cam.split()]
+            theirs, ours = os.path.join(tmp, f"{label}_{shader}_vr.exr"), os.path.join(tmp, f"{label}_{shader}_ewa.exr")
+            run(["vdb_render", path, theirs, *common])
+            run([*EWA_RENDER, path, ours, *common])
+            row.append(f"{diff(ours, theirs)[1]:.1f}")
+        print(f"| {label} | {' | '.join(row)} |", flush=True)
+
+
 def plot(rows, path):
     try:
         import matplotlib
@@ -548,6 +599,10 @@ def main():
     sv.add_argument("--res", default="1920x1080")
     sv.add_argument("--shader", default="diffuse")
     sv.add_argument("--repeat", type=int, default=3)
+    sh = sub.add_parser("holes")
+    sh.add_argument("--res", default="640x480")
+    sh.add_argument("--only", default="", help="comma-separated: sphere,torus,cube,bunny")
+    sh.add_argument("--keep", default="", help="folder that keeps the grids and images")
     sl = sub.add_parser("ladder")
     sl.add_argument("--scenes", default="all")
     sl.add_argument("--res", default="960x540")
@@ -562,7 +617,7 @@ def main():
     sp2.add_argument("--res", default="960x540", help="the resolution of a ladder table")
     a = ap.parse_args()
     {"speed": cmd_speed, "sigma": cmd_sigma, "tradeoff": cmd_tradeoff, "targets": cmd_targets,
-     "output": cmd_output, "surfaces": cmd_surfaces, "plot": cmd_plot, "ladder": cmd_ladder,
+     "output": cmd_output, "surfaces": cmd_surfaces, "holes": cmd_holes, "plot": cmd_plot, "ladder": cmd_ladder,
      "analytic": cmd_analytic}[a.cmd](a)
 
 

@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Install the Debian 12 packages vdb_ewa needs to build, test and benchmark.
-# Idempotent: installs only what is missing. Uses sudo when not run as root.
+# Idempotent: installs only what is missing. Uses sudo when not run as root. With --bench, also
+# what bench/bench.py's image analyses need (numpy, pyopenvdb, OpenImageIO's Python module,
+# matplotlib).
 set -euo pipefail
 packages=(
   cmake g++ make pkg-config
@@ -11,6 +13,9 @@ packages=(
   openimageio-tools  # oiiotool: EXR -> PNG previews and image diffs
   clang libclang-rt-14-dev  # the sanitized test build and the libFuzzer harnesses (tests/fuzz)
 )
+if [ "${1:-}" = "--bench" ]; then
+  packages+=(python3-numpy python3-openvdb python3-openimageio python3-matplotlib)
+fi
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

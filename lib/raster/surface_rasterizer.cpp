@@ -2,6 +2,7 @@
 #include "raster/surface_rasterizer.h"
 
 #include "projection/projection.h"
+#include "raster/disc_coverage.h"
 #include "raster/tile_bins.h"
 #include "support/blank_frame.h"
 
@@ -15,33 +16,39 @@ namespace vdb_ewa {
 namespace detail {
 namespace {
 
-/// Summed weights at or above this are full coverage: the kernels' partition of unity ripples
-/// by a few per cent between kernel centres, and an opaque surface must not let 2 % of the
-/// background through. At silhouettes the alpha = 0.5 contour moves by about 0.1 pixel.
-constexpr double kFullCoverage = 0.9;
+/// Depth layers composited front to back per pixel: where a silhouette lies over another part
+/// of the surface the front layer covers part of the pixel and the next the rest.
+constexpr int kMaxLayers = 4;
 
 /// A projected, shaded surface kernel.
 struct SurfaceSplat
 {
     float cx, cy;          ///< centre, raster
     float qa, qb, qc;      ///< conic, 1/pixels^2
-    float cutoff;          ///< evaluate where d^T Q d < cutoff
+    float cutoff;          ///< the filtered footprint: weights where d^T Q d < cutoff
+    float reach;           ///< pixels whose square may meet the disc: d^T Q d < reach (>= cutoff)
     float weight;          ///< area x footprint peak
     float colour[3];       ///< shaded colour
     Vec3d centre;          ///< camera-space centre
     Vec3d planeNormal;     ///< camera-space unit normal of the tangent plane
     double planeOffset;    ///< n . t_centre
     double depth;          ///< camera depth of the centre
-    double depthRange;     ///< the kernel's disc radius (3 sigma); plane depths are clamped to depth +- it
+    DiscCoverage disc;     ///< the kernel's disc in its tangent plane, seen from the camera
+    double depthRange;     ///< plane depths along a ray are clamped to depth +- this: the disc
+                           ///< and two pixels' width (the filtered footprint reaches that far)
     int x0, y0, x1, y1;
 };
 
-/// A (splat, tile pixel) pair inside the splat's cut-off: its conic distance and plane depth.
+/// A (splat, tile pixel) pair inside the splat's cut-off: its conic distance, plane depth along
+/// the pixel's central ray, the pixel's subsamples its disc covers and its depth layer.
 struct Pair
 {
+    double z;
+    double r;
     std::uint32_t splat;
-    int pixel;
-    double r, z;
+    int mask; ///< the subsamples its disc covers; -1: not computed yet (only needed until the
+              ///< pixel is covered)
+    bool shades; ///< the pixel lies on the kept side of the kernel's clip lines
 };
 
 /// vdb_render's shaders (RayTracer.h) with a white material (multiplied by the kernel's albedo).
@@ -76,8 +83,18 @@ std::vector<SurfaceSplat> projectSurfaceSplats(const SurfaceSet& set, const Came
             Footprint fp;
             if (!projectSurface(k, set.sigma, camera, params, t, normal, fp)) continue;
             SurfaceSplat& s = splats[i];
-            if (!pixelBox(fp, camera.width(), camera.height(), s.x0, s.y0, s.x1, s.y1)) continue;
+            // Coverage is sampled across each pixel's square: every pixel whose square meets
+            // the disc (inside the kernel's 3 sigma ellipse, so inside the filtered footprint's)
+            // is visited, also where its centre lies outside the footprint's cut-off.
+            const double radius = std::max(params.cutoffRadius, kDiscRadiusSigmas);
+            const double qMax = 0.5 * (fp.conic.xx + fp.conic.yy) +
+                std::sqrt(0.25 * (fp.conic.xx - fp.conic.yy) * (fp.conic.xx - fp.conic.yy) + fp.conic.xy * fp.conic.xy);
+            const double reach = radius + std::sqrt(0.5 * qMax); // half a pixel diagonal in the conic's metric
+            Footprint box = fp;
+            box.halfExtent = fp.halfExtent * (radius / params.cutoffRadius) + Vec2d(0.5);
+            if (!pixelBox(box, camera.width(), camera.height(), s.x0, s.y0, s.x1, s.y1)) continue;
             setFootprint(s, fp, params.cutoffRadius);
+            s.reach = float(reach * reach);
             s.weight = float(k.area * fp.peak);
             const Vec3d rayDir = perspective ? glm::normalize(k.pWorld - camera.eye()) : forward;
             const Vec3d c = k.albedo * shade(settings.surface.shader, k.normal, rayDir, k.pWorld, set);
@@ -86,7 +103,15 @@ std::vector<SurfaceSplat> projectSurfaceSplats(const SurfaceSet& set, const Came
             s.planeNormal = normal;
             s.planeOffset = glm::dot(normal, t);
             s.depth = t.z;
-            s.depthRange = 3.0 * set.sigma;
+            const double disc = k.discRadius;
+            Vec3d clipDirections[3];
+            double clipDistances[3];
+            for (int c = 0; c < k.clipCount; ++c) {
+                clipDirections[c] = camera.cameraFromWorld() * Vec3d(k.clips[std::size_t(c)].direction);
+                clipDistances[c] = double(k.clips[std::size_t(c)].distance);
+            }
+            s.disc = discCoverage(t, normal, disc, clipDirections, clipDistances, k.clipCount, camera);
+            s.depthRange = disc + 2.0 * (perspective ? t.z : 1.0) / camera.focalPixels();
             visible[i] = 1;
         }
     });
@@ -117,14 +142,17 @@ Frame rasterizeSurfaces(const SurfaceSet& set, const Camera& camera, const Rende
     const Vec2d principal = camera.principalPoint();
 
     const int tiles = bins.tilesX * bins.tilesY;
-    // Where the ray through pixel centre (px, py) meets splat s's tangent plane (camera space).
+    // Where the ray through raster point (px, py) meets splat s's tangent plane (camera space),
+    // in front of the eye.
     auto planePoint = [&](const SurfaceSplat& s, double px, double py, Vec3d& q) {
         const double x = (px - principal.x) / f, y = (py - principal.y) / f;
         if (perspective) {
             const Vec3d ray(x, y, 1.0);
             const double denom = glm::dot(s.planeNormal, ray);
             if (!(std::abs(denom) > 1e-9)) return false;
-            q = ray * (s.planeOffset / denom);
+            const double along = s.planeOffset / denom;
+            if (!(along > 0.0)) return false;
+            q = ray * along;
         } else {
             if (!(std::abs(s.planeNormal.z) > 1e-9)) return false;
             q = Vec3d(x, y, (s.planeOffset - s.planeNormal.x * x - s.planeNormal.y * y) / s.planeNormal.z);
@@ -134,19 +162,18 @@ Frame rasterizeSurfaces(const SurfaceSet& set, const Camera& camera, const Rende
     setUnits(progress, std::uint64_t(tiles));
     tbb::parallel_for(tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& range) {
         std::vector<std::uint32_t> order;
-        std::vector<Pair> pairs;
+        std::vector<Pair> pairs, sorted;
+        std::vector<std::uint8_t> pixelOf;
+        std::uint32_t start[kTilePixels + 1];
         for (int t = range.begin(); t < range.end(); ++t) {
             const int x0 = (t % bins.tilesX) * kTileSize, y0 = (t / bins.tilesX) * kTileSize;
             const int w = std::min(kTileSize, width - x0), h = std::min(kTileSize, height - y0);
             order.assign(bins.indices.begin() + std::ptrdiff_t(bins.offsets[t]),
                 bins.indices.begin() + std::ptrdiff_t(bins.offsets[t + 1]));
-            // Pass 1: every (pixel, splat) pair inside a footprint's cut-off, with its plane depth,
-            // and the front surface per pixel: the nearest depth at which its ray meets a kernel's
-            // disc (3 sigma), else (silhouettes) the nearest filtered tail.
-            double zDisc[kTilePixels], zTail[kTilePixels];
-            std::fill(std::begin(zDisc), std::end(zDisc), std::numeric_limits<double>::infinity());
-            std::fill(std::begin(zTail), std::end(zTail), std::numeric_limits<double>::infinity());
+            // Pass 1: every (pixel, splat) pair inside a footprint's cut-off, with its plane depth
+            // along the pixel's central ray, bucketed by pixel.
             pairs.clear();
+            pixelOf.clear();
             for (std::uint32_t index : order) {
                 const SurfaceSplat& s = splats[index];
                 const int lx0 = std::max(s.x0 - x0, 0), lx1 = std::min(s.x1 - x0, w - 1);
@@ -156,40 +183,85 @@ Frame rasterizeSurfaces(const SurfaceSet& set, const Camera& camera, const Rende
                         const double px = x0 + lx + 0.5, py = y0 + ly + 0.5;
                         const double dx = px - s.cx, dy = py - s.cy;
                         const double r = s.qa * dx * dx + 2.0 * s.qb * dx * dy + s.qc * dy * dy;
-                        if (!(r < s.cutoff)) continue;
+                        if (!(r < s.reach)) continue;
+                        int mask = -1;
+                        if (!(r < s.cutoff)) {
+                            mask = s.disc.mask(px, py);
+                            if (mask == 0) continue; // neither weight nor coverage
+                        }
                         Vec3d q;
-                        const bool hit = planePoint(s, px, py, q);
-                        const double z = hit ? std::clamp(q.z, s.depth - s.depthRange, s.depth + s.depthRange) : s.depth;
-                        const int p = ly * kTileSize + lx;
-                        if (hit && glm::length(q - s.centre) <= s.depthRange) zDisc[p] = std::min(zDisc[p], z);
-                        zTail[p] = std::min(zTail[p], z);
-                        pairs.push_back({index, p, r, z});
+                        const double z = planePoint(s, px, py, q) ? std::clamp(q.z, s.depth - s.depthRange, s.depth + s.depthRange) : s.depth;
+                        pairs.push_back({z, r, index, mask, s.disc.insideClips(px, py)});
+                        pixelOf.push_back(std::uint8_t(ly * kTileSize + lx));
                     }
             }
-            // Pass 2: accumulate the pairs within the tolerance of that surface (Sec. 7.2).
-            double zSum[kTilePixels], weight[kTilePixels], colour[kTilePixels][3];
-            std::fill(std::begin(zSum), std::end(zSum), 0.0);
-            std::fill(std::begin(weight), std::end(weight), 0.0);
-            std::fill(&colour[0][0], &colour[0][0] + 3 * kTilePixels, 0.0);
-            for (const Pair& pair : pairs) {
-                const int p = pair.pixel;
-                const double front = std::isinf(zDisc[p]) ? zTail[p] : zDisc[p];
-                if (pair.z > front + tolerance) continue; // hidden behind the front surface
-                const SurfaceSplat& s = splats[pair.splat];
-                const double wt = s.weight * std::exp(-0.5 * pair.r);
-                weight[p] += wt;
-                zSum[p] += wt * pair.z;
-                for (int c = 0; c < 3; ++c) colour[p][c] += wt * s.colour[c];
+            std::fill(std::begin(start), std::end(start), 0u);
+            for (std::uint8_t p : pixelOf) ++start[p + 1];
+            for (int p = 0; p < kTilePixels; ++p) start[p + 1] += start[p];
+            sorted.resize(pairs.size());
+            {
+                std::uint32_t next[kTilePixels];
+                std::copy(std::begin(start), std::end(start) - 1, std::begin(next));
+                for (std::size_t i = 0; i < pairs.size(); ++i) sorted[next[pixelOf[i]]++] = pairs[i];
+            }
+            // Pass 2, per pixel, its pairs front to back in depth layers: a layer's front is the
+            // nearest pair whose disc covers a subsample not yet covered; the pairs within the
+            // tolerance of it join the layer (Sec. 7.2's z-buffer with a tolerance). A layer's
+            // colour is its normalised weighted sum (Sec. 7.2), spread over the subsamples it
+            // newly covers. Discs are tested only until the pixel is covered.
+            std::uint16_t covered[kTilePixels];
+            double out[kTilePixels][3], depth[kTilePixels];
+            for (int p = 0; p < kTilePixels; ++p) {
+                covered[p] = 0;
+                out[p][0] = out[p][1] = out[p][2] = 0.0;
+                depth[p] = std::numeric_limits<double>::quiet_NaN();
+                if (start[p] == start[p + 1]) continue;
+                const auto first = sorted.begin() + std::ptrdiff_t(start[p]), last = sorted.begin() + std::ptrdiff_t(start[p + 1]);
+                std::sort(first, last, [](const Pair& a, const Pair& b) { return a.z < b.z || (a.z == b.z && a.splat < b.splat); });
+                const double px = x0 + p % kTileSize + 0.5, py = y0 + p / kTileSize + 0.5;
+                auto maskOf = [&](Pair& pair) {
+                    if (pair.mask < 0) pair.mask = splats[pair.splat].disc.mask(px, py);
+                    return std::uint16_t(pair.mask);
+                };
+                auto it = first;
+                for (int layer = 0; layer < kMaxLayers && it != last && covered[p] != kAllSubsamples; ++layer) {
+                    // The front: the nearest pair that adds coverage.
+                    auto front = it;
+                    while (front != last && (maskOf(*front) & ~covered[p]) == 0) ++front;
+                    if (front == last) break;
+                    const double limit = front->z + tolerance;
+                    // Sums over the pairs that shade the pixel ([1]) and over all ([0], where a
+                    // crease leaves none: a pixel at the edge itself).
+                    double weight[2] = {0.0, 0.0}, zSum[2] = {0.0, 0.0}, colour[2][3] = {{0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}};
+                    std::uint16_t layerMask = 0;
+                    for (; it != last && it->z <= limit; ++it) {
+                        const SurfaceSplat& s = splats[it->splat];
+                        const double wt = s.weight * std::exp(-0.5 * it->r);
+                        for (int k = 0; k < (it->shades ? 2 : 1); ++k) {
+                            weight[k] += wt;
+                            zSum[k] += wt * it->z;
+                            for (int c = 0; c < 3; ++c) colour[k][c] += wt * s.colour[c];
+                        }
+                        if ((covered[p] | layerMask) != kAllSubsamples) layerMask = std::uint16_t(layerMask | maskOf(*it));
+                    }
+                    const std::uint16_t fresh = std::uint16_t(layerMask & ~covered[p]);
+                    const int k = weight[1] > 0.0 ? 1 : 0;
+                    if (fresh == 0 || !(weight[k] > 0.0)) continue;
+                    const double share = double(__builtin_popcount(fresh)) / kSubsamples;
+                    for (int c = 0; c < 3; ++c) out[p][c] += share * colour[k][c] / weight[k];
+                    if (std::isnan(depth[p])) depth[p] = zSum[k] / weight[k];
+                    covered[p] = std::uint16_t(covered[p] | fresh);
+                }
             }
             for (int ly = 0; ly < h; ++ly)
                 for (int lx = 0; lx < w; ++lx) {
                     const int p = ly * kTileSize + lx;
                     const std::size_t i = std::size_t(y0 + ly) * std::size_t(width) + std::size_t(x0 + lx);
-                    const double alpha = std::min(1.0, weight[p] / kFullCoverage);
+                    const double alpha = double(__builtin_popcount(covered[p])) / kSubsamples;
                     float* px = frame.beauty.pixel(x0 + lx, y0 + ly);
-                    for (int c = 0; c < 3; ++c) px[c] = weight[p] > 0.0 ? float(colour[p][c] / weight[p] * alpha) : 0.0f;
+                    for (int c = 0; c < 3; ++c) px[c] = float(out[p][c]);
                     px[3] = float(alpha);
-                    if (passes.depth && alpha >= 0.5) frame.depth[i] = float(zSum[p] / weight[p]);
+                    if (passes.depth && alpha >= 0.5) frame.depth[i] = float(depth[p]);
                     if (passes.transmittance) std::fill_n(&frame.transmittance[3 * i], 3, float(1.0 - alpha));
                 }
             advance(progress);

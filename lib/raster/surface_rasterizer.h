@@ -21,15 +21,15 @@ struct SurfaceStats
     std::uint64_t splatTilePairs = 0;
 };
 
-/// Back-facing kernels are culled. Per pixel, two passes over its splats: the front surface is
-/// the nearest depth at which the pixel's ray meets a kernel's disc (3 sigma; at silhouettes,
-/// where only filtered tails reach, the nearest tail), then every splat whose tangent-plane
-/// depth along the ray is within settings.surface.tolerance voxel lengths of it is accumulated
-/// in kernel order (deterministic). Weight w = area x footprint; colour = sum w c / sum w;
-/// alpha = min(1, sum w / 0.9) (the kernels' areas make sum w = 1 inside a surface, to a few
-/// per cent). Z, where alpha >= 0.5: the weighted mean of the splats' tangent-plane depths
-/// along the pixel's ray. Passes: depth and transmittance (1 - alpha); the others are volume
-/// passes.
+/// Back-facing kernels are culled. Per pixel, its (splat, pixel) pairs in depth order (the
+/// tangent plane's depth along the pixel's ray), in up to 4 layers front to back: a layer's
+/// front is the nearest pair whose disc covers one of the pixel's 4x4 subsamples not yet
+/// covered (raster/disc_coverage.h), and the pairs within settings.surface.tolerance voxel
+/// lengths of it join it. Weight w = area x footprint; a layer's colour = sum w c / sum w over
+/// its pairs on the kept side of their crease clips, spread over the subsamples it newly
+/// covers; alpha = covered subsamples / 16. Deterministic (ties by kernel order). Z, where
+/// alpha >= 0.5: the front layer's weighted mean depth. Passes: depth and transmittance
+/// (1 - alpha); the others are volume passes (docs/equations.md#surface-coverage).
 /// @a progress: one unit per screen tile; throws Cancelled. @a budget: the splat-tile pairs are
 /// counted against it before they are stored (BudgetError).
 Frame rasterizeSurfaces(const SurfaceSet& surfaces, const Camera& camera, const RenderSettings& settings,

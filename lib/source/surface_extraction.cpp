@@ -15,14 +15,100 @@ namespace {
 /// A voxel is kept when its Newton step onto the surface stays within this many voxels of its
 /// centre along every index axis. 0.5 (its own cell) would represent each piece of a plane
 /// once but leaves gaps where the gradient turns; 1 overlaps the cells and closes them, and
-/// the kernels' areas come from their local density (normalizeAreas).
+/// the kernels' areas come from their local density (relateNeighbours).
 constexpr double kReach = 1.0;
 
+/// Neighbours whose normals turn by more than this (cos 30 degrees) across a convex crease cut
+/// a kernel's disc; smoother turns leave it whole.
+constexpr double kCreaseCos = 0.766044443118978;
+
+/// The clip lines stand this many voxels in front of the neighbour's plane: the kernels'
+/// centres and normals come from a sampled field and do not meet exactly at a crease; where
+/// neighbours' planes meet at a shallow angle the error along the plane grows as 1/sin(angle).
+constexpr double kCreaseMargin = 0.1;
+
+/// The line of kernel a's tangent plane where neighbour b's tangent plane cuts it, when b lies
+/// across a convex crease (turned by more than 30 degrees, a's centre behind b's plane): the
+/// disc's part in front of b's plane overhangs the surface (a cube's faces past its edges).
+/// False for smooth turns, concave creases (a's centre in front of b's plane) and the far side
+/// of thin parts (normals more than 107 degrees apart).
+bool creaseClip(const SurfaceKernel& a, const SurfaceKernel& b, double voxelLength, DiscClip& clip)
+{
+    const double turn = glm::dot(a.normal, b.normal);
+    if (turn >= kCreaseCos || turn < -0.1) return false;
+    const double offset = glm::dot(b.normal, b.pWorld - a.pWorld); // a's centre is this far behind b's plane
+    if (offset < -0.05 * voxelLength) return false;
+    const Vec3d across = b.normal - turn * a.normal; // b's normal in a's tangent plane
+    const double length = glm::length(across);
+    if (!(length > 1e-6)) return false;
+    clip.direction = glm::vec3(across / length);
+    clip.distance = float((std::max(offset, 0.0) + kCreaseMargin * voxelLength) / length);
+    return true;
+}
+
+/// Clips along the same direction (within 26 degrees) cut along the same crease: kernels of the
+/// same face, or of the rounded edge between: keep the nearest.
+void mergeClip(std::vector<DiscClip>& clips, const DiscClip& clip)
+{
+    for (DiscClip& c : clips) {
+        if (glm::dot(c.direction, clip.direction) > 0.9f) {
+            if (clip.distance < c.distance) c = clip;
+            return;
+        }
+    }
+    clips.push_back(clip);
+}
+
+/// Whether @a u lies in the cone of @a u1 and @a u2 (all in one tangent plane, unit).
+bool inCone(const glm::vec3& u, const glm::vec3& u1, const glm::vec3& u2)
+{
+    const float c = glm::dot(u1, u2);
+    if (c < -0.95f || c > 0.95f) return false;
+    // u = a u1 + b u2: solve the 2x2 normal equations.
+    const float p = glm::dot(u, u1), q = glm::dot(u, u2), det = 1.0f - c * c;
+    const float a = (p - c * q) / det, b = (q - c * p) / det;
+    return a > 0.0f && b > 0.0f;
+}
+
+/// A kernel's clips: at a corner, the faces' clips meet at the corner and the clip of the
+/// corner's own (rounded) kernels, whose direction lies between theirs, only chamfers it by
+/// the error of their positions: clips inside the cone of two others are dropped. Then the
+/// (at most three) nearest are kept.
+void chooseClips(std::vector<DiscClip>& candidates, SurfaceKernel& k)
+{
+    std::vector<DiscClip> kept;
+    for (std::size_t i = 0; i < candidates.size(); ++i) {
+        bool between = false;
+        for (std::size_t j = 0; j < candidates.size() && !between; ++j)
+            for (std::size_t l = j + 1; l < candidates.size() && !between; ++l) {
+                between = j != i && l != i && inCone(candidates[i].direction, candidates[j].direction, candidates[l].direction);
+            }
+        if (!between) kept.push_back(candidates[i]);
+    }
+    std::sort(kept.begin(), kept.end(), [](const DiscClip& x, const DiscClip& y) { return x.distance < y.distance; });
+    k.clipCount = int(std::min(kept.size(), k.clips.size()));
+    for (int i = 0; i < k.clipCount; ++i) k.clips[std::size_t(i)] = kept[std::size_t(i)];
+}
+
+/// A kernel's disc must reach its neighbours' (Botsch et al. 2005: the radius from the
+/// neighbourhood), no farther: a disc overhangs a curved silhouette by radius^2 / (2 x the
+/// curvature radius). The distance to the kNeighboursCovered-th nearest neighbour on the same
+/// sheet, tangentially, at most @a maxRadius (3 sigma); @a maxRadius where there are fewer.
+constexpr std::size_t kNeighboursCovered = 8;
+double discRadiusFrom(std::vector<double>& spacing, double maxRadius)
+{
+    if (spacing.size() < kNeighboursCovered) return maxRadius;
+    std::nth_element(spacing.begin(), spacing.begin() + std::ptrdiff_t(kNeighboursCovered - 1), spacing.end());
+    return std::min(maxRadius, spacing[kNeighboursCovered - 1]);
+}
+
+/// What each kernel takes from its neighbours on the surface (index offsets up to @a radius):
 /// Area per kernel = 1 / (density of kernels on the surface around it): the sum over the
 /// neighbours j on the same sheet (normal offset < 1.5 voxels, normals within 72 degrees) of
 /// the tangential Gaussian G_sigma(p_j - p_k). Then sum_k area_k G_sigma(u - u_k) ~ 1 on the
 /// surface (a partition of unity), however many voxels represent each piece of it.
-void normalizeAreas(std::vector<SurfaceKernel>& kernels, const std::vector<openvdb::Coord>& voxels, double sigma,
+/// Disc clips: the nearest convex creases within the disc (creaseClip).
+void relateNeighbours(std::vector<SurfaceKernel>& kernels, const std::vector<openvdb::Coord>& voxels, double sigma,
     double voxelLength, int radius)
 {
     openvdb::Int32Grid index(-1);
@@ -32,12 +118,20 @@ void normalizeAreas(std::vector<SurfaceKernel>& kernels, const std::vector<openv
     }
     const double twoPiS2 = 6.283185307179586 * sigma * sigma, inv2S2 = 0.5 / (sigma * sigma);
     const double maxNormalOffset = 1.5 * voxelLength;
-    std::vector<double> areas(kernels.size());
+    const double discRadius = kDiscRadiusSigmas * sigma;
+    std::vector<double> areas(kernels.size()), radii(kernels.size());
+    std::vector<std::array<DiscClip, 3>> clips(kernels.size());
+    std::vector<int> clipCounts(kernels.size(), 0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, kernels.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
         auto acc = index.getConstAccessor();
+        std::vector<double> spacing; // tangential distances to the neighbours on the same sheet
+        std::vector<DiscClip> candidates;
         for (std::size_t k = r.begin(); k < r.end(); ++k) {
-            const SurfaceKernel& a = kernels[k];
+            SurfaceKernel a = kernels[k];
+            a.clipCount = 0;
             double density = 0.0;
+            spacing.clear();
+            candidates.clear();
             const openvdb::Coord c = voxels[k];
             for (int i = -radius; i <= radius; ++i)
                 for (int j = -radius; j <= radius; ++j)
@@ -47,13 +141,26 @@ void normalizeAreas(std::vector<SurfaceKernel>& kernels, const std::vector<openv
                         const SurfaceKernel& b = kernels[std::size_t(other)];
                         const Vec3d d = b.pWorld - a.pWorld;
                         const double along = glm::dot(d, a.normal);
+                        DiscClip clip;
+                        if (creaseClip(a, b, voxelLength, clip) && clip.distance < discRadius) mergeClip(candidates, clip);
                         if (std::abs(along) > maxNormalOffset || glm::dot(a.normal, b.normal) < 0.3) continue;
-                        density += std::exp(-(glm::dot(d, d) - along * along) * inv2S2) / twoPiS2;
+                        const double tangential2 = std::max(0.0, glm::dot(d, d) - along * along);
+                        density += std::exp(-tangential2 * inv2S2) / twoPiS2;
+                        if (other != int(k)) spacing.push_back(std::sqrt(tangential2));
                     }
             areas[k] = 1.0 / density; // density includes the kernel itself: > 0
+            chooseClips(candidates, a);
+            radii[k] = discRadiusFrom(spacing, discRadius);
+            clips[k] = a.clips;
+            clipCounts[k] = a.clipCount;
         }
     });
-    for (std::size_t k = 0; k < kernels.size(); ++k) kernels[k].area = areas[k];
+    for (std::size_t k = 0; k < kernels.size(); ++k) {
+        kernels[k].area = areas[k];
+        kernels[k].discRadius = radii[k];
+        kernels[k].clips = clips[k];
+        kernels[k].clipCount = clipCounts[k];
+    }
 }
 
 } // namespace
@@ -114,7 +221,7 @@ SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, double isovalue, 
                 SurfaceKernel k;
                 k.normal = (outwardDecreasing ? -1.0 : 1.0) * gWorld / std::sqrt(g2);
                 k.pWorld = grid.indexToWorld(Vec3d(c.x(), c.y(), c.z())) + stepWorld;
-                k.area = 0.0; // normalizeAreas
+                k.area = 0.0; // relateNeighbours
                 k.albedo = color.at(k.pWorld);
                 perLeaf[l].push_back(k);
                 perLeafVoxels[l].push_back(ijk);
@@ -135,7 +242,7 @@ SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, double isovalue, 
     // surface adds 0.14 % of a kernel's own weight (duplicates across layers, up to two voxels
     // apart along the normal, are inside). Wider kernels look farther.
     const int radius = std::max(2, int(std::ceil(3.5 * kernelSigma)));
-    normalizeAreas(out.kernels, voxels, out.sigma, grid.voxelLength, radius);
+    relateNeighbours(out.kernels, voxels, out.sigma, grid.voxelLength, radius);
     return out;
 }
 

@@ -6,11 +6,20 @@
 #include "source/grid_source_impl.h"
 #include "support/progress.h"
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
 namespace vdb_ewa {
 namespace detail {
+
+/// A line of a kernel's tangent plane where the surface folds away (a convex crease): the
+/// kernel's disc keeps the side u . (q - pWorld) <= distance (docs/equations.md#surface-coverage).
+struct DiscClip
+{
+    glm::vec3 direction{0.0f}; ///< unit, in the tangent plane, pointing across the crease
+    float distance = 0.0f;     ///< world units from the centre, >= 0
+};
 
 /// A 2D Gaussian in the tangent plane of the iso-surface (the limit of Eq. 37).
 struct SurfaceKernel
@@ -19,6 +28,9 @@ struct SurfaceKernel
     Vec3d normal;   ///< unit world normal, the gradient direction (outwards for level sets)
     double area;    ///< surface area the kernel stands for, world^2 (its weight)
     Vec3d albedo{1.0}; ///< material colour: the colour grid at pWorld (trilinear), else white
+    double discRadius = 0;           ///< world units: reaches the neighbours' discs (coverage)
+    std::array<DiscClip, 3> clips{}; ///< the nearest creases across the disc, clipCount of them
+    int clipCount = 0;
 };
 
 struct SurfaceSet
@@ -33,7 +45,10 @@ struct SurfaceSet
 /// projection onto the surface value == @a isovalue
 /// (x - (f(x) - iso) grad / |grad|^2, central differences) lies within one voxel of its
 /// centre along each index axis; its area is the inverse of the kernels' density around it
-/// on the surface, so that the kernels sum to one over the surface; tangential sigma =
+/// on the surface, so that the kernels sum to one over the surface; its disc (the coverage
+/// test) reaches its 8th nearest neighbour on the surface, at most kDiscRadiusSigmas sigma, and
+/// is clipped where a neighbour's tangent plane, turned by more than 40 degrees, cuts it past
+/// a convex crease (docs/equations.md#surface-coverage); tangential sigma =
 /// @a kernelSigma voxel lengths. Anisotropic voxels use the voxel length cbrt|det A|. Voxels
 /// farther than 2 voxels from the surface by the estimate |f - iso| / |grad f| are skipped, as
 /// are NaN values.
@@ -42,6 +57,12 @@ struct SurfaceSet
 /// @a progress: one unit per leaf node; throws Cancelled.
 SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, double isovalue, double kernelSigma,
     bool outwardDecreasing = false, Progress* progress = nullptr);
+
+/// Largest radius of a surface kernel's disc (the coverage test) in tangential standard
+/// deviations; also the radius where a kernel has fewer neighbours than its rule needs. The
+/// kernels stand at most about one voxel apart on the surface (sigma = 0.55 voxels): discs of
+/// 3 sigma = 1.65 voxels overlap their neighbours' and close every gap.
+constexpr double kDiscRadiusSigmas = 3.0;
 
 } // namespace detail
 } // namespace vdb_ewa
