@@ -94,7 +94,8 @@ void Renderer::addIsoSurface(const GridSource::Impl& grid, const Camera& camera,
     const detail::LightMap& light, detail::SplatSet& splats, detail::Progress& progress) const
 {
     budgetFor(grid, mSettings).check(double(grid.activeVoxels), "active voxels (surface kernels)", detail::kBytesPerKernel);
-    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(grid, mSettings.surface.iso, mSettings.surface.sigma, true, &progress);
+    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(grid, mSettings.surface.iso, mSettings.surface.sigma, true, &progress,
+        detail::kReachForWeights);
     // The light's transmittance at the surface kernels, from the volume's light map.
     std::vector<detail::Rgb> shadows(surfaces.kernels.size());
     for (std::size_t i = 0; i < shadows.size(); ++i) shadows[i] = light.transmittance(light.coordinates(surfaces.kernels[i].pWorld));

@@ -1,7 +1,7 @@
 /// @file disc_coverage_test.cpp
 /// @brief A surface kernel's disc seen through the camera (raster/disc_coverage.h) against
 ///        the ray-plane intersection it replaces.
-#include "raster/disc_coverage.h"
+#include "raster/raster.h"
 
 #include <gtest/gtest.h>
 

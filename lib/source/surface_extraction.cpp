@@ -12,12 +12,6 @@ namespace vdb_ewa {
 namespace detail {
 namespace {
 
-/// A voxel is kept when its Newton step onto the surface stays within this many voxels of its
-/// centre along every index axis. 0.5 (its own cell) would represent each piece of a plane
-/// once but leaves gaps where the gradient turns; 1 overlaps the cells and closes them, and
-/// the kernels' areas come from their local density (relateNeighbours).
-constexpr double kReach = 1.0;
-
 /// Neighbours whose normals turn by more than this (cos 30 degrees) across a convex crease cut
 /// a kernel's disc; smoother turns leave it whole.
 constexpr double kCreaseCos = 0.766044443118978;
@@ -166,7 +160,7 @@ void relateNeighbours(std::vector<SurfaceKernel>& kernels, const std::vector<ope
 } // namespace
 
 SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, double isovalue, double kernelSigma, bool outwardDecreasing,
-    Progress* progress)
+    Progress* progress, double reach)
 {
     SurfaceSet out;
     const openvdb::FloatTree& tree = grid.grid->tree();
@@ -217,7 +211,7 @@ SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, double isovalue, 
                 // Newton step onto the iso-surface, in world and in index units.
                 const Vec3d stepWorld = -d * gWorld / g2;
                 const Vec3d stepIndex = Ainv * stepWorld;
-                if (std::max({std::abs(stepIndex.x), std::abs(stepIndex.y), std::abs(stepIndex.z)}) > kReach) continue;
+                if (std::max({std::abs(stepIndex.x), std::abs(stepIndex.y), std::abs(stepIndex.z)}) > reach) continue;
                 SurfaceKernel k;
                 k.normal = (outwardDecreasing ? -1.0 : 1.0) * gWorld / std::sqrt(g2);
                 k.pWorld = grid.indexToWorld(Vec3d(c.x(), c.y(), c.z())) + stepWorld;
