@@ -39,8 +39,8 @@ struct SurfaceSplat
     int x0, y0, x1, y1;
 };
 
-/// A (splat, tile pixel) pair inside the splat's cut-off: its conic distance, plane depth along
-/// the pixel's central ray, the pixel's subsamples its disc covers and its depth layer.
+/// A (splat, tile pixel) pair inside the splat's reach: its plane depth along the pixel's
+/// central ray, its conic distance and the pixel's subsamples its disc covers.
 struct Pair
 {
     double z;

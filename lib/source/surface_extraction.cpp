@@ -12,8 +12,10 @@ namespace vdb_ewa {
 namespace detail {
 namespace {
 
-/// Neighbours whose normals turn by more than this (cos 30 degrees) across a convex crease cut
-/// a kernel's disc; smoother turns leave it whole.
+/// Neighbours whose normals turn by more than this (cos 40 degrees) across a convex crease cut
+/// a kernel's disc; smoother turns leave it whole. At 30 degrees noisy shallow creases of a
+/// scanned model opened pinpricks; at 45 the rounded kernels of a cube's edges (exactly 45)
+/// escaped their clips (docs/equations.md#surface-coverage).
 constexpr double kCreaseCos = 0.766044443118978;
 
 /// The clip lines stand this many voxels in front of the neighbour's plane: the kernels'
@@ -22,10 +24,10 @@ constexpr double kCreaseCos = 0.766044443118978;
 constexpr double kCreaseMargin = 0.1;
 
 /// The line of kernel a's tangent plane where neighbour b's tangent plane cuts it, when b lies
-/// across a convex crease (turned by more than 30 degrees, a's centre behind b's plane): the
+/// across a convex crease (turned by more than 40 degrees, a's centre behind b's plane): the
 /// disc's part in front of b's plane overhangs the surface (a cube's faces past its edges).
 /// False for smooth turns, concave creases (a's centre in front of b's plane) and the far side
-/// of thin parts (normals more than 107 degrees apart).
+/// of thin parts (normals more than 96 degrees apart).
 bool creaseClip(const SurfaceKernel& a, const SurfaceKernel& b, double voxelLength, DiscClip& clip)
 {
     const double turn = glm::dot(a.normal, b.normal);
@@ -101,7 +103,8 @@ double discRadiusFrom(std::vector<double>& spacing, double maxRadius)
 /// neighbours j on the same sheet (normal offset < 1.5 voxels, normals within 72 degrees) of
 /// the tangential Gaussian G_sigma(p_j - p_k). Then sum_k area_k G_sigma(u - u_k) ~ 1 on the
 /// surface (a partition of unity), however many voxels represent each piece of it.
-/// Disc clips: the nearest convex creases within the disc (creaseClip).
+/// Disc radius: discRadiusFrom the same neighbours' tangential distances.
+/// Disc clips: the nearest convex creases within the disc (creaseClip, chooseClips).
 void relateNeighbours(std::vector<SurfaceKernel>& kernels, const std::vector<openvdb::Coord>& voxels, double sigma,
     double voxelLength, int radius)
 {
