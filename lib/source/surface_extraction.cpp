@@ -119,37 +119,55 @@ void relateNeighbours(std::vector<SurfaceKernel>& kernels, const std::vector<ope
     std::vector<double> areas(kernels.size()), radii(kernels.size());
     std::vector<std::array<DiscClip, 3>> clips(kernels.size());
     std::vector<int> clipCounts(kernels.size(), 0);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, kernels.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+    // The kernels come leaf by leaf (8^3 voxels): each leaf's neighbourhood, the leaf and
+    // @a radius voxels around it, is read into a dense block once (1,728 lookups for radius 2
+    // instead of 125 a kernel).
+    std::vector<std::size_t> leafStarts;
+    for (std::size_t k = 0; k < voxels.size(); ++k) {
+        if (k == 0 || (voxels[k] & ~7) != (voxels[k - 1] & ~7)) leafStarts.push_back(k);
+    }
+    leafStarts.push_back(voxels.size());
+    const int side = 8 + 2 * radius;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leafStarts.size() - 1, 16), [&](const tbb::blocked_range<std::size_t>& r) {
         auto acc = index.getConstAccessor();
+        std::vector<int> block(std::size_t(side) * std::size_t(side) * std::size_t(side));
         std::vector<double> spacing; // tangential distances to the neighbours on the same sheet
         std::vector<DiscClip> candidates;
-        for (std::size_t k = r.begin(); k < r.end(); ++k) {
-            SurfaceKernel a = kernels[k];
-            a.clipCount = 0;
-            double density = 0.0;
-            spacing.clear();
-            candidates.clear();
-            const openvdb::Coord c = voxels[k];
-            for (int i = -radius; i <= radius; ++i)
-                for (int j = -radius; j <= radius; ++j)
-                    for (int l = -radius; l <= radius; ++l) {
-                        const int other = acc.getValue(c.offsetBy(i, j, l));
-                        if (other < 0) continue;
-                        const SurfaceKernel& b = kernels[std::size_t(other)];
-                        const Vec3d d = b.pWorld - a.pWorld;
-                        const double along = glm::dot(d, a.normal);
-                        DiscClip clip;
-                        if (creaseClip(a, b, voxelLength, clip) && clip.distance < discRadius) mergeClip(candidates, clip);
-                        if (std::abs(along) > maxNormalOffset || glm::dot(a.normal, b.normal) < 0.3) continue;
-                        const double tangential2 = std::max(0.0, glm::dot(d, d) - along * along);
-                        density += std::exp(-tangential2 * inv2S2) / twoPiS2;
-                        if (other != int(k)) spacing.push_back(std::sqrt(tangential2));
+        for (std::size_t leaf = r.begin(); leaf < r.end(); ++leaf) {
+            const openvdb::Coord corner = (voxels[leafStarts[leaf]] & ~7).offsetBy(-radius);
+            for (int i = 0; i < side; ++i)
+                for (int j = 0; j < side; ++j)
+                    for (int l = 0; l < side; ++l) {
+                        block[std::size_t((i * side + j) * side + l)] = acc.getValue(corner.offsetBy(i, j, l));
                     }
-            areas[k] = 1.0 / density; // density includes the kernel itself: > 0
-            chooseClips(candidates, a);
-            radii[k] = discRadiusFrom(spacing, discRadius);
-            clips[k] = a.clips;
-            clipCounts[k] = a.clipCount;
+            for (std::size_t k = leafStarts[leaf]; k < leafStarts[leaf + 1]; ++k) {
+                SurfaceKernel a = kernels[k];
+                a.clipCount = 0;
+                double density = 0.0;
+                spacing.clear();
+                candidates.clear();
+                const openvdb::Coord c = voxels[k] - corner; // >= radius along each axis
+                for (int i = -radius; i <= radius; ++i)
+                    for (int j = -radius; j <= radius; ++j)
+                        for (int l = -radius; l <= radius; ++l) {
+                            const int other = block[std::size_t(((c.x() + i) * side + c.y() + j) * side + c.z() + l)];
+                            if (other < 0) continue;
+                            const SurfaceKernel& b = kernels[std::size_t(other)];
+                            const Vec3d d = b.pWorld - a.pWorld;
+                            const double along = glm::dot(d, a.normal);
+                            DiscClip clip;
+                            if (creaseClip(a, b, voxelLength, clip) && clip.distance < discRadius) mergeClip(candidates, clip);
+                            if (std::abs(along) > maxNormalOffset || glm::dot(a.normal, b.normal) < 0.3) continue;
+                            const double tangential2 = std::max(0.0, glm::dot(d, d) - along * along);
+                            density += std::exp(-tangential2 * inv2S2) / twoPiS2;
+                            if (other != int(k)) spacing.push_back(std::sqrt(tangential2));
+                        }
+                areas[k] = 1.0 / density; // density includes the kernel itself: > 0
+                chooseClips(candidates, a);
+                radii[k] = discRadiusFrom(spacing, discRadius);
+                clips[k] = a.clips;
+                clipCounts[k] = a.clipCount;
+            }
         }
     });
     for (std::size_t k = 0; k < kernels.size(); ++k) {
