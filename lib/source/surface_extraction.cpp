@@ -70,9 +70,9 @@ bool inCone(const glm::vec3& u, const glm::vec3& u1, const glm::vec3& u2)
 /// corner's own (rounded) kernels, whose direction lies between theirs, only chamfers it by
 /// the error of their positions: clips inside the cone of two others are dropped. Then the
 /// (at most three) nearest are kept.
-void chooseClips(std::vector<DiscClip>& candidates, SurfaceKernel& k)
+void chooseClips(const std::vector<DiscClip>& candidates, std::vector<DiscClip>& kept, SurfaceKernel& k)
 {
-    std::vector<DiscClip> kept;
+    kept.clear();
     for (std::size_t i = 0; i < candidates.size(); ++i) {
         bool between = false;
         for (std::size_t j = 0; j < candidates.size() && !between; ++j)
@@ -132,7 +132,7 @@ void relateNeighbours(std::vector<SurfaceKernel>& kernels, const std::vector<ope
         auto acc = index.getConstAccessor();
         std::vector<int> block(std::size_t(side) * std::size_t(side) * std::size_t(side));
         std::vector<double> spacing; // tangential distances to the neighbours on the same sheet
-        std::vector<DiscClip> candidates;
+        std::vector<DiscClip> candidates, kept;
         for (std::size_t leaf = r.begin(); leaf < r.end(); ++leaf) {
             const openvdb::Coord corner = (voxels[leafStarts[leaf]] & ~7).offsetBy(-radius);
             for (int i = 0; i < side; ++i)
@@ -163,7 +163,7 @@ void relateNeighbours(std::vector<SurfaceKernel>& kernels, const std::vector<ope
                             if (other != int(k)) spacing.push_back(std::sqrt(tangential2));
                         }
                 areas[k] = 1.0 / density; // density includes the kernel itself: > 0
-                chooseClips(candidates, a);
+                chooseClips(candidates, kept, a);
                 radii[k] = discRadiusFrom(spacing, discRadius);
                 clips[k] = a.clips;
                 clipCounts[k] = a.clipCount;
