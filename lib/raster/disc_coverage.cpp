@@ -8,27 +8,36 @@
 namespace vdb_ewa {
 namespace detail {
 
-bool DiscCoverage::covers(double x, double y) const
+void DiscCoverage::homogeneous(double x, double y, Vec3d& v, double& w) const
 {
-    const double w = W[0] * x + W[1] * y + W[2];
-    if (!(w > 0.0)) return false;
-    const Vec3d v(V[0][0] * x + V[0][1] * y + V[0][2], V[1][0] * x + V[1][1] * y + V[1][2],
-        V[2][0] * x + V[2][1] * y + V[2][2]);
-    if (!(glm::dot(v, v) <= radius2 * w * w)) return false;
-    return insideClips(x, y);
+    w = W[0] * x + W[1] * y + W[2];
+    v = Vec3d(V[0][0] * x + V[0][1] * y + V[0][2], V[1][0] * x + V[1][1] * y + V[1][2], V[2][0] * x + V[2][1] * y + V[2][2]);
 }
 
-bool DiscCoverage::insideClips(double x, double y) const
+bool DiscCoverage::planeOffset(double x, double y, Vec3d& offset) const
 {
-    if (clipCount == 0) return true;
-    const double w = W[0] * x + W[1] * y + W[2];
-    if (!(w > 0.0)) return false;
-    const Vec3d v(V[0][0] * x + V[0][1] * y + V[0][2], V[1][0] * x + V[1][1] * y + V[1][2],
-        V[2][0] * x + V[2][1] * y + V[2][2]);
+    Vec3d v;
+    double w;
+    homogeneous(x, y, v, w);
+    if (!(w > 1e-9)) return false;
+    offset = v / w;
+    return std::isfinite(offset.z);
+}
+
+bool DiscCoverage::keptSide(const Vec3d& v, double w) const
+{
     for (int c = 0; c < clipCount; ++c) {
         if (glm::dot(clipDirection[c], v) > clipDistance[c] * w) return false;
     }
     return true;
+}
+
+bool DiscCoverage::covers(double x, double y) const
+{
+    Vec3d v;
+    double w;
+    homogeneous(x, y, v, w);
+    return w > 0.0 && glm::dot(v, v) <= radius2 * w * w && keptSide(v, w);
 }
 
 std::uint16_t DiscCoverage::mask(double px, double py) const

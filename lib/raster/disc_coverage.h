@@ -32,13 +32,21 @@ struct DiscCoverage
     int clipCount = 0;
     double box[4]; ///< raster x0, y0, x1, y1 holding the disc's image (conservative)
 
+    /// Where the ray through raster point (@a x, @a y) meets the disc's plane, as q - centre
+    /// (camera space); false behind the eye or where the ray runs along the plane.
+    bool planeOffset(double x, double y, Vec3d& offset) const;
+    /// Whether the plane point q - centre = @a v / @a w lies on the kept side of every clip
+    /// line (at any distance): past a crease a kernel's filtered footprint does not shade the
+    /// other face.
+    bool keptSide(const Vec3d& v, double w = 1.0) const;
     /// Whether the ray through raster point (@a x, @a y) meets the (clipped) disc.
     bool covers(double x, double y) const;
-    /// Whether that ray meets the plane on the kept side of every clip line (at any distance):
-    /// past a crease a kernel's filtered footprint does not shade the other face.
-    bool insideClips(double x, double y) const;
     /// The subsamples of the pixel centred at (@a px, @a py) whose rays meet the disc.
     std::uint16_t mask(double px, double py) const;
+
+private:
+    /// v = V h and w = W . h for h = (x, y, 1).
+    void homogeneous(double x, double y, Vec3d& v, double& w) const;
 };
 
 /// The disc of @a radius around camera-space @a centre in the plane of unit @a normal, clipped

@@ -29,9 +29,6 @@ struct SurfaceSplat
     float reach;           ///< pixels whose square may meet the disc: d^T Q d < reach (>= cutoff)
     float weight;          ///< area x footprint peak
     float colour[3];       ///< shaded colour
-    Vec3d centre;          ///< camera-space centre
-    Vec3d planeNormal;     ///< camera-space unit normal of the tangent plane
-    double planeOffset;    ///< n . t_centre
     double depth;          ///< camera depth of the centre
     DiscCoverage disc;     ///< the kernel's disc in its tangent plane, seen from the camera
     double depthRange;     ///< plane depths along a ray are clamped to depth +- this: the disc
@@ -99,9 +96,6 @@ std::vector<SurfaceSplat> projectSurfaceSplats(const SurfaceSet& set, const Came
             const Vec3d rayDir = perspective ? glm::normalize(k.pWorld - camera.eye()) : forward;
             const Vec3d c = k.albedo * shade(settings.surface.shader, k.normal, rayDir, k.pWorld, set);
             for (int ch = 0; ch < 3; ++ch) s.colour[ch] = float(c[ch]);
-            s.centre = t;
-            s.planeNormal = normal;
-            s.planeOffset = glm::dot(normal, t);
             s.depth = t.z;
             const double disc = k.discRadius;
             Vec3d clipDirections[3];
@@ -137,28 +131,8 @@ Frame rasterizeSurfaces(const SurfaceSet& set, const Camera& camera, const Rende
     const TileBins bins = binSplats(splats, width, height, budget);
     stats.splatTilePairs = bins.indices.size();
     const double tolerance = settings.surface.tolerance * voxelLength;
-    const bool perspective = camera.projection() == Projection::Perspective;
-    const double f = camera.focalPixels();
-    const Vec2d principal = camera.principalPoint();
 
     const int tiles = bins.tilesX * bins.tilesY;
-    // Where the ray through raster point (px, py) meets splat s's tangent plane (camera space),
-    // in front of the eye.
-    auto planePoint = [&](const SurfaceSplat& s, double px, double py, Vec3d& q) {
-        const double x = (px - principal.x) / f, y = (py - principal.y) / f;
-        if (perspective) {
-            const Vec3d ray(x, y, 1.0);
-            const double denom = glm::dot(s.planeNormal, ray);
-            if (!(std::abs(denom) > 1e-9)) return false;
-            const double along = s.planeOffset / denom;
-            if (!(along > 0.0)) return false;
-            q = ray * along;
-        } else {
-            if (!(std::abs(s.planeNormal.z) > 1e-9)) return false;
-            q = Vec3d(x, y, (s.planeOffset - s.planeNormal.x * x - s.planeNormal.y * y) / s.planeNormal.z);
-        }
-        return std::isfinite(q.z);
-    };
     setUnits(progress, std::uint64_t(tiles));
     tbb::parallel_for(tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& range) {
         std::vector<std::uint32_t> order;
@@ -189,9 +163,13 @@ Frame rasterizeSurfaces(const SurfaceSet& set, const Camera& camera, const Rende
                             mask = s.disc.mask(px, py);
                             if (mask == 0) continue; // neither weight nor coverage
                         }
-                        Vec3d q;
-                        const double z = planePoint(s, px, py, q) ? std::clamp(q.z, s.depth - s.depthRange, s.depth + s.depthRange) : s.depth;
-                        pairs.push_back({z, r, index, mask, s.disc.insideClips(px, py)});
+                        // The tangent plane's depth along the pixel's ray, and whether the
+                        // pixel lies on the kept side of the kernel's crease clips.
+                        Vec3d offset;
+                        const bool hit = s.disc.planeOffset(px, py, offset);
+                        const double z = hit ? std::clamp(s.depth + offset.z, s.depth - s.depthRange, s.depth + s.depthRange) : s.depth;
+                        const bool shades = hit ? s.disc.keptSide(offset) : s.disc.clipCount == 0;
+                        pairs.push_back({z, r, index, mask, shades});
                         pixelOf.push_back(std::uint8_t(ly * kTileSize + lx));
                     }
             }
