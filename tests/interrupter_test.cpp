@@ -14,6 +14,7 @@
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
+#include <limits>
 #include <mutex>
 #include <thread>
 
@@ -74,6 +75,14 @@ public:
         mCv.wait(lock, [&] { return mStarted; });
         cancelledAt = Clock::now();
         cancel();
+    }
+
+    /// Lets the cancelling thread go when the render ended without reaching @a startPercent.
+    void release()
+    {
+        std::lock_guard<std::mutex> lock(mMutex);
+        mStarted = true;
+        mCv.notify_all();
     }
 
     Clock::time_point cancelledAt;
@@ -168,21 +177,35 @@ TEST(Interrupter, CancelFromAnotherThreadStopsTheRenderPromptly)
     march.method = Method::RayMarch;
     for (const Case& c : {Case{"splat, high", RenderSettings::preset(Quality::High)}, Case{"raymarch", march}}) {
         for (const int at : {1, 50}) { // early (kernels, shadows) and late (compositing)
-            CancelFromAnotherThread interrupter(at);
-            std::thread canceller([&] { interrupter.cancelWhenStarted(); });
-            const auto t0 = Clock::now();
+            // Best of up to three tries: a machine loaded by other jobs (CI runs two tests at a
+            // time) can delay the cancelling thread past the end of the render, or a render thread
+            // by a scheduler quantum; a stage that does not check the interrupter is slow every time.
             bool cancelled = false;
-            try {
-                Renderer(c.settings).render(scene.grid, scene.camera, nullptr, &interrupter);
-            } catch (const Cancelled&) {
+            double latency = std::numeric_limits<double>::infinity();
+            for (int attempt = 0; attempt < 3 && !(cancelled && latency < 0.25 * kLatencySlack); ++attempt) {
+                CancelFromAnotherThread interrupter(at);
+                std::thread canceller([&] { interrupter.cancelWhenStarted(); });
+                const auto t0 = Clock::now();
+                bool thrown = false;
+                try {
+                    Renderer(c.settings).render(scene.grid, scene.camera, nullptr, &interrupter);
+                } catch (const Cancelled&) {
+                    thrown = true;
+                }
+                const auto returned = Clock::now();
+                interrupter.release();
+                canceller.join();
+                const double ran = std::chrono::duration<double>(returned - t0).count();
+                if (!thrown) {
+                    std::printf("%s, cancel at %d%%: the render finished before the cancel (ran %.2f s)\n", c.name, at, ran);
+                    continue;
+                }
                 cancelled = true;
+                const double l = std::chrono::duration<double>(returned - interrupter.cancelledAt).count();
+                std::printf("%s, cancel at %d%%: returned %.3f s after the cancel (render ran %.2f s)\n", c.name, at, l, ran);
+                latency = std::min(latency, l);
             }
-            const auto returned = Clock::now();
-            canceller.join();
-            ASSERT_TRUE(cancelled) << c.name << ": the render finished before the cancel (make the scene slower)";
-            const double latency = std::chrono::duration<double>(returned - interrupter.cancelledAt).count();
-            const double ran = std::chrono::duration<double>(returned - t0).count();
-            std::printf("%s, cancel at %d%%: returned %.3f s after the cancel (render ran %.2f s)\n", c.name, at, latency, ran);
+            ASSERT_TRUE(cancelled) << c.name << ": the render finished before the cancel three times (make the scene slower)";
             EXPECT_LT(latency, 0.25 * kLatencySlack) << c.name;
         }
     }
