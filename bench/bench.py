@@ -499,12 +499,11 @@ def cmd_holes(args):
             ("cube", f"{ASSETS}/cube_levelset.vdb", (0, 0, 0), 11.0, (10, 12, 18), (0, 0, 0)),
             ("bunny", f"{ASSETS}/bunny_levelset.vdb", (0, 0, 0), 2.0, (0, 0, 4.859), (0, 0, 0))]
     only = set(args.only.split(",")) if args.only else None
+    sets = [s for s in sets if (not only or s[0] in only) and os.path.exists(s[1])]
     print(f"# level sets against vdb_render's hits (-shader matte), {args.res}, {os.cpu_count()} cores")
     print("| level set | camera | IoU | holes (2 px in) | holes (1 px in) | hit pixels | vdb_render (s) | vdb_ewa (s) | time ratio |")
     print("|---|---|---|---|---|---|---|---|---|")
     for label, path, centre, size, eye, focus in sets:
-        if (only and label not in only) or not os.path.exists(path):
-            continue
         for cam, camargs in coverage.cameras(path, centre, size, eye, focus).items():
             common = ["-res", args.res, "-shader", "matte", *camargs.split()]
             tag = f"{label}_{cam.split()[0]}"
@@ -519,8 +518,6 @@ def cmd_holes(args):
     print("| level set | diffuse | matte | normal | position |")
     print("|---|---|---|---|---|")
     for label, path, centre, size, eye, focus in sets:
-        if (only and label not in only) or not os.path.exists(path):
-            continue
         cam = coverage.cameras(path, centre, size, eye, focus)["default"]
         row = []
         for shader in ("diffuse", "matte", "normal", "position"):

@@ -63,22 +63,12 @@ openvdb::FloatGrid::Ptr cube(int n, float rho, double h)
     return makeBoxGrid(openvdb::Coord(-n), openvdb::Coord(n - 1), rho, h);
 }
 
-CameraSettings camera(const Vec3d& eye, const Vec3d& target, int w, int h)
-{
-    CameraSettings c;
-    c.width = w;
-    c.height = h;
-    c.translate = eye;
-    c.lookAt = target;
-    return c;
-}
-
 } // namespace
 
 TEST(Extremes, NearPlaneCutsTheVolume)
 {
     // Near plane through the middle of the cube: both methods drop what lies before it.
-    CameraSettings cam = camera(Vec3d(0, 0, 3.0), Vec3d(0.0), 64, 48);
+    CameraSettings cam = lookAtCamera(Vec3d(0, 0, 3.0), Vec3d(0.0), 64, 48);
     cam.near = 3.0;
     const RenderStats s = expectMatchesReference(cube(16, 0.2f, 0.125), cam, 0.02);
     EXPECT_NE(allWarnings(s).find("before the near plane skipped"), std::string::npos) << allWarnings(s);
@@ -86,7 +76,7 @@ TEST(Extremes, NearPlaneCutsTheVolume)
 
 TEST(Extremes, CameraInsideTheVolume)
 {
-    CameraSettings cam = camera(Vec3d(0.1, 0.05, 0.3), Vec3d(0.0), 64, 48);
+    CameraSettings cam = lookAtCamera(Vec3d(0.1, 0.05, 0.3), Vec3d(0.0), 64, 48);
     cam.setFieldOfView(90.0);
     const RenderStats s = expectMatchesReference(cube(16, 0.05f, 0.125), cam, 0.03);
     EXPECT_NE(allWarnings(s).find("within 3 sigma of the eye"), std::string::npos) << allWarnings(s);
@@ -95,7 +85,7 @@ TEST(Extremes, CameraInsideTheVolume)
 TEST(Extremes, GrazingRaysAtTheFrustumEdge)
 {
     // A wide camera with the volume at and beyond the edge of the frame.
-    CameraSettings cam = camera(Vec3d(0.0), Vec3d(0, 0, -1), 96, 64);
+    CameraSettings cam = lookAtCamera(Vec3d(0.0), Vec3d(0, 0, -1), 96, 64);
     cam.setFieldOfView(120.0);
     auto grid = makeBoxGrid(openvdb::Coord(14, -4, -12), openvdb::Coord(40, 4, -2), 0.3f, 0.1);
     RenderSettings wide; // kernels wide enough that some beyond 1.3x the edge reach into the frame
@@ -106,7 +96,7 @@ TEST(Extremes, GrazingRaysAtTheFrustumEdge)
 
 TEST(Extremes, FootprintLargerThanTheImage)
 {
-    CameraSettings cam = camera(Vec3d(0, 0, 3.0), Vec3d(0.0), 48, 32);
+    CameraSettings cam = lookAtCamera(Vec3d(0, 0, 3.0), Vec3d(0.0), 48, 32);
     cam.setFieldOfView(10.0);
     // One voxel: the trilinear field is a tent, the splatter's a Gaussian; this case guards the
     // projection of a kernel larger than the frame, so it is measured against the ray march of
@@ -127,7 +117,7 @@ TEST(Extremes, SubPixelFootprintsKeepTheirIntegral)
     // (Eq. 32, 33: sum over pixels of tau = sigma rho N |det A| / l * f^2 / t2^2 on the axis).
     const double h = 1e-3, sigma = 1e-3, rho = 0.5, distance = 20.0;
     const int n = 32;
-    CameraSettings cam = camera(Vec3d(-0.5 * h, -0.5 * h, distance), Vec3d(-0.5 * h, -0.5 * h, 0.0), 64, 64);
+    CameraSettings cam = lookAtCamera(Vec3d(-0.5 * h, -0.5 * h, distance), Vec3d(-0.5 * h, -0.5 * h, 0.0), 64, 64);
     const double f = 0.2 * distance / h; // pixels per plane unit for 0.2 pixel voxels
     cam.focal = cam.aperture * f / 64.0;
     RenderStats stats;
@@ -150,7 +140,7 @@ TEST(Extremes, VoxelSizesFrom1eMinus6To1e6AreScaleInvariant)
         openvdb::math::Mat4d m = openvdb::math::Mat4d::identity();
         m.setToScale(openvdb::Vec3d(0.08 * k));
         grid->setTransform(std::make_shared<openvdb::math::Transform>(std::make_shared<openvdb::math::AffineMap>(m)));
-        CameraSettings cam = camera(Vec3d(1.5, 0.8, 4.5) * k, Vec3d(0.0), 96, 64);
+        CameraSettings cam = lookAtCamera(Vec3d(1.5, 0.8, 4.5) * k, Vec3d(0.0), 96, 64);
         cam.near = 1e-3 * k;
         return renderGrid(grid, cam, RenderSettings());
     };
@@ -170,7 +160,7 @@ TEST(Extremes, MicrometreVoxels)
     openvdb::math::Mat4d m = openvdb::math::Mat4d::identity();
     m.setToScale(openvdb::Vec3d(1e-6, 1e-6, 1e-2));
     grid->setTransform(std::make_shared<openvdb::math::Transform>(std::make_shared<openvdb::math::AffineMap>(m)));
-    CameraSettings cam = camera(Vec3d(2e-5, 1e-5, 0.3), Vec3d(0.0), 64, 48);
+    CameraSettings cam = lookAtCamera(Vec3d(2e-5, 1e-5, 0.3), Vec3d(0.0), 64, 48);
     cam.near = 1e-7;
     cam.setFieldOfView(0.01);
     // Seen almost end-on the needle is 1000 voxel lengths deep: keep it optically thin, or the
@@ -187,7 +177,7 @@ TEST(Extremes, SmallVoxelsFarFromTheOrigin)
     auto render = [](const Vec3d& offset, bool doublePrecision) {
         auto grid = cube(12, 0.3f, 1e-3);
         grid->transform().postTranslate(openvdb::Vec3d(offset.x, offset.y, offset.z));
-        CameraSettings cam = camera(offset + Vec3d(0.01, 0.02, 0.06), offset, 64, 48);
+        CameraSettings cam = lookAtCamera(offset + Vec3d(0.01, 0.02, 0.06), offset, 64, 48);
         cam.near = 1e-5;
         RenderSettings s;
         s.splat.doublePrecision = doublePrecision;
@@ -217,7 +207,7 @@ TEST(Extremes, Anisotropy1000To1)
     m.setToScale(openvdb::Vec3d(0.1, 0.1, 1e-4));
     m.postRotate(openvdb::math::X_AXIS, 0.5);
     grid->setTransform(std::make_shared<openvdb::math::Transform>(std::make_shared<openvdb::math::AffineMap>(m)));
-    CameraSettings cam = camera(Vec3d(0.5, 0.8, 3.0), Vec3d(0.0), 64, 48);
+    CameraSettings cam = lookAtCamera(Vec3d(0.5, 0.8, 3.0), Vec3d(0.0), 64, 48);
     RenderSettings s;
     expectMatchesReference(grid, cam, 0.03, s, 0.02);
 }
@@ -233,7 +223,7 @@ TEST(Extremes, ShearWithNearZeroDeterminant)
     m[1][1] = h * 1e-3;
     m[2][2] = h;
     grid->setTransform(std::make_shared<openvdb::math::Transform>(std::make_shared<openvdb::math::AffineMap>(m)));
-    CameraSettings cam = camera(Vec3d(0.3, 3.0, 0.4), Vec3d(0.0), 64, 48);
+    CameraSettings cam = lookAtCamera(Vec3d(0.3, 3.0, 0.4), Vec3d(0.0), 64, 48);
     cam.up = Vec3d(0, 0, -1);
     expectMatchesReference(grid, cam, 0.03, RenderSettings(), 0.02);
 }
@@ -263,13 +253,13 @@ TEST(Extremes, OnePixelAndHugeImages)
 {
     const GridSource g = makeSampleGrid(SampleGrid::Cloud, 0.08);
     // One pixel looking into the cloud: the pixel is covered.
-    CameraSettings one = camera(Vec3d(0, 0, 2.5), Vec3d(0.0), 1, 1);
+    CameraSettings one = lookAtCamera(Vec3d(0, 0, 2.5), Vec3d(0.0), 1, 1);
     one.setFieldOfView(10.0);
     const Image px = Renderer(RenderSettings()).render(g, Camera(one, g.worldCentre()));
     expectSane(px);
     EXPECT_GT(px.rgba[3], 0.5f);
 
-    CameraSettings big = camera(Vec3d(1.5, 0.8, 4.5), Vec3d(0.0), 8192, 8192);
+    CameraSettings big = lookAtCamera(Vec3d(1.5, 0.8, 4.5), Vec3d(0.0), 8192, 8192);
     const Image huge = Renderer(RenderSettings()).render(g, Camera(big, g.worldCentre()));
     expectSane(huge);
     CameraSettings small = big;
@@ -296,7 +286,7 @@ TEST(Extremes, MemoryBudgetStopsEachStageBeforeItAllocates)
     s.maxMemory = 256.0 * 1024 * 1024;
     const GridSource cloud = makeSampleGrid(SampleGrid::Cloud, 0.08);
     const std::string pixels = message([&] {
-        Renderer(s).render(cloud, Camera(camera(Vec3d(1.5, 0.8, 4.5), Vec3d(0.0), 4096, 4096), cloud.worldCentre()));
+        Renderer(s).render(cloud, Camera(lookAtCamera(Vec3d(1.5, 0.8, 4.5), Vec3d(0.0), 4096, 4096), cloud.worldCentre()));
     });
     EXPECT_NE(pixels.find("16777216 pixels need 1.5 GB, over the memory budget of 256 MB (--max-memory)"), std::string::npos) << pixels;
     EXPECT_NE(pixels.find("grid 'density'"), std::string::npos) << pixels;
@@ -306,7 +296,7 @@ TEST(Extremes, MemoryBudgetStopsEachStageBeforeItAllocates)
     for (int i = 0; i < 64; ++i) tiles->tree().addTile(3, openvdb::Coord(4096 * i, 0, 0), 1.0f, true); // 64 x 4096^3 voxels
     const GridSource tiled = gridSourceFromOpenVDB(tiles);
     const std::string kernels = message([&] {
-        Renderer(s).render(tiled, Camera(camera(Vec3d(0.0, 0.0, 1e5), Vec3d(0.0), 64, 64), tiled.worldCentre()));
+        Renderer(s).render(tiled, Camera(lookAtCamera(Vec3d(0.0, 0.0, 1e5), Vec3d(0.0), 64, 64), tiled.worldCentre()));
     });
     EXPECT_NE(kernels.find("voxel and active-tile kernels need"), std::string::npos) << kernels;
 
@@ -316,7 +306,7 @@ TEST(Extremes, MemoryBudgetStopsEachStageBeforeItAllocates)
     RenderSettings wide = s;
     wide.splat.kernelSigma = 4.0;
     const std::string pairs = message([&] {
-        Renderer(wide).render(box, Camera(camera(Vec3d(0.0, 0.0, 11.0), Vec3d(0.0), 1024, 1024), box.worldCentre()));
+        Renderer(wide).render(box, Camera(lookAtCamera(Vec3d(0.0, 0.0, 11.0), Vec3d(0.0), 1024, 1024), box.worldCentre()));
     });
     EXPECT_NE(pairs.find("splat-tile pairs need"), std::string::npos) << pairs;
 
@@ -327,7 +317,7 @@ TEST(Extremes, MemoryBudgetStopsEachStageBeforeItAllocates)
     detail::SurfaceStats surfaceStats;
     const detail::MemoryBudget small(65536.0, "sphere");
     const std::string surfacePairs = message([&] {
-        detail::rasterizeSurfaces(surfaces, Camera(camera(Vec3d(0.0, 0.0, 3.0), Vec3d(0.0), 512, 512), Vec3d(0.0)), s,
+        detail::rasterizeSurfaces(surfaces, Camera(lookAtCamera(Vec3d(0.0, 0.0, 3.0), Vec3d(0.0), 512, 512), Vec3d(0.0)), s,
             sphere.impl().voxelLength, {}, surfaceStats, nullptr, &small);
     });
     EXPECT_NE(surfacePairs.find("splat-tile pairs need"), std::string::npos) << surfacePairs;

@@ -206,6 +206,17 @@ inline Camera cloudCamera(const GridSource& cloud, int width, int height)
     return Camera(cam, cloud.worldCentre());
 }
 
+/// A perspective camera of @a w x @a h pixels at @a eye looking at @a target.
+inline CameraSettings lookAtCamera(const Vec3d& eye, const Vec3d& target, int w, int h)
+{
+    CameraSettings c;
+    c.width = w;
+    c.height = h;
+    c.translate = eye;
+    c.lookAt = target;
+    return c;
+}
+
 /// Orthographic camera looking down -z at (x, y), from above z.
 inline CameraSettings orthoDownZ(double x, double y, double z, double frame, int res)
 {

@@ -70,14 +70,7 @@ constexpr int kWidth = 320, kHeight = 240;
 std::vector<View> views(const Scene& s)
 {
     const double tanHalf = 41.2136 / 2.0 / 50.0; // vdb_render's default aperture and focal length
-    auto base = [](const Vec3d& eye, const Vec3d& target) {
-        CameraSettings c;
-        c.width = kWidth;
-        c.height = kHeight;
-        c.translate = eye;
-        c.lookAt = target;
-        return c;
-    };
+    auto base = [](const Vec3d& eye, const Vec3d& target) { return lookAtCamera(eye, target, kWidth, kHeight); };
     std::vector<View> out;
     // The object about 60 pixels wide.
     out.push_back({"far", base(s.farDirection * (s.size * kWidth / 60.0 / (2.0 * tanHalf)), Vec3d(0.0))});
@@ -208,12 +201,7 @@ TEST(SurfaceCoverage, CubeFacesKeepTheirNormalsUpToTheEdges)
     constexpr double kEdgeBand = 2.0;
     const Scene cube = scenes()[1];
     const GridSource source = gridSourceFromOpenVDB(levelSet(cube));
-    CameraSettings settings;
-    settings.width = kWidth;
-    settings.height = kHeight;
-    settings.translate = Vec3d(2.2, 2.6, 3.4);
-    settings.lookAt = Vec3d(0.0);
-    const Camera camera(settings, source.worldCentre());
+    const Camera camera(lookAtCamera(Vec3d(2.2, 2.6, 3.4), Vec3d(0.0), kWidth, kHeight), source.worldCentre());
     RenderSettings shaded;
     shaded.surface.shader = SurfaceShader::Normal;
     const Image img = Renderer(shaded).render(source, camera);
