@@ -72,14 +72,18 @@ void Renderer::renderLevelSet(const GridSource::Impl& grid, const Camera& camera
     // At most one surface kernel an active voxel.
     const detail::MemoryBudget budget = budgetFor(grid, mSettings);
     budget.check(double(grid.activeVoxels), "active voxels (surface kernels)", detail::kBytesPerKernel);
-    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(grid, mSettings.surface.isovalue, mSettings.surface.sigma, false, &progress);
+    // Level of detail: the kernels' lattice spacing projects to at most half of --lod pixels.
+    const int lattice = detail::LevelOfDetail(grid, camera, mSettings.splat.lodPixels).surfaceLattice(detail::maxSurfaceLattice(grid));
+    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(grid, mSettings.surface.isovalue, mSettings.surface.sigma, false, &progress,
+        detail::kReachForDiscs, lattice);
     stats.kernelSeconds = timer.lap();
     progress.stage(60, 100);
     detail::SurfaceStats surfaceStats;
-    frame = detail::rasterizeSurfaces(surfaces, camera, mSettings, grid.voxelLength, passes, surfaceStats, &progress, &budget);
+    frame = detail::rasterizeSurfaces(surfaces, camera, mSettings, passes, surfaceStats, &progress, &budget);
     stats.rasterSeconds = timer.lap();
     stats.activeVoxels = surfaces.activeVoxels;
     stats.kernels = surfaces.kernels.size();
+    stats.surfaceLattice = surfaces.lattice;
     stats.kernelsCulled = surfaceStats.culled;
     stats.splats = surfaceStats.splats;
     stats.splatTilePairs = surfaceStats.splatTilePairs;

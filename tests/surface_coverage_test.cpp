@@ -53,10 +53,10 @@ std::vector<Scene> scenes()
     };
 }
 
-openvdb::FloatGrid::Ptr levelSet(const Scene& scene)
+openvdb::FloatGrid::Ptr levelSet(const Scene& scene, double voxel = kVoxel)
 {
-    const int n = int(std::ceil(scene.extent / kVoxel)) + 4;
-    return makeLevelSet(scene.sdf, openvdb::Coord(-n), openvdb::Coord(n), kVoxel);
+    const int n = int(std::ceil(scene.extent / voxel)) + 4;
+    return makeLevelSet(scene.sdf, openvdb::Coord(-n), openvdb::Coord(n), voxel);
 }
 
 struct View
@@ -66,17 +66,23 @@ struct View
 };
 
 constexpr int kWidth = 320, kHeight = 240;
+constexpr double kTanHalf = 41.2136 / 2.0 / 50.0; // vdb_render's default aperture and focal length
+
+/// The eye at which @a s spans about @a pixels pixels, from its far direction.
+Vec3d eyeSpanning(const Scene& s, double pixels)
+{
+    return s.farDirection * (s.size * kWidth / pixels / (2.0 * kTanHalf));
+}
 
 std::vector<View> views(const Scene& s)
 {
-    const double tanHalf = 41.2136 / 2.0 / 50.0; // vdb_render's default aperture and focal length
     auto base = [](const Vec3d& eye, const Vec3d& target) { return lookAtCamera(eye, target, kWidth, kHeight); };
     std::vector<View> out;
     // The object about 60 pixels wide.
-    out.push_back({"far", base(s.farDirection * (s.size * kWidth / 60.0 / (2.0 * tanHalf)), Vec3d(0.0))});
+    out.push_back({"far", base(eyeSpanning(s, 60.0), Vec3d(0.0))});
     // One voxel about 20 pixels wide.
     const Vec3d tilt = glm::normalize(s.normal + 0.2 * glm::normalize(glm::cross(s.normal, Vec3d(0.3, 1.0, 0.1))));
-    out.push_back({"near", base(s.point + tilt * (kVoxel * kWidth / 20.0 / (2.0 * tanHalf)), s.point)});
+    out.push_back({"near", base(s.point + tilt * (kVoxel * kWidth / 20.0 / (2.0 * kTanHalf)), s.point)});
     // 5 degrees above the tangent plane.
     const Vec3d tangent = glm::normalize(glm::cross(s.normal, std::abs(s.normal.y) < 0.9 ? Vec3d(0, 1, 0) : Vec3d(1, 0, 0)));
     const double a = 5.0 * 3.141592653589793 / 180.0;
@@ -187,6 +193,40 @@ TEST(SurfaceCoverage, ClosedLevelSetsAreOpaqueWhereverTheyAreHit)
                             float(hit[std::size_t(y + kMargin) * std::size_t(kWidth + 2 * kMargin) + std::size_t(x + kMargin)]);
                 writeExr(mask, std::string(keep) + "/coverage_" + scene.name + "_" + view.name + "_hits.exr");
             }
+        }
+    }
+}
+
+// Level of detail: where a voxel is half a pixel or less on screen, the kernels stand on every
+// 2nd or 4th voxel (--lod 2: the lattice step projects to at most one pixel), with the same
+// guarantees: no hole, the analytic silhouette. A sphere and a cube of 1 cm voxels, 64 and 32
+// pixels wide (voxels of about 0.35 and 0.17 pixels at the nearest leaf). Measured: holes 0,
+// IoU 0.996-1.0 with the lattice and at most 0.0005 below one kernel per voxel; kernels 4
+// and 16 times fewer. With crossings tested between neighbouring voxels instead of lattice
+// points, the 32-pixel sphere had 58 holes.
+TEST(SurfaceCoverage, DistantViewsTakeACoarserLatticeWithoutHoles)
+{
+    constexpr double kFine = 0.01;
+    for (const Scene& scene : {scenes()[0], scenes()[1]}) {
+        const GridSource source = gridSourceFromOpenVDB(levelSet(scene, kFine));
+        for (const auto& [pixels, lattice] : {std::pair{64.0, 2}, std::pair{32.0, 4}}) {
+            const Camera camera(lookAtCamera(eyeSpanning(scene, pixels), Vec3d(0.0), kWidth, kHeight), source.worldCentre());
+            const std::vector<std::uint8_t> hit = hitMask(scene, camera);
+            RenderStats lod, full;
+            RenderSettings perVoxel = matte();
+            perVoxel.splat.lodPixels = 0.0;
+            const Coverage c = measure(Renderer(matte()).render(source, camera, &lod), hit);
+            const Coverage reference = measure(Renderer(perVoxel).render(source, camera, &full), hit);
+            std::printf("%s, %.0f px: lattice %d, %llu kernels (%llu per voxel): holes %d, fringe %d, IoU %.4f (per voxel %.4f)\n",
+                scene.name, pixels, lod.surfaceLattice, static_cast<unsigned long long>(lod.kernels),
+                static_cast<unsigned long long>(full.kernels), c.holes, c.fringe, c.iou, reference.iou);
+            EXPECT_EQ(lod.surfaceLattice, lattice) << scene.name << ", " << pixels;
+            EXPECT_EQ(full.surfaceLattice, 1);
+            EXPECT_LT(double(lod.kernels), 1.5 * double(full.kernels) / double(lattice * lattice)) << scene.name;
+            EXPECT_EQ(c.holes, 0) << scene.name << ", " << pixels;
+            EXPECT_LE(c.fringe, 2) << scene.name << ", " << pixels;
+            EXPECT_GE(c.iou, 0.99) << scene.name << ", " << pixels;
+            EXPECT_GE(c.iou, reference.iou - 0.005) << scene.name << ", " << pixels;
         }
     }
 }

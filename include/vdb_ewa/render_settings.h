@@ -111,10 +111,10 @@ struct SurfaceOptions
 {
     double isovalue = 0.0;      ///< iso-surface of a level set, world units (vdb_render -isovalue)
     SurfaceShader shader = SurfaceShader::Diffuse;
-    double sigma = 0.55;        ///< surface kernel std. deviation in voxels along the tangent plane
+    double sigma = 0.55;        ///< surface kernel std. deviation in voxels (lattice steps under --lod) along the tangent plane
                                 ///< (Sec. 6.4; wider than SplatOptions::kernelSigma so that no holes
                                 ///< open between samples)
-    double tolerance = 4.0;     ///< z-buffer depth tolerance in voxel lengths (Sec. 7.2)
+    double tolerance = 4.0;     ///< z-buffer depth tolerance in voxel lengths (lattice steps under --lod) (Sec. 7.2)
     /// Fog volumes: also render the iso-surface density == iso with flattened surface kernels
     /// composited with the volume's (Sec. 6.4); NaN = off.
     double iso = std::numeric_limits<double>::quiet_NaN();

@@ -120,7 +120,7 @@ std::vector<SurfaceSplat> projectSurfaceSplats(const SurfaceSet& set, const Came
 } // namespace
 
 Frame rasterizeSurfaces(const SurfaceSet& set, const Camera& camera, const RenderSettings& settings,
-    double voxelLength, const PassRequest& passes, SurfaceStats& stats, Progress* progress, const MemoryBudget* budget)
+    const PassRequest& passes, SurfaceStats& stats, Progress* progress, const MemoryBudget* budget)
 {
     const int width = camera.width(), height = camera.height();
     Frame frame = blankFrame(width, height, passes);
@@ -130,7 +130,7 @@ Frame rasterizeSurfaces(const SurfaceSet& set, const Camera& camera, const Rende
     stats.culled = set.kernels.size() - splats.size();
     const TileBins bins = binSplats(splats, width, height, budget);
     stats.splatTilePairs = bins.indices.size();
-    const double tolerance = settings.surface.tolerance * voxelLength;
+    const double tolerance = settings.surface.tolerance * set.spacing;
 
     const int tiles = bins.tilesX * bins.tilesY;
     setUnits(progress, std::uint64_t(tiles));

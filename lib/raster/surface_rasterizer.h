@@ -24,8 +24,8 @@ struct SurfaceStats
 /// Back-facing kernels are culled. Per pixel, its (splat, pixel) pairs in depth order (the
 /// tangent plane's depth along the pixel's ray), in up to 4 layers front to back: a layer's
 /// front is the nearest pair whose disc covers one of the pixel's 4x4 subsamples not yet
-/// covered (raster/disc_coverage.h), and the pairs within settings.surface.tolerance voxel
-/// lengths of it join it. Weight w = area x footprint; a layer's colour = sum w c / sum w over
+/// covered (raster/disc_coverage.h), and the pairs within settings.surface.tolerance lattice
+/// steps (SurfaceSet::spacing) of it join it. Weight w = area x footprint; a layer's colour = sum w c / sum w over
 /// its pairs on the kept side of their crease clips, spread over the subsamples it newly
 /// covers; alpha = covered subsamples / 16. Deterministic (ties by kernel order). Z, where
 /// alpha >= 0.5: the front layer's weighted mean depth. Passes: depth and transmittance
@@ -33,7 +33,7 @@ struct SurfaceStats
 /// @a progress: one unit per screen tile; throws Cancelled. @a budget: the splat-tile pairs are
 /// counted against it before they are stored (BudgetError).
 Frame rasterizeSurfaces(const SurfaceSet& surfaces, const Camera& camera, const RenderSettings& settings,
-    double voxelLength, const PassRequest& passes, SurfaceStats& stats, Progress* progress = nullptr,
+    const PassRequest& passes, SurfaceStats& stats, Progress* progress = nullptr,
     const MemoryBudget* budget = nullptr);
 
 } // namespace detail

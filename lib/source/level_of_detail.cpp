@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 namespace vdb_ewa {
 namespace detail {
@@ -38,6 +39,21 @@ int LevelOfDetail::blockSize(const openvdb::Coord& min, int dim) const
     const double px = voxelPixels(min, dim);
     int s = 1;
     while (2 * s <= dim && double(2 * s) * px <= mMaxPixels) s *= 2;
+    return s;
+}
+
+int LevelOfDetail::surfaceLattice(int maxLattice) const
+{
+    if (!(mMaxPixels > 0.0) || maxLattice < 2) return 1;
+    std::vector<const openvdb::FloatTree::LeafNodeType*> leaves;
+    mGrid.grid->tree().getNodes(leaves);
+    double px = 0.0; // the largest voxel on screen
+    for (const auto* leaf : leaves) {
+        px = std::max(px, voxelPixels(leaf->origin(), int(openvdb::FloatTree::LeafNodeType::DIM)));
+        if (!(double(2) * px <= 0.5 * mMaxPixels)) return 1; // also +inf: a node at the eye
+    }
+    int s = 1;
+    while (2 * s <= maxLattice && double(2 * s) * px <= 0.5 * mMaxPixels) s *= 2;
     return s;
 }
 

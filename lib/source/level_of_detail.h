@@ -22,6 +22,12 @@ public:
     /// projects to at most maxPixels pixels. 1 = one kernel per voxel.
     int blockSize(const openvdb::Coord& min, int dim) const;
 
+    /// Lattice step (voxels, a power of two <= @a maxLattice) for surface kernels over the
+    /// whole grid: the largest whose spacing projects to at most maxPixels / 2 pixels at every
+    /// leaf node's nearest point (one step for all, so that neighbouring discs are alike).
+    /// 1 = one kernel per voxel.
+    int surfaceLattice(int maxLattice) const;
+
     /// Screen size in pixels of one voxel's longest axis at the node's nearest point (+inf
     /// when the node reaches the eye's side of the near plane).
     double voxelPixels(const openvdb::Coord& min, int dim) const;

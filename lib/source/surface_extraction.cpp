@@ -28,17 +28,17 @@ constexpr double kCreaseMargin = 0.1;
 /// disc's part in front of b's plane overhangs the surface (a cube's faces past its edges).
 /// False for smooth turns, concave creases (a's centre in front of b's plane) and the far side
 /// of thin parts (normals more than 96 degrees apart).
-bool creaseClip(const SurfaceKernel& a, const SurfaceKernel& b, double voxelLength, DiscClip& clip)
+bool creaseClip(const SurfaceKernel& a, const SurfaceKernel& b, double spacing, DiscClip& clip)
 {
     const double turn = glm::dot(a.normal, b.normal);
     if (turn >= kCreaseCos || turn < -0.1) return false;
     const double offset = glm::dot(b.normal, b.pWorld - a.pWorld); // a's centre is this far behind b's plane
-    if (offset < -0.05 * voxelLength) return false;
+    if (offset < -0.05 * spacing) return false;
     const Vec3d across = b.normal - turn * a.normal; // b's normal in a's tangent plane
     const double length = glm::length(across);
     if (!(length > 1e-6)) return false;
     clip.direction = glm::vec3(across / length);
-    clip.distance = float((std::max(offset, 0.0) + kCreaseMargin * voxelLength) / length);
+    clip.distance = float((std::max(offset, 0.0) + kCreaseMargin * spacing) / length);
     return true;
 }
 
@@ -91,11 +91,11 @@ void chooseClips(const std::vector<DiscClip>& candidates, std::vector<DiscClip>&
 /// curvature radius). The distance to the kNeighboursCovered-th nearest neighbour on the same
 /// sheet, tangentially, at most @a maxRadius (3 sigma); @a maxRadius where there are fewer.
 constexpr std::size_t kNeighboursCovered = 8;
-double discRadiusFrom(std::vector<double>& spacing, double maxRadius)
+double discRadiusFrom(std::vector<double>& distances, double maxRadius)
 {
-    if (spacing.size() < kNeighboursCovered) return maxRadius;
-    std::nth_element(spacing.begin(), spacing.begin() + std::ptrdiff_t(kNeighboursCovered - 1), spacing.end());
-    return std::min(maxRadius, spacing[kNeighboursCovered - 1]);
+    if (distances.size() < kNeighboursCovered) return maxRadius;
+    std::nth_element(distances.begin(), distances.begin() + std::ptrdiff_t(kNeighboursCovered - 1), distances.end());
+    return std::min(maxRadius, distances[kNeighboursCovered - 1]);
 }
 
 /// What each kernel takes from its neighbours on the surface (index offsets up to @a radius):
@@ -106,7 +106,7 @@ double discRadiusFrom(std::vector<double>& spacing, double maxRadius)
 /// Disc radius: discRadiusFrom the same neighbours' tangential distances.
 /// Disc clips: the nearest convex creases within the disc (creaseClip, chooseClips).
 void relateNeighbours(std::vector<SurfaceKernel>& kernels, const std::vector<openvdb::Coord>& voxels, double sigma,
-    double voxelLength, int radius)
+    double spacing, int radius)
 {
     openvdb::Int32Grid index(-1);
     {
@@ -114,7 +114,7 @@ void relateNeighbours(std::vector<SurfaceKernel>& kernels, const std::vector<ope
         for (std::size_t i = 0; i < voxels.size(); ++i) acc.setValueOn(voxels[i], int(i));
     }
     const double twoPiS2 = 6.283185307179586 * sigma * sigma, inv2S2 = 0.5 / (sigma * sigma);
-    const double maxNormalOffset = 1.5 * voxelLength;
+    const double maxNormalOffset = 1.5 * spacing;
     const double discRadius = kDiscRadiusSigmas * sigma;
     std::vector<double> areas(kernels.size()), radii(kernels.size());
     std::vector<std::array<DiscClip, 3>> clips(kernels.size());
@@ -131,7 +131,7 @@ void relateNeighbours(std::vector<SurfaceKernel>& kernels, const std::vector<ope
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leafStarts.size() - 1, 16), [&](const tbb::blocked_range<std::size_t>& r) {
         auto acc = index.getConstAccessor();
         std::vector<int> block(std::size_t(side) * std::size_t(side) * std::size_t(side));
-        std::vector<double> spacing; // tangential distances to the neighbours on the same sheet
+        std::vector<double> distances; // tangential distances to the neighbours on the same sheet
         std::vector<DiscClip> candidates, kept;
         for (std::size_t leaf = r.begin(); leaf < r.end(); ++leaf) {
             const openvdb::Coord corner = (voxels[leafStarts[leaf]] & ~7).offsetBy(-radius);
@@ -144,7 +144,7 @@ void relateNeighbours(std::vector<SurfaceKernel>& kernels, const std::vector<ope
                 SurfaceKernel a = kernels[k];
                 a.clipCount = 0;
                 double density = 0.0;
-                spacing.clear();
+                distances.clear();
                 candidates.clear();
                 const openvdb::Coord c = voxels[k] - corner; // >= radius along each axis
                 for (int i = -radius; i <= radius; ++i)
@@ -156,15 +156,15 @@ void relateNeighbours(std::vector<SurfaceKernel>& kernels, const std::vector<ope
                             const Vec3d d = b.pWorld - a.pWorld;
                             const double along = glm::dot(d, a.normal);
                             DiscClip clip;
-                            if (creaseClip(a, b, voxelLength, clip) && clip.distance < discRadius) mergeClip(candidates, clip);
+                            if (creaseClip(a, b, spacing, clip) && clip.distance < discRadius) mergeClip(candidates, clip);
                             if (std::abs(along) > maxNormalOffset || glm::dot(a.normal, b.normal) < 0.3) continue;
                             const double tangential2 = std::max(0.0, glm::dot(d, d) - along * along);
                             density += std::exp(-tangential2 * inv2S2) / twoPiS2;
-                            if (other != int(k)) spacing.push_back(std::sqrt(tangential2));
+                            if (other != int(k)) distances.push_back(std::sqrt(tangential2));
                         }
                 areas[k] = 1.0 / density; // density includes the kernel itself: > 0
                 chooseClips(candidates, kept, a);
-                radii[k] = discRadiusFrom(spacing, discRadius);
+                radii[k] = discRadiusFrom(distances, discRadius);
                 clips[k] = a.clips;
                 clipCounts[k] = a.clipCount;
             }
@@ -180,13 +180,24 @@ void relateNeighbours(std::vector<SurfaceKernel>& kernels, const std::vector<ope
 
 } // namespace
 
+int maxSurfaceLattice(const GridSource::Impl& grid)
+{
+    const double halfWidth = std::abs(double(grid.grid->background())) / grid.voxelLength; // voxels
+    int s = 1;
+    while (2 * s <= 8 && double(2 * s) / 2.0 + 0.5 <= halfWidth) s *= 2;
+    return s;
+}
+
 SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, double isovalue, double kernelSigma, bool outwardDecreasing,
-    Progress* progress, double reach)
+    Progress* progress, double reach, int lattice)
 {
     SurfaceSet out;
     const openvdb::FloatTree& tree = grid.grid->tree();
     const auto& xform = grid.grid->transform();
-    out.sigma = kernelSigma * grid.voxelLength;
+    const int s = lattice;
+    out.lattice = s;
+    out.spacing = grid.voxelLength * s;
+    out.sigma = kernelSigma * out.spacing;
     out.activeVoxels = tree.activeLeafVoxelCount();
     const openvdb::CoordBBox box = grid.grid->evalActiveVoxelBoundingBox();
     if (!box.empty()) {
@@ -199,48 +210,65 @@ SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, double isovalue, 
     tree.getNodes(leaves);
     std::vector<std::vector<SurfaceKernel>> perLeaf(leaves.size());
     std::vector<std::vector<openvdb::Coord>> perLeafVoxels(leaves.size());
-    const double reject = 2.0 * grid.voxelLength; // |f - iso| / |grad| beyond this cannot land in reach
+    const double reject = 2.0 * out.spacing; // |f - iso| / |grad| beyond this cannot land in reach
     setUnits(progress, leaves.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size()), [&](const tbb::blocked_range<std::size_t>& r) {
         openvdb::tree::ValueAccessor<const openvdb::FloatTree> acc(tree);
         MaterialColor color(grid);
-        for (std::size_t l = r.begin(); l < r.end(); ++l) {
-            for (auto it = leaves[l]->cbeginValueOn(); it; ++it) {
-                const double d = double(*it) - isovalue;
-                if (!std::isfinite(d)) continue;
-                const openvdb::Coord ijk = it.getCoord();
-                // Index-space gradient by central differences (the band's sign is kept by the
-                // background value outside it).
-                Vec3d g;
-                bool crosses = d == 0.0; // the surface passes between this voxel and a neighbour
-                for (int a = 0; a < 3; ++a) {
-                    openvdb::Coord lo = ijk, hi = ijk;
-                    lo[a] -= 1;
-                    hi[a] += 1;
-                    const double vLo = acc.getValue(lo), vHi = acc.getValue(hi);
-                    g[a] = 0.5 * (vHi - vLo);
-                    crosses = crosses || (vLo - isovalue) * d <= 0.0 || (vHi - isovalue) * d <= 0.0;
-                }
-                if (!crosses) continue;
-                const openvdb::Vec3d c(ijk.x(), ijk.y(), ijk.z());
-                const Mat3d A = grid.linear ? grid.indexToWorldLinear : indexToWorldJacobian(xform, c);
-                const Mat3d Ainv = glm::inverse(A);
-                const Vec3d gWorld = glm::transpose(Ainv) * g; // df/dworld = A^-T df/dindex
-                const double g2 = glm::dot(gWorld, gWorld);
-                if (!(g2 > 1e-24) || !std::isfinite(g2)) continue;
-                if (!(std::abs(d) < reject * std::sqrt(g2))) continue; // the distance estimate |d| / |g|
-                // Newton step onto the iso-surface, in world and in index units.
-                const Vec3d stepWorld = -d * gWorld / g2;
-                const Vec3d stepIndex = Ainv * stepWorld;
-                if (std::max({std::abs(stepIndex.x), std::abs(stepIndex.y), std::abs(stepIndex.z)}) > reach) continue;
-                SurfaceKernel k;
-                k.normal = (outwardDecreasing ? -1.0 : 1.0) * gWorld / std::sqrt(g2);
-                k.pWorld = grid.indexToWorld(Vec3d(c.x(), c.y(), c.z())) + stepWorld;
-                k.area = 0.0; // relateNeighbours
-                k.albedo = color.at(k.pWorld);
-                perLeaf[l].push_back(k);
-                perLeafVoxels[l].push_back(ijk);
+        std::size_t l = 0;
+        auto visit = [&](const openvdb::Coord& ijk, double value) {
+            const double d = value - isovalue;
+            if (!std::isfinite(d)) return;
+            // Index-space gradient by central differences (the band's sign is kept by the
+            // background value outside it); the crossing between lattice neighbours.
+            Vec3d g;
+            bool crosses = d == 0.0; // the surface passes between this point and a neighbour
+            for (int a = 0; a < 3; ++a) {
+                openvdb::Coord lo = ijk, hi = ijk;
+                lo[a] -= 1;
+                hi[a] += 1;
+                g[a] = 0.5 * (double(acc.getValue(hi)) - double(acc.getValue(lo)));
+                lo[a] -= s - 1;
+                hi[a] += s - 1;
+                crosses = crosses || (double(acc.getValue(lo)) - isovalue) * d <= 0.0 || (double(acc.getValue(hi)) - isovalue) * d <= 0.0;
             }
+            if (!crosses) return;
+            const openvdb::Vec3d c(ijk.x(), ijk.y(), ijk.z());
+            const Mat3d A = grid.linear ? grid.indexToWorldLinear : indexToWorldJacobian(xform, c);
+            const Mat3d Ainv = glm::inverse(A);
+            const Vec3d gWorld = glm::transpose(Ainv) * g; // df/dworld = A^-T df/dindex
+            const double g2 = glm::dot(gWorld, gWorld);
+            if (!(g2 > 1e-24) || !std::isfinite(g2)) return;
+            if (!(std::abs(d) < reject * std::sqrt(g2))) return; // the distance estimate |d| / |g|
+            // Newton step onto the iso-surface, in world and in index units.
+            const Vec3d stepWorld = -d * gWorld / g2;
+            const Vec3d stepIndex = Ainv * stepWorld;
+            // Within reach: where the surface lies halfway between two points (a cube's face on a
+            // lattice boundary) both keep a kernel; a one-sided rule would drop a thin plate's
+            // sheet, whose only other candidate has no gradient.
+            if (std::max({std::abs(stepIndex.x), std::abs(stepIndex.y), std::abs(stepIndex.z)}) > reach * s) return;
+            SurfaceKernel k;
+            k.normal = (outwardDecreasing ? -1.0 : 1.0) * gWorld / std::sqrt(g2);
+            k.pWorld = grid.indexToWorld(Vec3d(c.x(), c.y(), c.z())) + stepWorld;
+            k.area = 0.0; // relateNeighbours
+            k.albedo = color.at(k.pWorld);
+            perLeaf[l].push_back(k);
+            perLeafVoxels[l].push_back(openvdb::Coord(ijk.x() / s, ijk.y() / s, ijk.z() / s)); // exact: multiples of s
+        };
+        using Leaf = openvdb::FloatTree::LeafNodeType;
+        for (l = r.begin(); l < r.end(); ++l) {
+            const Leaf& leaf = *leaves[l];
+            if (s == 1) {
+                for (auto it = leaf.cbeginValueOn(); it; ++it) visit(it.getCoord(), double(*it));
+                continue;
+            }
+            // The lattice points of the leaf (its origin is a multiple of 8, and s divides 8).
+            for (int i = 0; i < int(Leaf::DIM); i += s)
+                for (int j = 0; j < int(Leaf::DIM); j += s)
+                    for (int k = 0; k < int(Leaf::DIM); k += s) {
+                        const openvdb::Index offset = Leaf::coordToOffset(openvdb::Coord(i, j, k));
+                        if (leaf.isValueOn(offset)) visit(leaf.offsetToGlobalCoord(offset), double(leaf.getValue(offset)));
+                    }
         }
         advance(progress, r.size());
     });
@@ -253,11 +281,11 @@ SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, double isovalue, 
         out.kernels.insert(out.kernels.end(), perLeaf[l].begin(), perLeaf[l].end());
         voxels.insert(voxels.end(), perLeafVoxels[l].begin(), perLeafVoxels[l].end());
     }
-    // Neighbours within two voxels: at sigma = 0.55 voxels a kernel two voxels away along the
-    // surface adds 0.14 % of a kernel's own weight (duplicates across layers, up to two voxels
-    // apart along the normal, are inside). Wider kernels look farther.
+    // Neighbours within two lattice steps: at sigma = 0.55 steps a kernel two steps away along
+    // the surface adds 0.14 % of a kernel's own weight (duplicates across layers, up to two
+    // steps apart along the normal, are inside). Wider kernels look farther.
     const int radius = std::max(2, int(std::ceil(3.5 * kernelSigma)));
-    relateNeighbours(out.kernels, voxels, out.sigma, grid.voxelLength, radius);
+    relateNeighbours(out.kernels, voxels, out.sigma, out.spacing, radius);
     return out;
 }
 

@@ -37,6 +37,8 @@ struct SurfaceSet
 {
     std::vector<SurfaceKernel> kernels; ///< in tree order (deterministic)
     double sigma = 0;                   ///< tangential std. deviation, world units
+    int lattice = 1;                    ///< the kernels stand on every lattice-th voxel (level of detail)
+    double spacing = 0;                 ///< world length of a lattice step: voxel length x lattice
     Vec3d boundsMin{0.0}, boundsMax{0.0}; ///< world box of the active voxels (position shader)
     std::uint64_t activeVoxels = 0;
 };
@@ -63,8 +65,18 @@ constexpr double kReachForDiscs = 0.5, kReachForWeights = 1.0;
 /// @a outwardDecreasing: the surface's outside is where values fall (fog volumes: the normal
 /// is minus the gradient); level sets grow outwards (the normal is the gradient).
 /// @a progress: one unit per leaf node; throws Cancelled.
+/// @a lattice (a power of two, at most maxSurfaceLattice): level of detail. Only the voxels
+/// whose indices are multiples of @a lattice are candidates, their crossings are tested against
+/// the candidates @a lattice voxels away, and the rules above hold in lattice steps: the grid
+/// seen as sampled every @a lattice voxels (the band's values are distances, exact at any
+/// step), with the gradient still taken from the voxel's own neighbours.
 SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, double isovalue, double kernelSigma,
-    bool outwardDecreasing = false, Progress* progress = nullptr, double reach = kReachForDiscs);
+    bool outwardDecreasing = false, Progress* progress = nullptr, double reach = kReachForDiscs, int lattice = 1);
+
+/// The largest lattice extractSurfaceKernels may take on this level set: every crossing
+/// between two lattice points lies within lattice / 2 voxels of one of them, which must be
+/// active, inside the narrow band (the background value is its half-width); at most 8.
+int maxSurfaceLattice(const GridSource::Impl& grid);
 
 /// Largest radius of a surface kernel's disc (the coverage test) in tangential standard
 /// deviations; also the radius where a kernel has fewer neighbours than its rule needs. The
