@@ -72,8 +72,8 @@ void Renderer::renderLevelSet(const GridSource::Impl& grid, const Camera& camera
     // At most one surface kernel an active voxel.
     const detail::MemoryBudget budget = budgetFor(grid, mSettings);
     budget.check(double(grid.activeVoxels), "active voxels (surface kernels)", detail::kBytesPerKernel);
-    // Level of detail: the kernels' lattice spacing projects to at most half of --lod pixels.
-    const int lattice = detail::LevelOfDetail(grid, camera, mSettings.splat.lodPixels).surfaceLattice(detail::maxSurfaceLattice(grid));
+    // Level of detail: the kernels' lattice spacing projects to at most a quarter of --lod pixels.
+    const int lattice = detail::LevelOfDetail(grid, camera, mSettings.splat.lodPixels).surfaceLattice(detail::kMaxSurfaceLattice);
     const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(grid, mSettings.surface.isovalue, mSettings.surface.sigma, false, &progress,
         detail::kReachForDiscs, lattice);
     stats.kernelSeconds = timer.lap();

@@ -101,7 +101,7 @@ public:
         mApp->add_option("--precision", mPrecision, "world-to-camera transform and covariances in double or float (default: double)");
         mApp->add_option("--tile-spacing", mTileSpacing, "largest kernel spacing in voxels for active tiles, 1 to voxelise them (default: 4)");
         mApp->add_option("--refine", mRefine, "where voxels span N pixels or more, their kernels on a lattice N times finer: the trilinear field sampled every 1/N voxel, kernels N times narrower, N^3 as many; range [1, 4], 1 = off (default: " + std::to_string(rs.splat.refine) + ")");
-        mApp->add_option("--lod", mLod, "level of detail, pixels in [0, 64]: fog volumes: blocks of 2, 4 or 8 voxels a side become one kernel where the block projects to at most this many pixels; level sets: surface kernels on every 2nd or 4th voxel where that step projects to at most half as many; 0 = off (default: " + fmt(rs.splat.lodPixels) + ")");
+        mApp->add_option("--lod", mLod, "level of detail, pixels in [0, 64]: fog volumes: blocks of 2, 4 or 8 voxels a side become one kernel where the block projects to at most this many pixels; level sets: surface kernels on every 2nd or 4th voxel where that step projects to at most a quarter as many; 0 = off (default: " + fmt(rs.splat.lodPixels) + ")");
         // Fog volumes with an iso-surface.
         mApp->add_option("--iso", mIso,
             "fog volumes: also render the iso-surface density = VALUE with flattened surface kernels, lit by "

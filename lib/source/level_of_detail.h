@@ -23,7 +23,7 @@ public:
     int blockSize(const openvdb::Coord& min, int dim) const;
 
     /// Lattice step (voxels, a power of two <= @a maxLattice) for surface kernels over the
-    /// whole grid: the largest whose spacing projects to at most maxPixels / 2 pixels at every
+    /// whole grid: the largest whose spacing projects to at most maxPixels / 4 pixels at every
     /// leaf node's nearest point (one step for all, so that neighbouring discs are alike).
     /// 1 = one kernel per voxel.
     int surfaceLattice(int maxLattice) const;

@@ -108,10 +108,17 @@ double discRadiusFrom(std::vector<double>& distances, double maxRadius)
 void relateNeighbours(std::vector<SurfaceKernel>& kernels, const std::vector<openvdb::Coord>& voxels, double sigma,
     double spacing, int radius)
 {
+    // The kernels at each coordinate, which are consecutive: the first's index x 4 + count - 1
+    // (one a voxel; up to kMaxSheetsPerBlock a level-of-detail block). The memory budget keeps
+    // the kernels far below 2^29.
+    static_assert(kMaxSheetsPerBlock <= 4, "two bits of the index hold the count");
     openvdb::Int32Grid index(-1);
     {
         auto acc = index.getAccessor();
-        for (std::size_t i = 0; i < voxels.size(); ++i) acc.setValueOn(voxels[i], int(i));
+        for (std::size_t i = 0; i < voxels.size(); ++i) {
+            if (i > 0 && voxels[i] == voxels[i - 1]) acc.setValueOn(voxels[i], acc.getValue(voxels[i]) + 1);
+            else acc.setValueOn(voxels[i], int(4 * i));
+        }
     }
     const double twoPiS2 = 6.283185307179586 * sigma * sigma, inv2S2 = 0.5 / (sigma * sigma);
     const double maxNormalOffset = 1.5 * spacing;
@@ -150,17 +157,19 @@ void relateNeighbours(std::vector<SurfaceKernel>& kernels, const std::vector<ope
                 for (int i = -radius; i <= radius; ++i)
                     for (int j = -radius; j <= radius; ++j)
                         for (int l = -radius; l <= radius; ++l) {
-                            const int other = block[std::size_t(((c.x() + i) * side + c.y() + j) * side + c.z() + l)];
-                            if (other < 0) continue;
-                            const SurfaceKernel& b = kernels[std::size_t(other)];
-                            const Vec3d d = b.pWorld - a.pWorld;
-                            const double along = glm::dot(d, a.normal);
-                            DiscClip clip;
-                            if (creaseClip(a, b, spacing, clip) && clip.distance < discRadius) mergeClip(candidates, clip);
-                            if (std::abs(along) > maxNormalOffset || glm::dot(a.normal, b.normal) < 0.3) continue;
-                            const double tangential2 = std::max(0.0, glm::dot(d, d) - along * along);
-                            density += std::exp(-tangential2 * inv2S2) / twoPiS2;
-                            if (other != int(k)) distances.push_back(std::sqrt(tangential2));
+                            const int entry = block[std::size_t(((c.x() + i) * side + c.y() + j) * side + c.z() + l)];
+                            if (entry < 0) continue;
+                            for (int other = entry / 4; other <= entry / 4 + entry % 4; ++other) {
+                                const SurfaceKernel& b = kernels[std::size_t(other)];
+                                const Vec3d d = b.pWorld - a.pWorld;
+                                const double along = glm::dot(d, a.normal);
+                                DiscClip clip;
+                                if (creaseClip(a, b, spacing, clip) && clip.distance < discRadius) mergeClip(candidates, clip);
+                                if (std::abs(along) > maxNormalOffset || glm::dot(a.normal, b.normal) < 0.3) continue; // another sheet
+                                const double tangential2 = std::max(0.0, glm::dot(d, d) - along * along);
+                                density += std::exp(-tangential2 * inv2S2) / twoPiS2;
+                                if (other != int(k)) distances.push_back(std::sqrt(tangential2));
+                            }
                         }
                 areas[k] = 1.0 / density; // density includes the kernel itself: > 0
                 chooseClips(candidates, kept, a);
@@ -178,15 +187,57 @@ void relateNeighbours(std::vector<SurfaceKernel>& kernels, const std::vector<ope
     }
 }
 
-} // namespace
-
-int maxSurfaceLattice(const GridSource::Impl& grid)
+/// Level of detail: of one leaf's kernels (@a voxels, in the leaf), each block of @a s^3 voxels
+/// (s divides the leaf's 8) keeps, for each sheet through it, the kernel nearest the block's
+/// centre, and gives it the block's coordinates (voxel / s). Kernels whose normals turn by
+/// more than 40 degrees (kCreaseCos) are on different sheets: a crease's two faces, a thin
+/// plate's two sides; keeping both keeps the creases' clips and the plate's far side. At most
+/// kMaxSheetsPerBlock sheets a block, in the order they come; kept kernels are grouped by block.
+void thinToLattice(std::vector<SurfaceKernel>& kernels, std::vector<openvdb::Coord>& voxels, int s, const GridSource::Impl& grid)
 {
-    const double halfWidth = std::abs(double(grid.grid->background())) / grid.voxelLength; // voxels
-    int s = 1;
-    while (2 * s <= 8 && double(2 * s) / 2.0 + 0.5 <= halfWidth) s *= 2;
-    return s;
+    constexpr int kDim = int(openvdb::FloatTree::LeafNodeType::DIM);
+    const int n = kDim / s;
+    struct Sheet
+    {
+        int kernel;
+        double distance; // squared, to the block's centre
+    };
+    std::vector<std::array<Sheet, kMaxSheetsPerBlock>> sheets(std::size_t(n * n * n));
+    std::vector<int> counts(sheets.size(), 0);
+    auto blockOf = [&](const openvdb::Coord& v) {
+        return std::size_t((((v.x() & (kDim - 1)) / s) * n + (v.y() & (kDim - 1)) / s) * n + (v.z() & (kDim - 1)) / s);
+    };
+    // v less its remainder (two's complement keeps it in [0, s)), divided exactly.
+    auto lattice = [s](const openvdb::Coord& v) {
+        return openvdb::Coord((v.x() - (v.x() & (s - 1))) / s, (v.y() - (v.y() & (s - 1))) / s, (v.z() - (v.z() & (s - 1))) / s);
+    };
+    for (std::size_t i = 0; i < kernels.size(); ++i) {
+        const std::size_t b = blockOf(voxels[i]);
+        const openvdb::Coord l = lattice(voxels[i]);
+        const Vec3d centre = grid.indexToWorld(Vec3d(l.x(), l.y(), l.z()) * double(s) + Vec3d(0.5 * (s - 1)));
+        const Vec3d d = kernels[i].pWorld - centre;
+        const Sheet candidate{int(i), glm::dot(d, d)};
+        int c = 0;
+        while (c < counts[b] && glm::dot(kernels[std::size_t(sheets[b][std::size_t(c)].kernel)].normal, kernels[i].normal) < kCreaseCos) ++c;
+        if (c == counts[b]) {
+            if (c < kMaxSheetsPerBlock) sheets[b][std::size_t(counts[b]++)] = candidate;
+        } else if (candidate.distance < sheets[b][std::size_t(c)].distance) {
+            sheets[b][std::size_t(c)] = candidate;
+        }
+    }
+    std::vector<SurfaceKernel> keptKernels;
+    std::vector<openvdb::Coord> keptVoxels;
+    for (std::size_t b = 0; b < sheets.size(); ++b)
+        for (int c = 0; c < counts[b]; ++c) {
+            const std::size_t k = std::size_t(sheets[b][std::size_t(c)].kernel);
+            keptKernels.push_back(kernels[k]);
+            keptVoxels.push_back(lattice(voxels[k]));
+        }
+    kernels.swap(keptKernels);
+    voxels.swap(keptVoxels);
 }
+
+} // namespace
 
 SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, double isovalue, double kernelSigma, bool outwardDecreasing,
     Progress* progress, double reach, int lattice)
@@ -210,65 +261,49 @@ SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, double isovalue, 
     tree.getNodes(leaves);
     std::vector<std::vector<SurfaceKernel>> perLeaf(leaves.size());
     std::vector<std::vector<openvdb::Coord>> perLeafVoxels(leaves.size());
-    const double reject = 2.0 * out.spacing; // |f - iso| / |grad| beyond this cannot land in reach
+    const double reject = 2.0 * grid.voxelLength; // |f - iso| / |grad| beyond this cannot land in reach
     setUnits(progress, leaves.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size()), [&](const tbb::blocked_range<std::size_t>& r) {
         openvdb::tree::ValueAccessor<const openvdb::FloatTree> acc(tree);
         MaterialColor color(grid);
-        std::size_t l = 0;
-        auto visit = [&](const openvdb::Coord& ijk, double value) {
-            const double d = value - isovalue;
-            if (!std::isfinite(d)) return;
-            // Index-space gradient by central differences (the band's sign is kept by the
-            // background value outside it); the crossing between lattice neighbours.
-            Vec3d g;
-            bool crosses = d == 0.0; // the surface passes between this point and a neighbour
-            for (int a = 0; a < 3; ++a) {
-                openvdb::Coord lo = ijk, hi = ijk;
-                lo[a] -= 1;
-                hi[a] += 1;
-                g[a] = 0.5 * (double(acc.getValue(hi)) - double(acc.getValue(lo)));
-                lo[a] -= s - 1;
-                hi[a] += s - 1;
-                crosses = crosses || (double(acc.getValue(lo)) - isovalue) * d <= 0.0 || (double(acc.getValue(hi)) - isovalue) * d <= 0.0;
+        for (std::size_t l = r.begin(); l < r.end(); ++l) {
+            for (auto it = leaves[l]->cbeginValueOn(); it; ++it) {
+                const double d = double(*it) - isovalue;
+                if (!std::isfinite(d)) continue;
+                const openvdb::Coord ijk = it.getCoord();
+                // Index-space gradient by central differences (the band's sign is kept by the
+                // background value outside it).
+                Vec3d g;
+                bool crosses = d == 0.0; // the surface passes between this voxel and a neighbour
+                for (int a = 0; a < 3; ++a) {
+                    openvdb::Coord lo = ijk, hi = ijk;
+                    lo[a] -= 1;
+                    hi[a] += 1;
+                    const double vLo = acc.getValue(lo), vHi = acc.getValue(hi);
+                    g[a] = 0.5 * (vHi - vLo);
+                    crosses = crosses || (vLo - isovalue) * d <= 0.0 || (vHi - isovalue) * d <= 0.0;
+                }
+                if (!crosses) continue;
+                const openvdb::Vec3d c(ijk.x(), ijk.y(), ijk.z());
+                const Mat3d A = grid.linear ? grid.indexToWorldLinear : indexToWorldJacobian(xform, c);
+                const Mat3d Ainv = glm::inverse(A);
+                const Vec3d gWorld = glm::transpose(Ainv) * g; // df/dworld = A^-T df/dindex
+                const double g2 = glm::dot(gWorld, gWorld);
+                if (!(g2 > 1e-24) || !std::isfinite(g2)) continue;
+                if (!(std::abs(d) < reject * std::sqrt(g2))) continue; // the distance estimate |d| / |g|
+                // Newton step onto the iso-surface, in world and in index units.
+                const Vec3d stepWorld = -d * gWorld / g2;
+                const Vec3d stepIndex = Ainv * stepWorld;
+                if (std::max({std::abs(stepIndex.x), std::abs(stepIndex.y), std::abs(stepIndex.z)}) > reach) continue;
+                SurfaceKernel k;
+                k.normal = (outwardDecreasing ? -1.0 : 1.0) * gWorld / std::sqrt(g2);
+                k.pWorld = grid.indexToWorld(Vec3d(c.x(), c.y(), c.z())) + stepWorld;
+                k.area = 0.0; // relateNeighbours
+                k.albedo = color.at(k.pWorld);
+                perLeaf[l].push_back(k);
+                perLeafVoxels[l].push_back(ijk);
             }
-            if (!crosses) return;
-            const openvdb::Vec3d c(ijk.x(), ijk.y(), ijk.z());
-            const Mat3d A = grid.linear ? grid.indexToWorldLinear : indexToWorldJacobian(xform, c);
-            const Mat3d Ainv = glm::inverse(A);
-            const Vec3d gWorld = glm::transpose(Ainv) * g; // df/dworld = A^-T df/dindex
-            const double g2 = glm::dot(gWorld, gWorld);
-            if (!(g2 > 1e-24) || !std::isfinite(g2)) return;
-            if (!(std::abs(d) < reject * std::sqrt(g2))) return; // the distance estimate |d| / |g|
-            // Newton step onto the iso-surface, in world and in index units.
-            const Vec3d stepWorld = -d * gWorld / g2;
-            const Vec3d stepIndex = Ainv * stepWorld;
-            // Within reach: where the surface lies halfway between two points (a cube's face on a
-            // lattice boundary) both keep a kernel; a one-sided rule would drop a thin plate's
-            // sheet, whose only other candidate has no gradient.
-            if (std::max({std::abs(stepIndex.x), std::abs(stepIndex.y), std::abs(stepIndex.z)}) > reach * s) return;
-            SurfaceKernel k;
-            k.normal = (outwardDecreasing ? -1.0 : 1.0) * gWorld / std::sqrt(g2);
-            k.pWorld = grid.indexToWorld(Vec3d(c.x(), c.y(), c.z())) + stepWorld;
-            k.area = 0.0; // relateNeighbours
-            k.albedo = color.at(k.pWorld);
-            perLeaf[l].push_back(k);
-            perLeafVoxels[l].push_back(openvdb::Coord(ijk.x() / s, ijk.y() / s, ijk.z() / s)); // exact: multiples of s
-        };
-        using Leaf = openvdb::FloatTree::LeafNodeType;
-        for (l = r.begin(); l < r.end(); ++l) {
-            const Leaf& leaf = *leaves[l];
-            if (s == 1) {
-                for (auto it = leaf.cbeginValueOn(); it; ++it) visit(it.getCoord(), double(*it));
-                continue;
-            }
-            // The lattice points of the leaf (its origin is a multiple of 8, and s divides 8).
-            for (int i = 0; i < int(Leaf::DIM); i += s)
-                for (int j = 0; j < int(Leaf::DIM); j += s)
-                    for (int k = 0; k < int(Leaf::DIM); k += s) {
-                        const openvdb::Index offset = Leaf::coordToOffset(openvdb::Coord(i, j, k));
-                        if (leaf.isValueOn(offset)) visit(leaf.offsetToGlobalCoord(offset), double(leaf.getValue(offset)));
-                    }
+            if (s > 1) thinToLattice(perLeaf[l], perLeafVoxels[l], s, grid);
         }
         advance(progress, r.size());
     });

@@ -65,18 +65,18 @@ constexpr double kReachForDiscs = 0.5, kReachForWeights = 1.0;
 /// @a outwardDecreasing: the surface's outside is where values fall (fog volumes: the normal
 /// is minus the gradient); level sets grow outwards (the normal is the gradient).
 /// @a progress: one unit per leaf node; throws Cancelled.
-/// @a lattice (a power of two, at most maxSurfaceLattice): level of detail. Only the voxels
-/// whose indices are multiples of @a lattice are candidates, their crossings are tested against
-/// the candidates @a lattice voxels away, and the rules above hold in lattice steps: the grid
-/// seen as sampled every @a lattice voxels (the band's values are distances, exact at any
-/// step), with the gradient still taken from the voxel's own neighbours.
+/// @a lattice (a power of two dividing 8): level of detail. Of the kernels above, each block
+/// of lattice^3 voxels keeps the one nearest its centre for each sheet through it (normals
+/// more than 40 degrees apart, at most kMaxSheetsPerBlock), and the rules that follow (areas,
+/// discs, clips) hold in lattice steps: the neighbours are looked up by block, the sigma,
+/// the normal offsets and the crease margin are lattice x what they are for voxels.
 SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, double isovalue, double kernelSigma,
     bool outwardDecreasing = false, Progress* progress = nullptr, double reach = kReachForDiscs, int lattice = 1);
 
-/// The largest lattice extractSurfaceKernels may take on this level set: every crossing
-/// between two lattice points lies within lattice / 2 voxels of one of them, which must be
-/// active, inside the narrow band (the background value is its half-width); at most 8.
-int maxSurfaceLattice(const GridSource::Impl& grid);
+/// The largest lattice of the level of detail: 4 (a kernel for 16 voxels of surface).
+constexpr int kMaxSurfaceLattice = 4;
+/// Sheets (normals more than 40 degrees apart) a level-of-detail block keeps a kernel for.
+constexpr int kMaxSheetsPerBlock = 4;
 
 /// Largest radius of a surface kernel's disc (the coverage test) in tangential standard
 /// deviations; also the radius where a kernel has fewer neighbours than its rule needs. The
