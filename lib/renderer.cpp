@@ -73,9 +73,15 @@ void Renderer::renderLevelSet(const GridSource::Impl& grid, const Camera& camera
     const detail::MemoryBudget budget = budgetFor(grid, mSettings);
     budget.check(double(grid.activeVoxels), "active voxels (surface kernels)", detail::kBytesPerKernel);
     // Level of detail: the kernels' lattice spacing projects to at most a quarter of --lod pixels.
-    const int lattice = detail::LevelOfDetail(grid, camera, mSettings.splat.lodPixels).surfaceLattice(detail::kMaxSurfaceLattice);
-    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(grid, mSettings.surface.isovalue, mSettings.surface.sigma, false, &progress,
-        detail::kReachForDiscs, lattice);
+    detail::SurfaceRequest request;
+    request.isovalue = mSettings.surface.isovalue;
+    request.kernelSigma = mSettings.surface.sigma;
+    request.lattice = detail::LevelOfDetail(grid, camera, mSettings.splat.lodPixels).surfaceLattice(detail::kMaxSurfaceLattice);
+    request.drawn = [&camera](const detail::SurfaceKernel& k) {
+        Vec3d t, normal;
+        return detail::facesEye(k, camera, t, normal);
+    };
+    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(grid, request, &progress);
     stats.kernelSeconds = timer.lap();
     progress.stage(60, 100);
     detail::SurfaceStats surfaceStats;
@@ -98,8 +104,12 @@ void Renderer::addIsoSurface(const GridSource::Impl& grid, const Camera& camera,
     const detail::LightMap& light, detail::SplatSet& splats, detail::Progress& progress) const
 {
     budgetFor(grid, mSettings).check(double(grid.activeVoxels), "active voxels (surface kernels)", detail::kBytesPerKernel);
-    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(grid, mSettings.surface.iso, mSettings.surface.sigma, true, &progress,
-        detail::kReachForWeights);
+    detail::SurfaceRequest request;
+    request.isovalue = mSettings.surface.iso;
+    request.kernelSigma = mSettings.surface.sigma;
+    request.outwardDecreasing = true;
+    request.reach = detail::kReachForWeights;
+    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(grid, request, &progress);
     // The light's transmittance at the surface kernels, from the volume's light map.
     std::vector<detail::Rgb> shadows(surfaces.kernels.size());
     for (std::size_t i = 0; i < shadows.size(); ++i) shadows[i] = light.transmittance(light.coordinates(surfaces.kernels[i].pWorld));

@@ -313,7 +313,7 @@ TEST(Extremes, MemoryBudgetStopsEachStageBeforeItAllocates)
     // The surface rasteriser too, before it bins: a sphere's surface kernels (about 3e4 of them,
     // a few pixels wide) make tens of thousands of pairs, over a budget of 64 KB (16384 pairs).
     const GridSource sphere = gridSourceFromOpenVDB(sphereLevelSet(1.0, 0.02));
-    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(sphere.impl(), 0.0, s.surface.sigma, false);
+    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(sphere.impl(), detail::SurfaceRequest{});
     detail::SurfaceStats surfaceStats;
     const detail::MemoryBudget small(65536.0, "sphere");
     const std::string surfacePairs = message([&] {

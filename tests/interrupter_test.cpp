@@ -156,7 +156,7 @@ TEST(Progress, EveryStageAdvancesExactlyTheUnitsItDeclares)
 
     const GridSource sphere = gridSourceFromOpenVDB(sphereLevelSet(1.0, 0.04));
     const GridSource::Impl& surface = sphere.impl();
-    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(surface, 0.0, settings.surface.sigma, false, &progress);
+    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(surface, detail::SurfaceRequest{}, &progress);
     expectComplete("surface kernels (one per leaf node)", surface.grid->tree().leafCount());
     detail::SurfaceStats surfaceStats;
     const Camera sphereView(orthoDownZ(0.0, 0.0, 5.0, 3.0, 150), Vec3d(0.0));

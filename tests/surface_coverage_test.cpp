@@ -4,9 +4,14 @@
 ///        silhouette matches the analytic one; a cube's faces keep their normals up to the edges.
 #include "fixtures.h"
 
+#include "projection/projection.h"
+#include "raster/raster.h"
+#include "source/source.h"
+
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <cstring>
 #include <functional>
 
 using namespace vdb_ewa;
@@ -238,6 +243,39 @@ TEST(SurfaceCoverage, DistantViewsTakeACoarserLatticeWithoutHoles)
             EXPECT_LE(c.fringe, 2) << scene.name << ", " << pixels;
             EXPECT_GE(c.iou, 0.99) << scene.name << ", " << pixels;
             EXPECT_GE(c.iou, reference.iou - 0.005) << scene.name << ", " << pixels;
+        }
+    }
+}
+
+// The renderer relates only the kernels it will draw (SurfaceRequest::drawn: those facing the
+// eye); the others stay their neighbours' neighbours, so the image is bit-identical to
+// relating every kernel, and about half the kernels are skipped. Two spheres one behind the
+// other and a cube (creases), perspective and orthographic.
+TEST(SurfaceCoverage, RelatingOnlyTheDrawnKernelsLeavesTheImageUnchanged)
+{
+    for (const Scene& scene : {scenes()[1], scenes()[2]}) {
+        const GridSource source = gridSourceFromOpenVDB(levelSet(scene));
+        for (const View& view : views(scene)) {
+            const Camera camera(view.camera, source.worldCentre());
+            detail::SurfaceRequest all;
+            detail::SurfaceRequest seen = all;
+            seen.drawn = [&camera](const detail::SurfaceKernel& k) {
+                Vec3d t, normal;
+                return detail::facesEye(k, camera, t, normal);
+            };
+            const detail::SurfaceSet every = detail::extractSurfaceKernels(source.impl(), all);
+            const detail::SurfaceSet drawn = detail::extractSurfaceKernels(source.impl(), seen);
+            ASSERT_EQ(every.kernels.size(), drawn.kernels.size());
+            std::size_t skipped = 0;
+            for (const detail::SurfaceKernel& k : drawn.kernels) skipped += k.area == 0.0;
+            detail::SurfaceStats a, b;
+            const Frame fa = detail::rasterizeSurfaces(every, camera, matte(), {}, a);
+            const Frame fb = detail::rasterizeSurfaces(drawn, camera, matte(), {}, b);
+            std::printf("%s, %s: %zu of %zu kernels not related\n", scene.name, view.name, skipped, drawn.kernels.size());
+            EXPECT_GT(skipped, drawn.kernels.size() / 4) << scene.name << ", " << view.name;
+            EXPECT_EQ(a.splats, b.splats);
+            EXPECT_EQ(0, std::memcmp(fa.beauty.rgba.data(), fb.beauty.rgba.data(), fa.beauty.rgba.size() * sizeof(float)))
+                << scene.name << ", " << view.name;
         }
     }
 }

@@ -9,13 +9,18 @@
 namespace vdb_ewa {
 namespace detail {
 
-bool projectSurface(const SurfaceKernel& kernel, double sigma, const Camera& camera, const ProjectionParams& params,
-    Vec3d& t, Vec3d& normal, Footprint& fp)
+bool facesEye(const SurfaceKernel& kernel, const Camera& camera, Vec3d& t, Vec3d& normal)
 {
     t = camera.cameraFromWorldPoint(kernel.pWorld);
     if (!(t.z > camera.near()) || !(t.z < camera.far())) return false;
     normal = camera.cameraFromWorld() * kernel.normal;
-    if (glm::dot(normal, params.perspective ? t : Vec3d(0, 0, 1)) > 0.0) return false;
+    return !(glm::dot(normal, camera.projection() == Projection::Perspective ? t : Vec3d(0, 0, 1)) > 0.0);
+}
+
+bool projectSurface(const SurfaceKernel& kernel, double sigma, const Camera& camera, const ProjectionParams& params,
+    Vec3d& t, Vec3d& normal, Footprint& fp)
+{
+    if (!facesEye(kernel, camera, t, normal)) return false;
     const Vec3d helper = std::abs(normal.x) < 0.6 ? Vec3d(1, 0, 0) : Vec3d(0, 1, 0);
     const Vec3d t0 = glm::normalize(glm::cross(normal, helper)), t1 = glm::cross(normal, t0);
     fp = projectSurfaceKernel(t, t0, t1, sigma, params);

@@ -11,10 +11,13 @@
 namespace vdb_ewa {
 namespace detail {
 
+/// Whether @a kernel can be drawn through @a camera: it lies between the near and far planes and
+/// faces the eye (back faces are hidden by the front of the same surface). Its camera-space
+/// centre @a t and @a normal.
+bool facesEye(const SurfaceKernel& kernel, const Camera& camera, Vec3d& t, Vec3d& normal);
+
 /// A surface kernel seen through @a camera: its camera-space centre @a t and normal, and its
-/// footprint (Eq. 35). False if it lies before the near plane or beyond the far plane, faces
-/// away from the eye (back faces are hidden by the front of the same surface), or does not
-/// project.
+/// footprint (Eq. 35). False unless it facesEye, or if it does not project.
 bool projectSurface(const SurfaceKernel& kernel, double sigma, const Camera& camera, const ProjectionParams& params,
     Vec3d& t, Vec3d& normal, Footprint& fp);
 

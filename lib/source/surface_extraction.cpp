@@ -105,8 +105,9 @@ double discRadiusFrom(std::vector<double>& distances, double maxRadius)
 /// surface (a partition of unity), however many voxels represent each piece of it.
 /// Disc radius: discRadiusFrom the same neighbours' tangential distances.
 /// Disc clips: the nearest convex creases within the disc (creaseClip, chooseClips).
+/// Only for the kernels @a drawn (all if empty); the others are still neighbours.
 void relateNeighbours(std::vector<SurfaceKernel>& kernels, const std::vector<openvdb::Coord>& voxels, double sigma,
-    double spacing, int radius)
+    double spacing, int radius, const std::function<bool(const SurfaceKernel&)>& drawn)
 {
     // The kernels at each coordinate, which are consecutive: the first's index x 4 + count - 1
     // (one a voxel; up to kMaxSheetsPerBlock a level-of-detail block). The memory budget keeps
@@ -148,6 +149,7 @@ void relateNeighbours(std::vector<SurfaceKernel>& kernels, const std::vector<ope
                         block[std::size_t((i * side + j) * side + l)] = acc.getValue(corner.offsetBy(i, j, l));
                     }
             for (std::size_t k = leafStarts[leaf]; k < leafStarts[leaf + 1]; ++k) {
+                if (drawn && !drawn(kernels[k])) continue; // area 0, no disc: not drawn
                 SurfaceKernel a = kernels[k];
                 a.clipCount = 0;
                 double density = 0.0;
@@ -239,9 +241,11 @@ void thinToLattice(std::vector<SurfaceKernel>& kernels, std::vector<openvdb::Coo
 
 } // namespace
 
-SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, double isovalue, double kernelSigma, bool outwardDecreasing,
-    Progress* progress, double reach, int lattice)
+SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, const SurfaceRequest& request, Progress* progress)
 {
+    const double isovalue = request.isovalue, kernelSigma = request.kernelSigma, reach = request.reach;
+    const bool outwardDecreasing = request.outwardDecreasing;
+    const int lattice = request.lattice;
     SurfaceSet out;
     const openvdb::FloatTree& tree = grid.grid->tree();
     const auto& xform = grid.grid->transform();
@@ -320,7 +324,7 @@ SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, double isovalue, 
     // the surface adds 0.14 % of a kernel's own weight (duplicates across layers, up to two
     // steps apart along the normal, are inside). Wider kernels look farther.
     const int radius = std::max(2, int(std::ceil(3.5 * kernelSigma)));
-    relateNeighbours(out.kernels, voxels, out.sigma, out.spacing, radius);
+    relateNeighbours(out.kernels, voxels, out.sigma, out.spacing, radius, request.drawn);
     return out;
 }
 

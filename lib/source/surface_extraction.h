@@ -8,6 +8,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace vdb_ewa {
@@ -51,27 +52,39 @@ struct SurfaceSet
 /// cells overlap, 1 (with 0.5 a blob behind an opaque iso-surface showed through).
 constexpr double kReachForDiscs = 0.5, kReachForWeights = 1.0;
 
-/// One kernel for every active voxel whose 6-neighbourhood crosses @a isovalue and whose
-/// projection onto the surface value == @a isovalue
-/// (x - (f(x) - iso) grad / |grad|^2, central differences) lies within @a reach voxels of its
+/// What extractSurfaceKernels builds.
+struct SurfaceRequest
+{
+    double isovalue = 0.0;
+    double kernelSigma = 0.55;      ///< tangential standard deviation, voxels (lattice steps)
+    bool outwardDecreasing = false; ///< fog volumes: the normal is minus the gradient
+    double reach = kReachForDiscs;  ///< voxels from a kernel's voxel to its point on the surface
+    int lattice = 1;                ///< level of detail: a power of two dividing 8
+    /// Kernels for which this is false get no area, disc or clips, as they will not be drawn
+    /// (back faces); they are still their neighbours' neighbours, so the others are unchanged.
+    /// Empty: every kernel is drawn.
+    std::function<bool(const SurfaceKernel&)> drawn;
+};
+
+/// One kernel for every active voxel whose 6-neighbourhood crosses the isovalue and whose
+/// projection onto the surface value == isovalue
+/// (x - (f(x) - iso) grad / |grad|^2, central differences) lies within `reach` voxels of its
 /// centre along each index axis; its area is the inverse of the kernels' density around it
 /// on the surface, so that the kernels sum to one over the surface; its disc (the coverage
 /// test) reaches its 8th nearest neighbour on the surface, at most kDiscRadiusSigmas sigma, and
 /// is clipped where a neighbour's tangent plane, turned by more than 40 degrees, cuts it past
-/// a convex crease (docs/equations.md#surface-coverage); tangential sigma =
-/// @a kernelSigma voxel lengths. Anisotropic voxels use the voxel length cbrt|det A|. Voxels
-/// farther than 2 voxels from the surface by the estimate |f - iso| / |grad f| are skipped, as
-/// are NaN values.
-/// @a outwardDecreasing: the surface's outside is where values fall (fog volumes: the normal
-/// is minus the gradient); level sets grow outwards (the normal is the gradient).
+/// a convex crease (docs/equations.md#surface-coverage); tangential sigma = kernelSigma voxel
+/// lengths. Anisotropic voxels use the voxel length cbrt|det A|. Voxels farther than 2 voxels
+/// from the surface by the estimate |f - iso| / |grad f| are skipped, as are NaN values.
+/// outwardDecreasing: the surface's outside is where values fall (fog volumes: the normal is
+/// minus the gradient); level sets grow outwards (the normal is the gradient).
+/// lattice: level of detail. Of the kernels above, each block of lattice^3 voxels keeps the
+/// one nearest its centre for each sheet through it (normals more than 40 degrees apart, at
+/// most kMaxSheetsPerBlock), and the rules that follow (areas, discs, clips) hold in lattice
+/// steps: the neighbours are looked up by block, the sigma, the normal offsets and the crease
+/// margin are lattice x what they are for voxels.
 /// @a progress: one unit per leaf node; throws Cancelled.
-/// @a lattice (a power of two dividing 8): level of detail. Of the kernels above, each block
-/// of lattice^3 voxels keeps the one nearest its centre for each sheet through it (normals
-/// more than 40 degrees apart, at most kMaxSheetsPerBlock), and the rules that follow (areas,
-/// discs, clips) hold in lattice steps: the neighbours are looked up by block, the sigma,
-/// the normal offsets and the crease margin are lattice x what they are for voxels.
-SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, double isovalue, double kernelSigma,
-    bool outwardDecreasing = false, Progress* progress = nullptr, double reach = kReachForDiscs, int lattice = 1);
+SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, const SurfaceRequest& request, Progress* progress = nullptr);
 
 /// The largest lattice of the level of detail: 4 (a kernel for 16 voxels of surface).
 constexpr int kMaxSurfaceLattice = 4;
