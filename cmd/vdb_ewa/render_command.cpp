@@ -101,7 +101,7 @@ public:
         mApp->add_option("--precision", mPrecision, "world-to-camera transform and covariances in double or float (default: double)");
         mApp->add_option("--tile-spacing", mTileSpacing, "largest kernel spacing in voxels for active tiles, 1 to voxelise them (default: 4)");
         mApp->add_option("--refine", mRefine, "where voxels span N pixels or more, their kernels on a lattice N times finer: the trilinear field sampled every 1/N voxel, kernels N times narrower, N^3 as many; range [1, 4], 1 = off (default: " + std::to_string(rs.splat.refine) + ")");
-        mApp->add_option("--lod", mLod, "level of detail, pixels in [0, 64]: fog volumes: blocks of 2, 4 or 8 voxels a side become one kernel where the block projects to at most this many pixels; level sets: surface kernels on every 2nd or 4th voxel where that step projects to at most a quarter as many; 0 = off (default: " + fmt(rs.splat.lodPixels) + ")");
+        mApp->add_option("--lod", mLod, "level of detail, pixels in [0, 64]: fog volumes: blocks of 2, 4 or 8 voxels a side become one kernel where the block projects to at most this many pixels; level sets: one surface kernel a 2^3 or 4^3 block of voxels (for each sheet through it) where the block projects to at most a quarter as many; 0 = off (default: " + fmt(rs.splat.lodPixels) + ")");
         // Fog volumes with an iso-surface.
         mApp->add_option("--iso", mIso,
             "fog volumes: also render the iso-surface density = VALUE with flattened surface kernels, lit by "
@@ -409,7 +409,7 @@ private:
     {
         std::cout << "vdb_ewa: " << s.activeVoxels << " active voxels and " << s.activeTiles << " active tiles read; "
                   << s.kernels << " kernels (" << s.voxelsMerged << " voxels merged into " << s.mergedKernels
-                  << " by --lod, " << (s.surfaceLattice > 1 ? "surface kernels on every " + std::to_string(s.surfaceLattice) + "th voxel by --lod, " : "")
+                  << " by --lod, " << (s.surfaceLattice > 1 ? "one surface kernel a " + std::to_string(s.surfaceLattice) + "^3 block by --lod, " : "")
                   << s.haloKernels << " halo kernels by --prefilter, " << s.refinedVoxels << " voxels sampled by --refine), " << s.kernelsSkipped << " values skipped (below --cutoff or NaN), "
                   << s.kernelsCulled << " kernels culled, " << s.splats << " splatted into " << s.splatTilePairs
                   << " (splat, tile) pairs; " << s.screenTilesOpaque << " of " << s.screenTiles

@@ -103,7 +103,9 @@ struct SplatOptions
     /// kernelSigma / n (n^3 the kernels; 1 = off; docs/numerics.md#refined-kernels).
     int refine = 1;
     double lodPixels = 2.0;     ///< level of detail: merge blocks of 2^L voxels into one kernel where
-                                ///< the block spacing projects to at most this many pixels; 0 = off
+                                ///< the block spacing projects to at most this many pixels (level
+                                ///< sets: one surface kernel a block and sheet, at a quarter of
+                                ///< it); 0 = off
 };
 
 /// Surfaces (level-set grids, fog iso-surfaces; docs/equations.md#surface-kernels).

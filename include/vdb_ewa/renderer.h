@@ -36,7 +36,7 @@ struct RenderStats
     std::uint64_t kernelsSkipped = 0; ///< below the density cutoff, or invalid values
     std::uint64_t voxelsMerged = 0;   ///< active voxels merged into level-of-detail kernels (--lod)
     std::uint64_t mergedKernels = 0;  ///< the level-of-detail kernels they became
-    int surfaceLattice = 1;           ///< level sets: surface kernels on every n-th voxel (--lod)
+    int surfaceLattice = 1;           ///< level sets: one surface kernel a n^3 block of voxels, per sheet (--lod)
     std::uint64_t kernelsCulled = 0;  ///< outside the view frustum
     std::uint64_t splats = 0;         ///< kernels splatted
     std::uint64_t splatTilePairs = 0; ///< (splat, screen tile) pairs binned
