@@ -73,15 +73,9 @@ void Renderer::renderLevelSet(const GridSource::Impl& grid, const Camera& camera
     const detail::MemoryBudget budget = budgetFor(grid, mSettings);
     budget.check(double(grid.activeVoxels), "active voxels (surface kernels)", detail::kBytesPerKernel);
     // Level of detail: the kernels' lattice spacing projects to at most a quarter of --lod pixels.
-    detail::SurfaceRequest request;
-    request.isovalue = mSettings.surface.isovalue;
-    request.kernelSigma = mSettings.surface.sigma;
-    request.lattice = detail::LevelOfDetail(grid, camera, mSettings.splat.lodPixels).surfaceLattice(detail::kMaxSurfaceLattice);
-    request.drawn = [&camera](const detail::SurfaceKernel& k) {
-        Vec3d t, normal;
-        return detail::facesEye(k, camera, t, normal);
-    };
-    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(grid, request, &progress);
+    const int lattice = detail::LevelOfDetail(grid, camera, mSettings.splat.lodPixels).surfaceLattice(detail::kMaxSurfaceLattice);
+    const detail::SurfaceSet surfaces =
+        detail::extractSurfaceKernels(grid, detail::levelSetRequest(mSettings, camera, grid.voxelLength, lattice), &progress);
     stats.kernelSeconds = timer.lap();
     progress.stage(60, 100);
     detail::SurfaceStats surfaceStats;

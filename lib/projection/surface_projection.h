@@ -16,6 +16,20 @@ namespace detail {
 /// centre @a t and @a normal.
 bool facesEye(const SurfaceKernel& kernel, const Camera& camera, Vec3d& t, Vec3d& normal);
 
+/// Whether any part of the world box [@a lo, @a hi] may be seen through @a camera: it does not lie
+/// wholly outside one plane of the view frustum (near, far, and the frame's four sides pushed
+/// out by @a pixelMargin pixels).
+bool boxMayBeSeen(const Camera& camera, const Vec3d& lo, const Vec3d& hi, double pixelMargin);
+
+/// The surface kernels a level set's render through @a camera needs, on the lattice @a lattice
+/// (voxels of @a voxelLength): only the kernels facing the eye are related to their neighbours,
+/// and leaf nodes whose kernels cannot reach the frame are skipped. A kernel reaches the frame
+/// through its footprint (settings.splat.cutoffRadius sigma, widened by the low-pass filter) or
+/// its disc (kDiscRadiusSigmas sigma): the leaves' boxes are widened by the larger in world
+/// units and the frame by the filter's reach in pixels. The image is bit-identical to that of
+/// every kernel (SurfaceCoverage.RelatingOnlyTheDrawnKernelsLeavesTheImageUnchanged).
+SurfaceRequest levelSetRequest(const RenderSettings& settings, const Camera& camera, double voxelLength, int lattice);
+
 /// A surface kernel seen through @a camera: its camera-space centre @a t and normal, and its
 /// footprint (Eq. 35). False unless it facesEye, or if it does not project.
 bool projectSurface(const SurfaceKernel& kernel, double sigma, const Camera& camera, const ProjectionParams& params,

@@ -266,11 +266,24 @@ SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, const SurfaceRequ
     std::vector<std::vector<SurfaceKernel>> perLeaf(leaves.size());
     std::vector<std::vector<openvdb::Coord>> perLeafVoxels(leaves.size());
     const double reject = 2.0 * grid.voxelLength; // |f - iso| / |grad| beyond this cannot land in reach
+    // Neighbours within two lattice steps: at sigma = 0.55 steps a kernel two steps away along
+    // the surface adds 0.14 % of a kernel's own weight (duplicates across layers, up to two
+    // steps apart along the normal, are inside). Wider kernels look farther.
+    const int radius = std::max(2, int(std::ceil(3.5 * kernelSigma)));
+    const double leafMargin = 0.5 + (radius + 1) * s; // index units: the neighbours' reach, and a step for the Newton offset
     setUnits(progress, leaves.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size()), [&](const tbb::blocked_range<std::size_t>& r) {
         openvdb::tree::ValueAccessor<const openvdb::FloatTree> acc(tree);
         MaterialColor color(grid);
         for (std::size_t l = r.begin(); l < r.end(); ++l) {
+            if (request.leafMayBeSeen) {
+                const openvdb::Vec3d o = leaves[l]->origin().asVec3d();
+                const openvdb::BBoxd world = xform.indexToWorld(openvdb::BBoxd(o - openvdb::Vec3d(leafMargin), o + openvdb::Vec3d(7.0 + leafMargin)));
+                if (!request.leafMayBeSeen(Vec3d(world.min().x(), world.min().y(), world.min().z()),
+                        Vec3d(world.max().x(), world.max().y(), world.max().z()))) {
+                    continue;
+                }
+            }
             for (auto it = leaves[l]->cbeginValueOn(); it; ++it) {
                 const double d = double(*it) - isovalue;
                 if (!std::isfinite(d)) continue;
@@ -320,10 +333,6 @@ SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, const SurfaceRequ
         out.kernels.insert(out.kernels.end(), perLeaf[l].begin(), perLeaf[l].end());
         voxels.insert(voxels.end(), perLeafVoxels[l].begin(), perLeafVoxels[l].end());
     }
-    // Neighbours within two lattice steps: at sigma = 0.55 steps a kernel two steps away along
-    // the surface adds 0.14 % of a kernel's own weight (duplicates across layers, up to two
-    // steps apart along the normal, are inside). Wider kernels look farther.
-    const int radius = std::max(2, int(std::ceil(3.5 * kernelSigma)));
     relateNeighbours(out.kernels, voxels, out.sigma, out.spacing, radius, request.drawn);
     return out;
 }

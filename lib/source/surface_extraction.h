@@ -64,6 +64,11 @@ struct SurfaceRequest
     /// (back faces); they are still their neighbours' neighbours, so the others are unchanged.
     /// Empty: every kernel is drawn.
     std::function<bool(const SurfaceKernel&)> drawn;
+    /// Called with each leaf node's world box, widened by the neighbours' reach (the lattice
+    /// steps within which kernels are related); false: the leaf makes no kernels, as none of
+    /// them is drawn or is the neighbour of one that is (the caller widens the box by its
+    /// footprints' reach). Empty: every leaf.
+    std::function<bool(const Vec3d& lo, const Vec3d& hi)> leafMayBeSeen;
 };
 
 /// One kernel for every active voxel whose 6-neighbourhood crosses the isovalue and whose
