@@ -56,7 +56,7 @@ int LevelOfDetail::surfaceLattice(int maxLattice) const
     double px = 0.0; // the largest voxel on screen
     for (const auto* leaf : leaves) {
         px = std::max(px, voxelPixels(leaf->origin(), int(openvdb::FloatTree::LeafNodeType::DIM)));
-        if (!(double(2) * px <= kSurfaceLatticeShare * mMaxPixels)) return 1; // also +inf: a node at the eye
+        if (!(2.0 * px <= kSurfaceLatticeShare * mMaxPixels)) return 1; // also +inf: a node at the eye
     }
     int s = 1;
     while (2 * s <= maxLattice && double(2 * s) * px <= kSurfaceLatticeShare * mMaxPixels) s *= 2;

@@ -199,6 +199,8 @@ void thinToLattice(std::vector<SurfaceKernel>& kernels, std::vector<openvdb::Coo
 {
     constexpr int kDim = int(openvdb::FloatTree::LeafNodeType::DIM);
     const int n = kDim / s;
+    int shift = 0; // s = 2^shift
+    while ((1 << shift) < s) ++shift;
     struct Sheet
     {
         int kernel;
@@ -207,16 +209,13 @@ void thinToLattice(std::vector<SurfaceKernel>& kernels, std::vector<openvdb::Coo
     std::vector<std::array<Sheet, kMaxSheetsPerBlock>> sheets(std::size_t(n * n * n));
     std::vector<int> counts(sheets.size(), 0);
     auto blockOf = [&](const openvdb::Coord& v) {
-        return std::size_t((((v.x() & (kDim - 1)) / s) * n + (v.y() & (kDim - 1)) / s) * n + (v.z() & (kDim - 1)) / s);
-    };
-    // v less its remainder (two's complement keeps it in [0, s)), divided exactly.
-    auto lattice = [s](const openvdb::Coord& v) {
-        return openvdb::Coord((v.x() - (v.x() & (s - 1))) / s, (v.y() - (v.y() & (s - 1))) / s, (v.z() - (v.z() & (s - 1))) / s);
+        const openvdb::Coord b = (v & (kDim - 1)) >> std::size_t(shift); // the block, within the leaf
+        return std::size_t((b.x() * n + b.y()) * n + b.z());
     };
     for (std::size_t i = 0; i < kernels.size(); ++i) {
         const std::size_t b = blockOf(voxels[i]);
-        const openvdb::Coord l = lattice(voxels[i]);
-        const Vec3d centre = grid.indexToWorld(Vec3d(l.x(), l.y(), l.z()) * double(s) + Vec3d(0.5 * (s - 1)));
+        const openvdb::Coord origin = voxels[i] & ~(s - 1); // the block's first voxel
+        const Vec3d centre = grid.indexToWorld(Vec3d(origin.x(), origin.y(), origin.z()) + Vec3d(0.5 * (s - 1)));
         const Vec3d d = kernels[i].pWorld - centre;
         const Sheet candidate{int(i), glm::dot(d, d)};
         int c = 0;
@@ -233,7 +232,7 @@ void thinToLattice(std::vector<SurfaceKernel>& kernels, std::vector<openvdb::Coo
         for (int c = 0; c < counts[b]; ++c) {
             const std::size_t k = std::size_t(sheets[b][std::size_t(c)].kernel);
             keptKernels.push_back(kernels[k]);
-            keptVoxels.push_back(lattice(voxels[k]));
+            keptVoxels.push_back(voxels[k] >> std::size_t(shift)); // arithmetic shift: floor(voxel / s)
         }
     kernels.swap(keptKernels);
     voxels.swap(keptVoxels);
@@ -245,11 +244,10 @@ SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, const SurfaceRequ
 {
     const double isovalue = request.isovalue, kernelSigma = request.kernelSigma, reach = request.reach;
     const bool outwardDecreasing = request.outwardDecreasing;
-    const int lattice = request.lattice;
+    const int s = request.lattice;
     SurfaceSet out;
     const openvdb::FloatTree& tree = grid.grid->tree();
     const auto& xform = grid.grid->transform();
-    const int s = lattice;
     out.lattice = s;
     out.spacing = grid.voxelLength * s;
     out.sigma = kernelSigma * out.spacing;

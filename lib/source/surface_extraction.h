@@ -3,6 +3,8 @@
 ///        (Zwicker et al. 2002, Sec. 6.3, 6.4; docs/equations.md#surface-kernels).
 #pragma once
 
+#include <vdb_ewa/render_settings.h>
+
 #include "source/grid_source_impl.h"
 #include "support/progress.h"
 
@@ -38,7 +40,7 @@ struct SurfaceSet
 {
     std::vector<SurfaceKernel> kernels; ///< in tree order (deterministic)
     double sigma = 0;                   ///< tangential std. deviation, world units
-    int lattice = 1;                    ///< the kernels stand on every lattice-th voxel (level of detail)
+    int lattice = 1;                    ///< one kernel a lattice^3 block of voxels, per sheet (level of detail)
     double spacing = 0;                 ///< world length of a lattice step: voxel length x lattice
     Vec3d boundsMin{0.0}, boundsMax{0.0}; ///< world box of the active voxels (position shader)
     std::uint64_t activeVoxels = 0;
@@ -56,7 +58,7 @@ constexpr double kReachForDiscs = 0.5, kReachForWeights = 1.0;
 struct SurfaceRequest
 {
     double isovalue = 0.0;
-    double kernelSigma = 0.55;      ///< tangential standard deviation, voxels (lattice steps)
+    double kernelSigma = SurfaceOptions().sigma; ///< tangential standard deviation, voxels (lattice steps)
     bool outwardDecreasing = false; ///< fog volumes: the normal is minus the gradient
     double reach = kReachForDiscs;  ///< voxels from a kernel's voxel to its point on the surface
     int lattice = 1;                ///< level of detail: a power of two dividing 8
