@@ -141,3 +141,36 @@ TEST(DiscCoverage, MaskHoldsTheCoveredSubsamples)
     EXPECT_GT(partial, 1000);
     EXPECT_GT(full, 1000);
 }
+
+// The box is the disc's own where its image is an ellipse: each side touches it (a covered
+// point within 0.02 pixels inside each side), not the image of the disc's 3D bounding box,
+// which is up to sqrt 2 wider along an axis for an oblique disc (the pixels visited for
+// coverage follow the box).
+TEST(DiscCoverage, BoxTouchesTheDiscsImage)
+{
+    std::mt19937 rng(11);
+    for (const Projection projection : {Projection::Perspective, Projection::Orthographic}) {
+        const Camera cam = camera(projection);
+        int checked = 0;
+        for (int i = 0; i < 100; ++i) {
+            Disc d = randomDisc(rng);
+            d.clips = 0; // clips cut the disc inside its box
+            const DiscCoverage dc = discCoverage(d.centre, d.normal, d.radius, d.clipDirection, d.clipDistance, d.clips, cam);
+            if (!(dc.box[0] > 0.0 && dc.box[2] < 320.0 && dc.box[1] > 0.0 && dc.box[3] < 240.0)) continue; // in view
+            const double inset = 0.02, step = 0.002;
+            bool left = false, right = false, top = false, bottom = false;
+            for (double y = dc.box[1]; y <= dc.box[3]; y += step) {
+                left = left || dc.covers(dc.box[0] + inset, y);
+                right = right || dc.covers(dc.box[2] - inset, y);
+            }
+            for (double x = dc.box[0]; x <= dc.box[2]; x += step) {
+                top = top || dc.covers(x, dc.box[1] + inset);
+                bottom = bottom || dc.covers(x, dc.box[3] - inset);
+            }
+            EXPECT_TRUE(left && right && top && bottom) << "disc " << i << ": box " << dc.box[0] << ", " << dc.box[1] << " - "
+                                                        << dc.box[2] << ", " << dc.box[3];
+            ++checked;
+        }
+        EXPECT_GT(checked, 50);
+    }
+}

@@ -20,13 +20,16 @@ namespace {
 /// of the surface the front layer covers part of the pixel and the next the rest.
 constexpr int kMaxLayers = 4;
 
+/// The weights' cut-off in standard deviations of the filtered footprint (at most
+/// --cutoff-radius). The colour is the weights' normalised sum, and coverage comes from the discs.
+constexpr double kSurfaceCutoffRadius = 2.0;
+
 /// A projected, shaded surface kernel.
 struct SurfaceSplat
 {
     float cx, cy;          ///< centre, raster
     float qa, qb, qc;      ///< conic, 1/pixels^2
     float cutoff;          ///< the filtered footprint: weights where d^T Q d < cutoff
-    float reach;           ///< pixels whose square may meet the disc: d^T Q d < reach (>= cutoff)
     float weight;          ///< area x footprint peak
     float colour[3];       ///< shaded colour
     double depth;          ///< camera depth of the centre
@@ -35,6 +38,9 @@ struct SurfaceSplat
                            ///< and two pixels' width (the filtered footprint reaches that far)
     int x0, y0, x1, y1;
 };
+
+/// Pair::r of a pair outside its footprint's cut-off: it may cover, and does not weigh.
+constexpr double kNoWeight = std::numeric_limits<double>::infinity();
 
 /// A (splat, tile pixel) pair inside the splat's reach: its plane depth along the pixel's
 /// central ray, its conic distance and the pixel's subsamples its disc covers.
@@ -64,57 +70,73 @@ Vec3d shade(SurfaceShader shader, const Vec3d& normal, const Vec3d& rayDir, cons
     return Vec3d(1.0);
 }
 
-std::vector<SurfaceSplat> projectSurfaceSplats(const SurfaceSet& set, const Camera& camera, const RenderSettings& settings)
+/// Projects kernel @a k into @a s: false where it is not drawn (a back face, or outside the
+/// frame). The pixels visited are those whose centre lies in the footprint's cut-off (the
+/// weights) or whose square meets the disc's raster box (coverage is sampled across each
+/// pixel's square).
+bool projectSurfaceSplat(const SurfaceKernel& k, const SurfaceSet& set, const Camera& camera, const ProjectionParams& params,
+    SurfaceShader shader, SurfaceSplat& s)
 {
-    const ProjectionParams params = projectionParams(camera, settings.splat);
-    const Vec3d forward = glm::transpose(camera.cameraFromWorld())[2];
-    const bool perspective = params.perspective;
+    Vec3d t, normal;
+    Footprint fp;
+    if (!projectSurface(k, set.sigma, camera, params, t, normal, fp)) return false; // back faces are culled
+    Vec3d clipDirections[3];
+    double clipDistances[3];
+    for (int l = 0; l < k.clipCount; ++l) {
+        clipDirections[l] = camera.cameraFromWorld() * Vec3d(k.clips[std::size_t(l)].direction);
+        clipDistances[l] = double(k.clips[std::size_t(l)].distance);
+    }
+    s.disc = discCoverage(t, normal, k.discRadius, clipDirections, clipDistances, k.clipCount, camera);
+    // The union of the cut-off's box and the disc's box widened by half a pixel.
+    const double* b = s.disc.box;
+    const double lo[2] = {std::min(fp.centre.x - fp.halfExtent.x, b[0] - 0.5), std::min(fp.centre.y - fp.halfExtent.y, b[1] - 0.5)};
+    const double hi[2] = {std::max(fp.centre.x + fp.halfExtent.x, b[2] + 0.5), std::max(fp.centre.y + fp.halfExtent.y, b[3] + 0.5)};
+    Footprint box = fp;
+    box.centre = 0.5 * Vec2d(lo[0] + hi[0], lo[1] + hi[1]);
+    box.halfExtent = 0.5 * Vec2d(hi[0] - lo[0], hi[1] - lo[1]);
+    if (!std::isfinite(box.centre.x + box.centre.y + box.halfExtent.x + box.halfExtent.y)) box = fp; // a disc through the eye plane
+    if (!pixelBox(box, camera.width(), camera.height(), s.x0, s.y0, s.x1, s.y1)) return false;
+    setFootprint(s, fp, params.cutoffRadius);
+    s.weight = float(k.area * fp.peak);
+    const Vec3d rayDir = params.perspective ? glm::normalize(k.pWorld - camera.eye()) : glm::transpose(camera.cameraFromWorld())[2];
+    const Vec3d c = k.albedo * shade(shader, k.normal, rayDir, k.pWorld, set);
+    for (int ch = 0; ch < 3; ++ch) s.colour[ch] = float(c[ch]);
+    s.depth = t.z;
+    s.depthRange = k.discRadius + 2.0 * (params.perspective ? t.z : 1.0) / camera.focalPixels();
+    return true;
+}
+
+/// The splats of the kernels facing the eye, in the kernels' order; those outside the frame
+/// have an empty pixel box (x1 < x0). Only the kernels facing the eye take memory.
+LargeArray<SurfaceSplat> projectSurfaceSplats(const SurfaceSet& set, const Camera& camera, const RenderSettings& settings)
+{
+    ProjectionParams params = projectionParams(camera, settings.splat);
+    params.cutoffRadius = std::min(params.cutoffRadius, kSurfaceCutoffRadius);
     const std::size_t n = set.kernels.size();
-    std::vector<SurfaceSplat> splats(n);
-    std::vector<std::uint8_t> visible(n, 0);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t i = r.begin(); i < r.end(); ++i) {
-            const SurfaceKernel& k = set.kernels[i];
-            // Back faces are culled: that keeps thin parts from mixing both sides.
-            Vec3d t, normal;
-            Footprint fp;
-            if (!projectSurface(k, set.sigma, camera, params, t, normal, fp)) continue;
-            SurfaceSplat& s = splats[i];
-            // Coverage is sampled across each pixel's square: every pixel whose square meets
-            // the disc (inside the kernel's 3 sigma ellipse, so inside the filtered footprint's)
-            // is visited, also where its centre lies outside the footprint's cut-off.
-            const double radius = std::max(params.cutoffRadius, kDiscRadiusSigmas);
-            const double qMax = 0.5 * (fp.conic.xx + fp.conic.yy) +
-                std::sqrt(0.25 * (fp.conic.xx - fp.conic.yy) * (fp.conic.xx - fp.conic.yy) + fp.conic.xy * fp.conic.xy);
-            const double reach = radius + std::sqrt(0.5 * qMax); // half a pixel diagonal in the conic's metric
-            Footprint box = fp;
-            box.halfExtent = fp.halfExtent * (radius / params.cutoffRadius) + Vec2d(0.5);
-            if (!pixelBox(box, camera.width(), camera.height(), s.x0, s.y0, s.x1, s.y1)) continue;
-            setFootprint(s, fp, params.cutoffRadius);
-            s.reach = float(reach * reach);
-            s.weight = float(k.area * fp.peak);
-            const Vec3d rayDir = perspective ? glm::normalize(k.pWorld - camera.eye()) : forward;
-            const Vec3d c = k.albedo * shade(settings.surface.shader, k.normal, rayDir, k.pWorld, set);
-            for (int ch = 0; ch < 3; ++ch) s.colour[ch] = float(c[ch]);
-            s.depth = t.z;
-            const double disc = k.discRadius;
-            Vec3d clipDirections[3];
-            double clipDistances[3];
-            for (int c = 0; c < k.clipCount; ++c) {
-                clipDirections[c] = camera.cameraFromWorld() * Vec3d(k.clips[std::size_t(c)].direction);
-                clipDistances[c] = double(k.clips[std::size_t(c)].distance);
+    constexpr std::size_t kChunk = 4096;
+    const std::size_t chunks = (n + kChunk - 1) / kChunk;
+    std::vector<std::size_t> firstOfChunk(chunks + 1, 0);
+    tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
+        Vec3d t, normal;
+        std::size_t count = 0;
+        for (std::size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) count += facesEye(set.kernels[i], camera, t, normal) ? 1 : 0;
+        firstOfChunk[c + 1] = count;
+    });
+    for (std::size_t c = 0; c < chunks; ++c) firstOfChunk[c + 1] += firstOfChunk[c];
+    LargeArray<SurfaceSplat> splats(firstOfChunk[chunks]);
+    tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
+        std::size_t next = firstOfChunk[c];
+        Vec3d t, normal;
+        for (std::size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
+            if (!facesEye(set.kernels[i], camera, t, normal)) continue;
+            SurfaceSplat& s = splats[next++];
+            if (!projectSurfaceSplat(set.kernels[i], set, camera, params, settings.surface.shader, s)) {
+                s.x0 = s.y0 = 0;
+                s.x1 = s.y1 = -1;
             }
-            s.disc = discCoverage(t, normal, disc, clipDirections, clipDistances, k.clipCount, camera);
-            s.depthRange = disc + 2.0 * (perspective ? t.z : 1.0) / camera.focalPixels();
-            visible[i] = 1;
         }
     });
-    std::vector<SurfaceSplat> out;
-    out.reserve(std::size_t(std::count(visible.begin(), visible.end(), 1)));
-    for (std::size_t i = 0; i < n; ++i) {
-        if (visible[i]) out.push_back(splats[i]);
-    }
-    return out;
+    return splats;
 }
 
 } // namespace
@@ -124,10 +146,9 @@ Frame rasterizeSurfaces(const SurfaceSet& set, const Camera& camera, const Rende
 {
     const int width = camera.width(), height = camera.height();
     Frame frame = blankFrame(width, height, passes);
-
-    const std::vector<SurfaceSplat> splats = projectSurfaceSplats(set, camera, settings);
-    stats.splats = splats.size();
-    stats.culled = set.kernels.size() - splats.size();
+    const LargeArray<SurfaceSplat> splats = projectSurfaceSplats(set, camera, settings);
+    stats.splats = std::size_t(std::count_if(splats.begin(), splats.end(), [](const SurfaceSplat& s) { return s.x0 <= s.x1; }));
+    stats.culled = set.kernels.size() - stats.splats;
     const TileBins bins = binSplats(splats, width, height, budget);
     stats.splatTilePairs = bins.indices.size();
     const double tolerance = settings.surface.tolerance * set.spacing;
@@ -157,19 +178,19 @@ Frame rasterizeSurfaces(const SurfaceSet& set, const Camera& camera, const Rende
                         const double px = x0 + lx + 0.5, py = y0 + ly + 0.5;
                         const double dx = px - s.cx, dy = py - s.cy;
                         const double r = s.qa * dx * dx + 2.0 * s.qb * dx * dy + s.qc * dy * dy;
-                        if (!(r < s.reach)) continue;
-                        int mask = -1;
-                        if (!(r < s.cutoff)) {
-                            mask = s.disc.mask(px, py);
-                            if (mask == 0) continue; // neither weight nor coverage
-                        }
+                        // Inside the cut-off a pair weighs; outside it may still cover (its
+                        // square meets the disc's box), with no weight.
+                        const bool weighs = r < s.cutoff;
+                        if (!weighs && !(px + 0.5 >= s.disc.box[0] && px - 0.5 <= s.disc.box[2] && py + 0.5 >= s.disc.box[1] &&
+                                           py - 0.5 <= s.disc.box[3]))
+                            continue;
                         // The tangent plane's depth along the pixel's ray, and whether the
                         // pixel lies on the kept side of the kernel's crease clips.
-                        Vec3d offset;
-                        const bool hit = s.disc.planeOffset(px, py, offset);
-                        const double z = hit ? std::clamp(s.depth + offset.z, s.depth - s.depthRange, s.depth + s.depthRange) : s.depth;
-                        const bool shades = hit ? s.disc.keptSide(offset) : s.disc.clipCount == 0;
-                        pairs.push_back({z, r, index, mask, shades});
+                        double dz = 0.0;
+                        const bool hit = s.disc.depthOffset(px, py, dz);
+                        const double z = hit ? std::clamp(s.depth + dz, s.depth - s.depthRange, s.depth + s.depthRange) : s.depth;
+                        const bool shades = hit ? s.disc.keptSide(px, py) : s.disc.clipCount == 0;
+                        pairs.push_back({z, weighs ? r : kNoWeight, index, -1, shades});
                         pixelOf.push_back(std::uint8_t(ly * kTileSize + lx));
                     }
             }
@@ -195,7 +216,16 @@ Frame rasterizeSurfaces(const SurfaceSet& set, const Camera& camera, const Rende
                 depth[p] = std::numeric_limits<double>::quiet_NaN();
                 if (start[p] == start[p + 1]) continue;
                 const auto first = sorted.begin() + std::ptrdiff_t(start[p]), last = sorted.begin() + std::ptrdiff_t(start[p + 1]);
-                std::sort(first, last, [](const Pair& a, const Pair& b) { return a.z < b.z || (a.z == b.z && a.splat < b.splat); });
+                // Where every pair lies within the tolerance of the nearest, they are one layer
+                // whatever their order (most pixels inside a surface): no sort.
+                const auto [zMin, zMax] = std::minmax_element(first, last, [](const Pair& a, const Pair& b) { return a.z < b.z; });
+                if (zMax->z - zMin->z > tolerance) {
+                    std::sort(first, last, [](const Pair& a, const Pair& b) { return a.z < b.z || (a.z == b.z && a.splat < b.splat); });
+                } else {
+                    // The disc nearest the pixel first: it is the likeliest to cover all of it,
+                    // and discs are then tested only until the pixel is covered.
+                    std::iter_swap(first, std::min_element(first, last, [](const Pair& a, const Pair& b) { return a.r < b.r; }));
+                }
                 const double px = x0 + p % kTileSize + 0.5, py = y0 + p / kTileSize + 0.5;
                 auto maskOf = [&](Pair& pair) {
                     if (pair.mask < 0) pair.mask = splats[pair.splat].disc.mask(px, py);
@@ -208,23 +238,25 @@ Frame rasterizeSurfaces(const SurfaceSet& set, const Camera& camera, const Rende
                     while (front != last && (maskOf(*front) & ~covered[p]) == 0) ++front;
                     if (front == last) break;
                     const double limit = front->z + tolerance;
-                    // Sums over the pairs that shade the pixel ([1]) and over all ([0], where a
-                    // crease leaves none: a pixel at the edge itself).
-                    double weight[2] = {0.0, 0.0}, zSum[2] = {0.0, 0.0}, colour[2][3] = {{0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}};
+                    // Sums over the pairs that shade the pixel ([1]), over all ([0], where a
+                    // crease leaves none: a pixel at the edge itself), and of all unweighted
+                    // ([2], where the layer's discs reach past every footprint's cut-off).
+                    double weight[3] = {0.0, 0.0, 0.0}, zSum[3] = {0.0, 0.0, 0.0}, colour[3][3] = {};
                     std::uint16_t layerMask = 0;
                     for (; it != last && it->z <= limit; ++it) {
                         const SurfaceSplat& s = splats[it->splat];
-                        const double wt = s.weight * std::exp(-0.5 * it->r);
-                        for (int k = 0; k < (it->shades ? 2 : 1); ++k) {
-                            weight[k] += wt;
-                            zSum[k] += wt * it->z;
-                            for (int c = 0; c < 3; ++c) colour[k][c] += wt * s.colour[c];
+                        const double wt = it->r < kNoWeight ? double(s.weight * std::exp(float(-0.5 * it->r))) : 0.0;
+                        const double wts[3] = {wt, it->shades ? wt : 0.0, 1.0};
+                        for (int k = 0; k < 3; ++k) {
+                            weight[k] += wts[k];
+                            zSum[k] += wts[k] * it->z;
+                            for (int c = 0; c < 3; ++c) colour[k][c] += wts[k] * s.colour[c];
                         }
                         if ((covered[p] | layerMask) != kAllSubsamples) layerMask = std::uint16_t(layerMask | maskOf(*it));
                     }
                     const std::uint16_t fresh = std::uint16_t(layerMask & ~covered[p]);
-                    const int k = weight[1] > 0.0 ? 1 : 0;
-                    if (fresh == 0 || !(weight[k] > 0.0)) continue;
+                    const int k = weight[1] > 0.0 ? 1 : weight[0] > 0.0 ? 0 : 2;
+                    if (fresh == 0) continue;
                     const double share = double(__builtin_popcount(fresh)) / kSubsamples;
                     for (int c = 0; c < 3; ++c) out[p][c] += share * colour[k][c] / weight[k];
                     if (std::isnan(depth[p])) depth[p] = zSum[k] / weight[k];

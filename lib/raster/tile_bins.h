@@ -27,8 +27,8 @@ struct TileBins
 };
 
 /// Bins n splats in the order k = 0 .. n - 1: boxOf(k) is the k-th splat's inclusive pixel box
-/// (x0, y0, x1, y1 inside the image), indexOf(k) the index listed for it and spanOf(k) its
-/// span. Every tile lists its splats in that order (a counting sort, stable, in parallel over
+/// (x0, y0, x1, y1 inside the image; empty where x1 < x0 or y1 < y0), indexOf(k) the index
+/// listed for it and spanOf(k) its span. Every tile lists its splats in that order (a counting sort, stable, in parallel over
 /// fixed chunks of the order: the same lists for any thread count), and keeps the largest span
 /// of its splats. @a budget: the pairs are counted against it before they are stored.
 template <typename BoxOf, typename IndexOf, typename SpanOf>
@@ -40,6 +40,7 @@ TileBins binInOrder(std::size_t n, const BoxOf& boxOf, const IndexOf& indexOf, c
     bins.tilesY = (height + kTileSize - 1) / kTileSize;
     const std::size_t tiles = std::size_t(bins.tilesX) * bins.tilesY;
     const auto forEachTile = [&](const auto& s, const auto& f) {
+        if (s.x1 < s.x0 || s.y1 < s.y0) return; // an empty box
         for (int ty = s.y0 / kTileSize; ty <= s.y1 / kTileSize; ++ty)
             for (int tx = s.x0 / kTileSize; tx <= s.x1 / kTileSize; ++tx) f(std::size_t(ty) * std::size_t(bins.tilesX) + std::size_t(tx));
     };

@@ -2,6 +2,7 @@
 #include "source/surface_extraction.h"
 
 #include "source/material_color.h"
+#include "support/dense_block.h"
 
 #include <tbb/parallel_for.h>
 
@@ -90,12 +91,13 @@ void chooseClips(const std::vector<DiscClip>& candidates, std::vector<DiscClip>&
 /// neighbourhood), no farther: a disc overhangs a curved silhouette by radius^2 / (2 x the
 /// curvature radius). The distance to the kNeighboursCovered-th nearest neighbour on the same
 /// sheet, tangentially, at most @a maxRadius (3 sigma); @a maxRadius where there are fewer.
+/// @a squaredDistances: the neighbours' squared tangential distances (reordered).
 constexpr std::size_t kNeighboursCovered = 8;
-double discRadiusFrom(std::vector<double>& distances, double maxRadius)
+double discRadiusFrom(std::vector<double>& squaredDistances, double maxRadius)
 {
-    if (distances.size() < kNeighboursCovered) return maxRadius;
-    std::nth_element(distances.begin(), distances.begin() + std::ptrdiff_t(kNeighboursCovered - 1), distances.end());
-    return std::min(maxRadius, distances[kNeighboursCovered - 1]);
+    if (squaredDistances.size() < kNeighboursCovered) return maxRadius;
+    std::nth_element(squaredDistances.begin(), squaredDistances.begin() + std::ptrdiff_t(kNeighboursCovered - 1), squaredDistances.end());
+    return std::min(maxRadius, std::sqrt(squaredDistances[kNeighboursCovered - 1]));
 }
 
 /// What each kernel takes from its neighbours on the surface (index offsets up to @a radius):
@@ -106,7 +108,7 @@ double discRadiusFrom(std::vector<double>& distances, double maxRadius)
 /// Disc radius: discRadiusFrom the same neighbours' tangential distances.
 /// Disc clips: the nearest convex creases within the disc (creaseClip, chooseClips).
 /// Only for the kernels @a drawn (all if empty); the others are still neighbours.
-void relateNeighbours(std::vector<SurfaceKernel>& kernels, const std::vector<openvdb::Coord>& voxels, double sigma,
+void relateNeighbours(LargeArray<SurfaceKernel>& kernels, const std::vector<openvdb::Coord>& voxels, double sigma,
     double spacing, int radius, const std::function<bool(const SurfaceKernel&)>& drawn)
 {
     // The kernels at each coordinate, which are consecutive: the first's index x 4 + count - 1
@@ -124,12 +126,9 @@ void relateNeighbours(std::vector<SurfaceKernel>& kernels, const std::vector<ope
     const double twoPiS2 = 6.283185307179586 * sigma * sigma, inv2S2 = 0.5 / (sigma * sigma);
     const double maxNormalOffset = 1.5 * spacing;
     const double discRadius = kDiscRadiusSigmas * sigma;
-    std::vector<double> areas(kernels.size()), radii(kernels.size());
-    std::vector<std::array<DiscClip, 3>> clips(kernels.size());
-    std::vector<int> clipCounts(kernels.size(), 0);
     // The kernels come leaf by leaf (8^3 voxels): each leaf's neighbourhood, the leaf and
-    // @a radius voxels around it, is read into a dense block once (1,728 lookups for radius 2
-    // instead of 125 a kernel).
+    // @a radius voxels around it, is read into a dense block once (readDenseBlock: 27 leaf
+    // nodes for radius 2, instead of 125 lookups a kernel).
     std::vector<std::size_t> leafStarts;
     for (std::size_t k = 0; k < voxels.size(); ++k) {
         if (k == 0 || (voxels[k] & ~7) != (voxels[k - 1] & ~7)) leafStarts.push_back(k);
@@ -139,19 +138,16 @@ void relateNeighbours(std::vector<SurfaceKernel>& kernels, const std::vector<ope
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leafStarts.size() - 1, 16), [&](const tbb::blocked_range<std::size_t>& r) {
         auto acc = index.getConstAccessor();
         std::vector<int> block(std::size_t(side) * std::size_t(side) * std::size_t(side));
-        std::vector<double> distances; // tangential distances to the neighbours on the same sheet
+        std::vector<double> distances; // squared tangential distances to the neighbours on the same sheet
         std::vector<DiscClip> candidates, kept;
         for (std::size_t leaf = r.begin(); leaf < r.end(); ++leaf) {
             const openvdb::Coord corner = (voxels[leafStarts[leaf]] & ~7).offsetBy(-radius);
-            for (int i = 0; i < side; ++i)
-                for (int j = 0; j < side; ++j)
-                    for (int l = 0; l < side; ++l) {
-                        block[std::size_t((i * side + j) * side + l)] = acc.getValue(corner.offsetBy(i, j, l));
-                    }
+            readDenseBlock(acc, corner, side, block);
             for (std::size_t k = leafStarts[leaf]; k < leafStarts[leaf + 1]; ++k) {
                 if (drawn && !drawn(kernels[k])) continue; // area 0, no disc: not drawn
-                SurfaceKernel a = kernels[k];
-                a.clipCount = 0;
+                // The neighbours read only the kernels' centres and normals: the other fields
+                // are written in place.
+                SurfaceKernel& a = kernels[k];
                 double density = 0.0;
                 distances.clear();
                 candidates.clear();
@@ -165,28 +161,23 @@ void relateNeighbours(std::vector<SurfaceKernel>& kernels, const std::vector<ope
                                 const SurfaceKernel& b = kernels[std::size_t(other)];
                                 const Vec3d d = b.pWorld - a.pWorld;
                                 const double along = glm::dot(d, a.normal);
+                                const double turn = glm::dot(a.normal, b.normal);
                                 DiscClip clip;
-                                if (creaseClip(a, b, spacing, clip) && clip.distance < discRadius) mergeClip(candidates, clip);
-                                if (std::abs(along) > maxNormalOffset || glm::dot(a.normal, b.normal) < 0.3) continue; // another sheet
+                                if (turn < kCreaseCos && creaseClip(a, b, spacing, clip) && clip.distance < discRadius) {
+                                    mergeClip(candidates, clip);
+                                }
+                                if (std::abs(along) > maxNormalOffset || turn < 0.3) continue; // another sheet
                                 const double tangential2 = std::max(0.0, glm::dot(d, d) - along * along);
-                                density += std::exp(-tangential2 * inv2S2) / twoPiS2;
-                                if (other != int(k)) distances.push_back(std::sqrt(tangential2));
+                                density += double(std::exp(float(-tangential2 * inv2S2))); // float: 1e-7 of the area
+                                if (other != int(k)) distances.push_back(tangential2);
                             }
                         }
-                areas[k] = 1.0 / density; // density includes the kernel itself: > 0
+                a.area = twoPiS2 / density; // density includes the kernel itself: > 0
                 chooseClips(candidates, kept, a);
-                radii[k] = discRadiusFrom(distances, discRadius);
-                clips[k] = a.clips;
-                clipCounts[k] = a.clipCount;
+                a.discRadius = discRadiusFrom(distances, discRadius);
             }
         }
     });
-    for (std::size_t k = 0; k < kernels.size(); ++k) {
-        kernels[k].area = areas[k];
-        kernels[k].discRadius = radii[k];
-        kernels[k].clips = clips[k];
-        kernels[k].clipCount = clipCounts[k];
-    }
 }
 
 /// Level of detail: of one leaf's kernels (@a voxels, in the leaf), each block of @a s^3 voxels
@@ -273,6 +264,9 @@ SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, const SurfaceRequ
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size()), [&](const tbb::blocked_range<std::size_t>& r) {
         openvdb::tree::ValueAccessor<const openvdb::FloatTree> acc(tree);
         MaterialColor color(grid);
+        constexpr int kBlockSide = 10;
+        constexpr std::size_t kAxisStride[3] = {kBlockSide * kBlockSide, kBlockSide, 1};
+        std::vector<float> block;
         for (std::size_t l = r.begin(); l < r.end(); ++l) {
             if (request.leafMayBeSeen) {
                 const openvdb::Vec3d o = leaves[l]->origin().asVec3d();
@@ -282,19 +276,21 @@ SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, const SurfaceRequ
                     continue;
                 }
             }
+            // The leaf and a voxel around it, for the 6-neighbourhoods.
+            const openvdb::Coord corner = leaves[l]->origin().offsetBy(-1);
+            readDenseBlock(acc, corner, kBlockSide, block);
             for (auto it = leaves[l]->cbeginValueOn(); it; ++it) {
                 const double d = double(*it) - isovalue;
                 if (!std::isfinite(d)) continue;
                 const openvdb::Coord ijk = it.getCoord();
+                const openvdb::Coord local = ijk - corner;
+                const std::size_t centre = std::size_t((local.x() * kBlockSide + local.y()) * kBlockSide + local.z());
                 // Index-space gradient by central differences (the band's sign is kept by the
                 // background value outside it).
                 Vec3d g;
                 bool crosses = d == 0.0; // the surface passes between this voxel and a neighbour
                 for (int a = 0; a < 3; ++a) {
-                    openvdb::Coord lo = ijk, hi = ijk;
-                    lo[a] -= 1;
-                    hi[a] += 1;
-                    const double vLo = acc.getValue(lo), vHi = acc.getValue(hi);
+                    const double vLo = block[centre - kAxisStride[a]], vHi = block[centre + kAxisStride[a]];
                     g[a] = 0.5 * (vHi - vLo);
                     crosses = crosses || (vLo - isovalue) * d <= 0.0 || (vHi - isovalue) * d <= 0.0;
                 }
@@ -322,15 +318,18 @@ SurfaceSet extractSurfaceKernels(const GridSource::Impl& grid, const SurfaceRequ
         }
         advance(progress, r.size());
     });
-    std::size_t total = 0;
-    for (const auto& v : perLeaf) total += v.size();
-    out.kernels.reserve(total);
-    std::vector<openvdb::Coord> voxels;
-    voxels.reserve(total);
-    for (std::size_t l = 0; l < perLeaf.size(); ++l) {
-        out.kernels.insert(out.kernels.end(), perLeaf[l].begin(), perLeaf[l].end());
-        voxels.insert(voxels.end(), perLeafVoxels[l].begin(), perLeafVoxels[l].end());
-    }
+    // The leaves' kernels, in leaf order.
+    std::vector<std::size_t> firstOfLeaf(perLeaf.size() + 1, 0);
+    for (std::size_t l = 0; l < perLeaf.size(); ++l) firstOfLeaf[l + 1] = firstOfLeaf[l] + perLeaf[l].size();
+    out.kernels.resize(firstOfLeaf.back());
+    std::vector<openvdb::Coord> voxels(firstOfLeaf.back());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, perLeaf.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t l = r.begin(); l < r.end(); ++l) {
+            std::copy(perLeaf[l].begin(), perLeaf[l].end(), out.kernels.begin() + std::ptrdiff_t(firstOfLeaf[l]));
+            std::copy(perLeafVoxels[l].begin(), perLeafVoxels[l].end(), voxels.begin() + std::ptrdiff_t(firstOfLeaf[l]));
+            std::vector<SurfaceKernel>().swap(perLeaf[l]);
+        }
+    });
     relateNeighbours(out.kernels, voxels, out.sigma, out.spacing, radius, request.drawn);
     return out;
 }

@@ -6,6 +6,7 @@
 #include <vdb_ewa/render_settings.h>
 
 #include "source/grid_source_impl.h"
+#include "support/huge_page_allocator.h"
 #include "support/progress.h"
 
 #include <array>
@@ -38,7 +39,7 @@ struct SurfaceKernel
 
 struct SurfaceSet
 {
-    std::vector<SurfaceKernel> kernels; ///< in tree order (deterministic)
+    LargeArray<SurfaceKernel> kernels; ///< in tree order (deterministic)
     double sigma = 0;                   ///< tangential std. deviation, world units
     int lattice = 1;                    ///< one kernel a lattice^3 block of voxels, per sheet (level of detail)
     double spacing = 0;                 ///< world length of a lattice step: voxel length x lattice
