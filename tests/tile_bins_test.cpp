@@ -1,6 +1,6 @@
 /// @file tile_bins_test.cpp
 /// @brief Binning splats into screen tiles (raster/tile_bins.h).
-#include "raster/tile_bins.h"
+#include "raster/raster.h"
 
 #include <gtest/gtest.h>
 

@@ -8,4 +8,5 @@
 
 #include "raster/disc_coverage.h"
 #include "raster/surface_rasterizer.h"
+#include "raster/tile_bins.h"
 #include "raster/tile_rasterizer.h"
