@@ -22,6 +22,9 @@
                                                          where DIR holds a tradeoff run's references)
   bench/bench.py surfaces [--res 1920x1080] [--shader diffuse] [--repeat 3]
                                                          level sets: surface splats against vdb_render
+  bench/bench.py roofline [--res 1920x1080] [--quality draft,default] [--build DIR]
+                                                         issue 17: the rasteriser's achieved rate against
+                                                         the peak of its inner loop (bench/roofline)
   bench/bench.py holes [--res 640x480] [--only sphere,cube] [--keep DIR]
                                                          issue 16's coverage: IoU and holes against
                                                          vdb_render's hit mask (-shader matte), level
@@ -529,6 +532,55 @@ def cmd_holes(args):
         print(f"| {label} | {' | '.join(row)} |", flush=True)
 
 
+ROOFLINE_SCENES = ["smoke", "pyro", "brain_mri", "cloud (grids/)"]
+
+
+def roofline_binary(build):
+    """bench/roofline's benchmark, configured and built in @a build if it is not there yet."""
+    exe = os.path.join(build, "bench", "roofline", "vdb_ewa_roofline")
+    if not os.path.exists(exe):
+        subprocess.run(["cmake", "-S", ROOT, "-B", build, "-DCMAKE_BUILD_TYPE=Release", "-DVDB_EWA_BENCHMARKS=ON",
+                        "-DVDB_EWA_BUILD_TESTS=OFF", "-DVDB_EWA_BUILD_CLI=OFF"], check=True, capture_output=True)
+        subprocess.run(["cmake", "--build", build, "--target", "vdb_ewa_roofline"], check=True, capture_output=True)
+    return exe
+
+
+def cmd_roofline(args):
+    """Issue 17: the rasteriser's achieved rate in real frames against this machine's peak for its
+    inner loop (bench/roofline, one core, data in L1), scalar and AVX2."""
+    import json
+    exe = roofline_binary(args.build)
+    out = subprocess.run([exe, "--benchmark_format=json", "--benchmark_min_time=0.5"], check=True, capture_output=True, text=True).stdout
+    peak = {b["name"]: b["items_per_second"] for b in json.loads(out)["benchmarks"]}
+    print(f"# peak of the inner loop on one core (bench/roofline, data in L1), {os.cpu_count()} cores")
+    print("| kernel | scalar (M/s) | AVX2 (M/s) | AVX2 / scalar |")
+    print("|---|---|---|---|")
+    for k in ("footprint_samples", "slab_composites"):
+        sc, vx = peak.get(k + "/scalar", nan), peak.get(k + "/avx2", nan)
+        print(f"| {k.replace('_', ' ')} | {sc / 1e6:.0f} | {vx / 1e6:.0f} | {vx / sc:.1f}x |")
+    print(f"\n# achieved in real frames, {args.res}, one thread (--threads 1), median of {args.repeat}; "
+          "roofline time = samples / peak + composites / peak")
+    print("| scene | quality | footprint samples (M) | slab composites (M) | rasterise (s) | achieved (M samples/s) "
+          "| rasterise / roofline time, scalar | rasterise / roofline time, AVX2 |")
+    print("|---|---|---|---|---|---|---|---|")
+    tmp = tempfile.mkdtemp(prefix="vdb_ewa_roofline_")
+    for label, path, cam in [s for s in SCENES if s[0] in ROOFLINE_SCENES]:
+        if not os.path.exists(path):
+            continue
+        for quality in args.quality.split(","):
+            times, samples, composites = [], 0, 0
+            for _ in range(args.repeat):
+                _, stdout = run([EWA, "render", path, os.path.join(tmp, "o.exr"), "-res", args.res, *cam.split(),
+                                 "--quality", quality, "--threads", "1", "-v"])
+                times.append(stages(stdout).get("rasterise", nan))
+                samples = int(re.search(r"([0-9]+) footprint samples", stdout).group(1))
+                composites = int(re.search(r"([0-9]+) slab composites", stdout).group(1))
+            t = statistics.median(times)
+            ideal = lambda kind: samples / peak["footprint_samples/" + kind] + composites / peak["slab_composites/" + kind]
+            print(f"| {label} | {quality} | {samples / 1e6:.1f} | {composites / 1e6:.1f} | {t:.3f} | {samples / t / 1e6:.0f} | "
+                  f"{t / ideal('scalar'):.1f} | {t / ideal('avx2') if 'footprint_samples/avx2' in peak else nan:.1f} |", flush=True)
+
+
 def plot(rows, path):
     try:
         import matplotlib
@@ -606,6 +658,11 @@ def main():
     sl.add_argument("--repeat", type=int, default=1)
     sl.add_argument("--cache", default="", help="folder that keeps vdb_render's converged images between runs")
     sl.add_argument("--plot", default="")
+    sr = sub.add_parser("roofline")
+    sr.add_argument("--res", default="1920x1080")
+    sr.add_argument("--quality", default="draft,default")
+    sr.add_argument("--repeat", type=int, default=3)
+    sr.add_argument("--build", default=os.path.join(ROOT, "build-bench"), help="where bench/roofline is built")
     sa = sub.add_parser("analytic")
     sa.add_argument("--res", default="320x180")
     sp2 = sub.add_parser("plot")
@@ -615,7 +672,7 @@ def main():
     a = ap.parse_args()
     {"speed": cmd_speed, "sigma": cmd_sigma, "tradeoff": cmd_tradeoff, "targets": cmd_targets,
      "output": cmd_output, "surfaces": cmd_surfaces, "holes": cmd_holes, "plot": cmd_plot, "ladder": cmd_ladder,
-     "analytic": cmd_analytic}[a.cmd](a)
+     "analytic": cmd_analytic, "roofline": cmd_roofline}[a.cmd](a)
 
 
 if __name__ == "__main__":

@@ -2,7 +2,7 @@
 # Install the Debian 12 packages vdb_ewa needs to build, test and benchmark.
 # Idempotent: installs only what is missing. Uses sudo when not run as root. With --bench, also
 # what bench/bench.py's image analyses need (numpy, pyopenvdb, OpenImageIO's Python module,
-# matplotlib).
+# matplotlib) and bench/roofline (Google Benchmark, xsimd).
 set -euo pipefail
 packages=(
   cmake g++ make pkg-config
@@ -14,7 +14,7 @@ packages=(
   clang libclang-rt-14-dev  # the sanitized test build and the libFuzzer harnesses (tests/fuzz)
 )
 if [ "${1:-}" = "--bench" ]; then
-  packages+=(python3-numpy python3-openvdb python3-openimageio python3-matplotlib)
+  packages+=(python3-numpy python3-openvdb python3-openimageio python3-matplotlib libbenchmark-dev libxsimd-dev)
 fi
 missing=()
 for p in "${packages[@]}"; do

@@ -413,7 +413,8 @@ private:
                   << s.haloKernels << " halo kernels by --prefilter, " << s.refinedVoxels << " voxels sampled by --refine), " << s.kernelsSkipped << " values skipped (below --cutoff or NaN), "
                   << s.kernelsCulled << " kernels culled, " << s.splats << " splatted into " << s.splatTilePairs
                   << " (splat, tile) pairs; " << s.screenTilesOpaque << " of " << s.screenTiles
-                  << " screen tiles turned opaque early, skipping " << s.splatTilePairsSkipped << " pairs\n"
+                  << " screen tiles turned opaque early, skipping " << s.splatTilePairsSkipped << " pairs; "
+                  << s.footprintSamples << " footprint samples, " << s.slabComposites << " slab composites\n"
                   << std::fixed << std::setprecision(3) << "vdb_ewa: timings (s): load " << loadSeconds << ", kernels "
                   << s.kernelSeconds << ", shadows " << s.shadowSeconds << ", project " << s.projectSeconds
                   << ", rasterise " << s.rasterSeconds << ", write " << writeSeconds << "\n";

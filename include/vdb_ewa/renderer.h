@@ -43,6 +43,8 @@ struct RenderStats
     std::uint64_t screenTiles = 0;         ///< 16x16 screen tiles
     std::uint64_t screenTilesOpaque = 0;   ///< tiles that turned opaque before their last splat
     std::uint64_t splatTilePairsSkipped = 0; ///< pairs skipped because their tile was opaque
+    std::uint64_t footprintSamples = 0; ///< fog volumes: footprint weights evaluated (pixels inside a cut-off)
+    std::uint64_t slabComposites = 0;   ///< fog volumes: (pixel, slab) samples composited
     std::vector<std::string> warnings; ///< what was clamped or skipped, one line each
 };
 

@@ -9,6 +9,7 @@
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -110,6 +111,11 @@ public:
     }
 
     bool opaque() const { return mAliveCount == 0; }
+    /// The footprint weights evaluated (pixels inside a cut-off, each spread into every slab
+    /// its kernel overlaps) and the (pixel, slab) samples composited: the work the roofline
+    /// benchmark's rates are measured in (bench/roofline).
+    std::uint64_t samples() const { return mSamples; }
+    std::uint64_t composites() const { return mComposites; }
 
     /// exp(-r/2) along a row, r = qa dx^2 + 2 qb dx dy + qc dy^2, dx = dx0, dx0 + 1, ...
     void rowWeights(double qa, double qb, double qc, double dx0, double dy, int n, float k, float* out) const
@@ -177,6 +183,7 @@ public:
             const int p0 = ly * kTileSize + lxa;
             const double dx0 = double(mX0 + lxa) + 0.5 - double(s.cx);
             rowWeights(qa, qb, qc, dx0, dy, n, kx, weights);
+            mSamples += std::uint64_t(n);
             for (int i = 0; i < n; ++i) {
                 if (!mAlive[p0 + i]) weights[i] = 0.0f;
             }
@@ -486,6 +493,7 @@ private:
                         t2 += t * t;
                     }
                     if (passes) flushPasses(slab, p, meanBefore, emission, lit);
+                    ++mComposites;
                     if (u < 1.0f || t2 * float(3 / C) < mCutoff) {
                         mAlive[p] = 0;
                         --mAliveCount;
@@ -503,6 +511,7 @@ private:
         d.on = false;
     }
 
+    std::uint64_t mSamples = 0, mComposites = 0; ///< samples(), composites()
     int mX0, mY0, mW, mH;
     std::int64_t mMask;
     float mCutoff;
@@ -606,7 +615,7 @@ std::vector<SweepEntry> sweepOrder(const SplatSet& set)
 template <int C>
 void compositeTiles(const SplatSet& set, const TileBins& bins, const CompositeOptions& options,
     const std::vector<float>& depthScale, Frame& frame, std::vector<TileDeep>& deep, std::vector<std::uint64_t>& skipped,
-    Progress* progress)
+    std::vector<std::array<std::uint64_t, 2>>& work, Progress* progress)
 {
     const int width = frame.beauty.width, height = frame.beauty.height;
     const int tiles = bins.tilesX * bins.tilesY;
@@ -635,6 +644,7 @@ void compositeTiles(const SplatSet& set, const TileBins& bins, const CompositeOp
             }
             skipped[std::size_t(t)] = count - done;
             tile.finish(frame, depthScale, deep.empty() ? nullptr : &deep[std::size_t(t)]);
+            work[std::size_t(t)] = {tile.samples(), tile.composites()};
             advance(progress);
         }
     });
@@ -712,6 +722,7 @@ Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSet
     stats.splatTilePairs = bins.indices.size();
     const int tiles = bins.tilesX * bins.tilesY;
     std::vector<std::uint64_t> skipped(std::size_t(tiles), 0);
+    std::vector<std::array<std::uint64_t, 2>> work(std::size_t(tiles), {0, 0});
     const ExpTable table(float(settings.splat.cutoffRadius * settings.splat.cutoffRadius));
     CompositeOptions options;
     options.cutoff = float(settings.cutoff);
@@ -729,13 +740,17 @@ Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSet
     const std::vector<float> depthScale = (passes.depth || passes.deep) ? depthScales(camera) : std::vector<float>{};
     std::vector<TileDeep> deep(passes.deep ? std::size_t(tiles) : 0);
     setUnits(progress, std::uint64_t(bins.tilesX) * std::uint64_t(bins.tilesY));
-    if (allGrey(set, model)) compositeTiles<1>(set, bins, options, depthScale, frame, deep, skipped, progress);
-    else compositeTiles<3>(set, bins, options, depthScale, frame, deep, skipped, progress);
+    if (allGrey(set, model)) compositeTiles<1>(set, bins, options, depthScale, frame, deep, skipped, work, progress);
+    else compositeTiles<3>(set, bins, options, depthScale, frame, deep, skipped, work, progress);
     if (passes.deep) frame.deep = assembleDeep(deep, bins, width, height, depthScale);
     stats.tiles = std::uint64_t(tiles);
     for (std::uint64_t n : skipped) {
         stats.tilesOpaque += (n > 0);
         stats.pairsSkipped += n;
+    }
+    for (const auto& w : work) {
+        stats.footprintSamples += w[0];
+        stats.slabComposites += w[1];
     }
     return frame;
 }

@@ -18,6 +18,8 @@ struct RasterStats
     std::uint64_t tiles = 0;
     std::uint64_t tilesOpaque = 0;  ///< tiles that turned opaque before their last splat
     std::uint64_t pairsSkipped = 0; ///< pairs skipped in those tiles
+    std::uint64_t footprintSamples = 0; ///< footprint weights evaluated (pixels inside a cut-off)
+    std::uint64_t slabComposites = 0;   ///< (pixel, slab) samples composited
 };
 
 /// Composite @a set into the camera's image (premultiplied RGB, A = 1 - mean T) and the
