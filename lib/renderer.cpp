@@ -14,8 +14,10 @@
 
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <sstream>
 
 namespace vdb_ewa {
@@ -50,6 +52,46 @@ std::string countLine(std::uint64_t n, const std::string& what)
     return s.str();
 }
 
+
+/// A fog volume's --iso surface rasterised on its own with disc coverage (the level sets'
+/// method: docs/equations.md#surface-coverage), for the slab compositor to composite at its
+/// depth; lit as the volume is: the light's colour x the material colour x the cosine x the
+/// light's transmittance from the light map at the kernel. shadow: that transmittance alone
+/// (the shadow pass). Both times --iso-opacity.
+struct IsoSurface
+{
+    detail::SurfaceLayer layer, shadow;
+};
+
+IsoSurface isoSurface(const RenderSettings& settings, const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes,
+    const detail::LightMap& light, detail::Progress& progress, const detail::MemoryBudget& budget)
+{
+    budget.check(double(grid.activeVoxels), "active voxels (surface kernels)", detail::kBytesPerKernel);
+    const int lattice = detail::LevelOfDetail(grid, camera, settings.splat.lodPixels).surfaceLattice(detail::kMaxSurfaceLattice);
+    detail::SurfaceRequest request = detail::levelSetRequest(settings, camera, grid.voxelLength, lattice);
+    request.isovalue = settings.surface.iso;
+    request.outwardDecreasing = true; // the outside is where the density falls
+    request.reach = detail::kReachForFog;
+    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(grid, request, &progress);
+    const Vec3d toLight = settings.light.unitDirection();
+    std::vector<detail::Rgb> lit(surfaces.kernels.size(), detail::Rgb{0.0f, 0.0f, 0.0f}), shadow = lit;
+    for (std::size_t i = 0; i < lit.size(); ++i) {
+        const detail::SurfaceKernel& k = surfaces.kernels[i];
+        if (!(k.area > 0.0)) continue; // not drawn
+        shadow[i] = light.transmittance(light.coordinates(k.pWorld));
+        const double lambert = std::max(0.0, glm::dot(k.normal, toLight));
+        for (int c = 0; c < 3; ++c) lit[i][std::size_t(c)] = float(settings.light.color[c] * k.albedo[c] * lambert * double(shadow[i][std::size_t(c)]));
+    }
+    detail::SurfaceStats stats;
+    IsoSurface out;
+    out.layer = detail::rasterizeSurfaceLayer(surfaces, camera, settings, stats, &progress, &budget, &lit);
+    if (passes.shadow) out.shadow = detail::rasterizeSurfaceLayer(surfaces, camera, settings, stats, &progress, &budget, &shadow);
+    const float opacity = float(std::clamp(settings.surface.isoOpacity, 0.0, 1.0));
+    for (detail::SurfaceLayer* layer : {&out.layer, &out.shadow}) {
+        for (float& v : layer->rgba) v *= opacity;
+    }
+    return out;
+}
 } // namespace
 
 Renderer::Renderer(const RenderSettings& settings) : mSettings(settings)
@@ -94,22 +136,6 @@ void Renderer::renderLevelSet(const GridSource::Impl& grid, const Camera& camera
     }
 }
 
-void Renderer::addIsoSurface(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes,
-    const detail::LightMap& light, detail::SplatSet& splats, detail::Progress& progress) const
-{
-    budgetFor(grid, mSettings).check(double(grid.activeVoxels), "active voxels (surface kernels)", detail::kBytesPerKernel);
-    detail::SurfaceRequest request;
-    request.isovalue = mSettings.surface.iso;
-    request.kernelSigma = mSettings.surface.sigma;
-    request.outwardDecreasing = true;
-    request.reach = detail::kReachForWeights;
-    const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(grid, request, &progress);
-    // The light's transmittance at the surface kernels, from the volume's light map.
-    std::vector<detail::Rgb> shadows(surfaces.kernels.size());
-    for (std::size_t i = 0; i < shadows.size(); ++i) shadows[i] = light.transmittance(light.coordinates(surfaces.kernels[i].pWorld));
-    detail::appendSurfaceSplats(splats, surfaces, shadows, camera, mSettings, grid.voxelLength, passes);
-}
-
 void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, const PassRequest& passes,
     Frame& frame, RenderStats& stats, detail::Progress& progress) const
 {
@@ -149,11 +175,13 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     progress.stage(35, 45);
     const std::vector<detail::Rgb> colors = detail::kernelColors(g, kernels);
     detail::SplatSet splats = detail::projectSplats(g, kernels, colors, camera, mSettings, passes, &progress);
-    if (!std::isnan(mSettings.surface.iso)) addIsoSurface(g, camera, passes, light, splats, progress);
+    std::optional<IsoSurface> iso;
+    if (!std::isnan(mSettings.surface.iso)) iso = isoSurface(mSettings, g, camera, passes, light, progress, budget);
     stats.projectSeconds = timer.lap();
     progress.stage(45, 100);
     detail::RasterStats raster;
-    frame = detail::rasterizeSplats(splats, camera, mSettings, passes, raster, &light, !colors.empty(), &progress, &budget);
+    frame = detail::rasterizeSplats(splats, camera, mSettings, passes, raster, &light, !colors.empty(), &progress, &budget,
+        iso ? &iso->layer : nullptr, iso && passes.shadow ? &iso->shadow : nullptr);
     stats.rasterSeconds = timer.lap();
 
     stats.activeVoxels = kernels.activeVoxels;

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 
 using namespace vdb_ewa;
@@ -221,6 +222,65 @@ TEST(Passes, DeepSamplesAreTidyAndFlattenToTheBeauty)
         EXPECT_LT(worst, 1e-4) << "--slab " << slab;
         EXPECT_GT(maxSamples, 3u);
     }
+}
+
+// A fog --iso surface (composited at its depth by the slab compositor) is in every pass: Z at
+// the surface, no transmittance through it, a deep point sample at its depth (the samples in
+// order, flattening to the beauty), and in the shadow pass the light's transmittance at it,
+// which for a white surface lit head-on is the beauty.
+TEST(Passes, IsoSurfaceIsInEveryPass)
+{
+    // A fog ball of radius 1: density 0.5 inside, a linear ramp 4 voxels wide, 0.25 on the sphere.
+    const double voxel = 0.05;
+    auto grid = openvdb::FloatGrid::create(0.0f);
+    grid->setTransform(openvdb::math::Transform::createLinearTransform(voxel));
+    grid->setName("density");
+    auto acc = grid->getAccessor();
+    for (int i = -25; i <= 25; ++i)
+        for (int j = -25; j <= 25; ++j)
+            for (int k = -25; k <= 25; ++k) {
+                const double density = 0.5 * std::clamp(0.5 - (glm::length(Vec3d(i, j, k) * voxel) - 1.0) / (4.0 * voxel), 0.0, 1.0);
+                if (density > 0.0) acc.setValueOn(openvdb::Coord(i, j, k), float(density));
+            }
+    const GridSource ball = gridSourceFromOpenVDB(grid);
+    const Camera camera(orthoDownZ(0.0, 0.0, 5.0, 2.4, 48), Vec3d(0.0)); // the sphere's top at depth 4
+    RenderSettings s;
+    s.surface.iso = 0.25;
+    s.medium.absorb = Vec3d(0.0); // albedo 1, white light from the camera: the shadow pass is the beauty
+    s.light.color = Vec3d(1.0);
+    s.light.direction = Vec3d(0.0, 0.0, 1.0);
+    PassRequest all = allFlatPasses();
+    all.deep = true;
+    const Frame f = Renderer(s).renderFrame(ball, camera, all);
+    const int x = 24, y = 24;
+    const std::size_t i = std::size_t(y) * 48 + std::size_t(x);
+    EXPECT_GT(f.beauty.pixel(x, y)[3], 0.999f) << "the surface is opaque";
+    EXPECT_NEAR(f.depth[i], 4.0, 0.01) << "Z is the surface's";
+    for (int c = 0; c < 3; ++c) {
+        EXPECT_LT(f.transmittance[3 * i + std::size_t(c)], 1e-3f);
+        EXPECT_NEAR(f.shadow[3 * i + std::size_t(c)], f.beauty.pixel(x, y)[c], 2e-3) << "channel " << c;
+    }
+    EXPECT_GT(f.beauty.pixel(x, y)[0], 0.1f) << "lit";
+    const DeepImage& d = f.deep;
+    bool surfaceSample = false;
+    double worst = 0.0;
+    for (int py = 0; py < 48; ++py)
+        for (int px = 0; px < 48; ++px) {
+            const std::size_t j = std::size_t(py) * 48 + std::size_t(px);
+            for (std::uint64_t k = d.offsets[j]; k < d.offsets[j + 1]; ++k) {
+                EXPECT_LE(d.samples[k].z, d.samples[k].zBack);
+                if (k > d.offsets[j]) {
+                    EXPECT_LE(d.samples[k - 1].zBack, d.samples[k].z * (1.0f + 1e-6f));
+                }
+            }
+            const std::array<double, 4> flat = flatten(d, px, py);
+            for (int c = 0; c < 4; ++c) worst = std::max(worst, std::abs(flat[std::size_t(c)] - f.beauty.pixel(px, py)[c]));
+        }
+    for (std::uint64_t k = d.offsets[i]; k < d.offsets[i + 1]; ++k) {
+        surfaceSample = surfaceSample || (d.samples[k].z == d.samples[k].zBack && std::abs(d.samples[k].z - 4.0f) < 0.06f && d.samples[k].a > 0.99f);
+    }
+    EXPECT_TRUE(surfaceSample) << "a point sample at the surface, within half a slab";
+    EXPECT_LT(worst, 1e-4);
 }
 
 TEST(Passes, RayMarchRejectsPassesItCannotMake)

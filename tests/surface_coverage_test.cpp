@@ -202,6 +202,47 @@ TEST(SurfaceCoverage, ClosedLevelSetsAreOpaqueWhereverTheyAreHit)
     }
 }
 
+// Fog --iso surfaces are covered by the same discs, composited by the slab compositor at their
+// depth: a faint fog (density 0.002, a linear ramp 4 voxels wide with 0.001 on the surface:
+// the fog's own alpha is below 0.01) with --iso 0.001 is opaque wherever the surface is hit,
+// and its silhouette is the analytic one.
+// Before (the surface's optical depth as weights in the slabs) the interior sat at the fog's
+// alpha cap of 0.959 and the silhouette was dilated (IoU 0.978 on a sphere). Measured: no hole,
+// at most 8 fringe pixels, IoU 0.9929-1.0 (the level sets': 0.9922-1.0). Without the surface
+// composited, every pixel is a hole. The thin plate is left out: one voxel of fog has no gradient across it, so no surface.
+TEST(SurfaceCoverage, FogIsoSurfacesAreOpaqueWhereverTheyAreHit)
+{
+    for (const Scene& scene : scenes()) {
+        if (std::string(scene.name) == "thin plate") continue;
+        auto grid = openvdb::FloatGrid::create(0.0f);
+        grid->setTransform(openvdb::math::Transform::createLinearTransform(kVoxel));
+        grid->setName("density");
+        const int n = int(std::ceil(scene.extent / kVoxel)) + 4;
+        auto acc = grid->getAccessor();
+        for (int i = -n; i <= n; ++i)
+            for (int j = -n; j <= n; ++j)
+                for (int k = -n; k <= n; ++k) {
+                    const double density = 0.002 * std::clamp(0.5 - scene.sdf(Vec3d(i, j, k) * kVoxel) / (4.0 * kVoxel), 0.0, 1.0);
+                    if (density > 0.0) acc.setValueOn(openvdb::Coord(i, j, k), float(density));
+                }
+        const GridSource source = gridSourceFromOpenVDB(grid);
+        RenderSettings s;
+        s.surface.iso = 0.001;
+        for (const View& view : views(scene)) {
+            const Camera camera(view.camera, source.worldCentre());
+            const Image img = Renderer(s).render(source, camera);
+            ASSERT_TRUE(img.allFinite());
+            const Coverage c = measure(img, hitMask(scene, camera));
+            if (const char* keep = std::getenv("VDB_EWA_KEEP")) writeExr(img, std::string(keep) + "/fog_" + scene.name + "_" + view.name + ".exr");
+            std::printf("fog %s, %s: holes %d, fringe %d, IoU %.4f (%d pixels only in alpha > 0.5, %d only hit)\n", scene.name,
+                view.name, c.holes, c.fringe, c.iou, c.oursOnly, c.theirsOnly);
+            EXPECT_EQ(c.holes, 0) << scene.name << ", " << view.name;
+            EXPECT_LE(c.fringe, 10) << scene.name << ", " << view.name;
+            EXPECT_GE(c.iou, 0.99) << scene.name << ", " << view.name;
+        }
+    }
+}
+
 // Level of detail: where a voxel is small on screen, a block of 2^3 or 4^3 voxels keeps one
 // kernel for each sheet through it (--lod 4: the lattice step projects to at most one pixel),
 // with the same guarantees: no hole, the analytic silhouette. A sphere, a cube and two plates

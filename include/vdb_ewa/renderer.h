@@ -81,10 +81,6 @@ private:
     VDB_EWA_LOCAL void renderFogVolume(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes, Frame& frame,
         RenderStats& stats, detail::Progress& progress) const;
 
-    /// Fog volumes with settings.surface.iso: the iso-surface's kernels join the volume's splats.
-    VDB_EWA_LOCAL void addIsoSurface(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes,
-        const detail::LightMap& light, detail::SplatSet& splats, detail::Progress& progress) const;
-
     RenderSettings mSettings;
 };
 

@@ -77,48 +77,5 @@ bool projectSurface(const SurfaceKernel& kernel, double sigma, const Camera& cam
     return fp.valid;
 }
 
-void appendSurfaceSplats(SplatSet& set, const SurfaceSet& surfaces, const std::vector<Rgb>& shadows,
-    const Camera& camera, const RenderSettings& settings, double voxelLength, const PassRequest& passes)
-{
-    const ProjectionParams params = projectionParams(camera, settings.splat);
-    const bool perspective = params.perspective;
-    const Vec3d toLight = settings.light.unitDirection();
-    const double tauSurface = std::min(20.0, -std::log1p(-std::min(settings.surface.isoOpacity, 1.0)));
-    const double sd = 0.25 * voxelLength; // a flattened kernel: about one slab deep
-    for (std::size_t i = 0; i < surfaces.kernels.size(); ++i) {
-        const SurfaceKernel& k = surfaces.kernels[i];
-        Vec3d t, normal;
-        Footprint fp;
-        if (!projectSurface(k, surfaces.sigma, camera, params, t, normal, fp)) continue;
-        Splat sp{};
-        if (!pixelBox(fp, camera.width(), camera.height(), sp.x0, sp.y0, sp.x1, sp.y1)) continue;
-        const double toRay = perspective ? glm::length(t) / t.z : 1.0;
-        const double clipNear = camera.near() * toRay, clipFar = camera.far() * toRay;
-        std::int64_t first = 0;
-        const std::int64_t span = std::min<std::int64_t>(slabSpan(set.slabs, fp.depth, sd, kDepthTruncation, clipNear, clipFar, first), kMaxSlabSpan);
-        if (span <= 0) continue;
-        setFootprint(sp, fp, params.cutoffRadius);
-        const double tau = tauSurface * k.area * fp.peak;
-        const double lambert = std::max(0.0, glm::dot(k.normal, toLight));
-        for (int c = 0; c < 3; ++c) {
-            sp.tau[c] = float(tau);
-            sp.emission[c] = float(tau * settings.light.color[c] * k.albedo[c] * lambert * double(shadows[i][c]));
-            sp.scatter[c] = 0.0f;
-        }
-        sp.firstSlab = first;
-        sp.slabCount = std::uint32_t(span);
-        sp.shareOffset = set.shares.size();
-        set.shares.resize(set.shares.size() + std::size_t(span));
-        set.shareMoments.resize(2 * set.shares.size());
-        slabShares(set.slabs, fp.depth, sd, kDepthTruncation, clipNear, clipFar, first, set.shares.data() + sp.shareOffset,
-            int(span), set.shareMoments.data() + 2 * sp.shareOffset);
-        set.splats.push_back(sp);
-        if (passes.shadow) {
-            for (int c = 0; c < 3; ++c) set.passSources.push_back(float(tau * double(shadows[i][c])));
-        }
-        if (passes.emission) set.passSources.insert(set.passSources.end(), 3, 0.0f);
-    }
-}
-
 } // namespace detail
 } // namespace vdb_ewa

@@ -1,6 +1,6 @@
 /// @file surface_projection.h
-/// @brief Surface kernels -> screen-space footprints (Sec. 6.4, Eq. 35): for the level-set
-///        rasteriser, and as thin splats of the volume's slab compositor (fog iso-surfaces).
+/// @brief Surface kernels -> screen-space footprints (Sec. 6.4, Eq. 35) for the surface
+///        rasteriser (level sets and fog --iso surfaces).
 #pragma once
 
 #include "projection/splat_projection.h"
@@ -21,7 +21,7 @@ bool facesEye(const SurfaceKernel& kernel, const Camera& camera, Vec3d& t, Vec3d
 /// out by @a pixelMargin pixels).
 bool boxMayBeSeen(const Camera& camera, const Vec3d& lo, const Vec3d& hi, double pixelMargin);
 
-/// The surface kernels a level set's render through @a camera needs, on the lattice @a lattice
+/// The surface kernels a render of a surface (a level set, a fog --iso surface) through @a camera needs, on the lattice @a lattice
 /// (voxels of @a voxelLength): only the kernels facing the eye are related to their neighbours,
 /// and leaf nodes whose kernels cannot reach the frame are skipped. A kernel reaches the frame
 /// through its footprint (settings.splat.cutoffRadius sigma, widened by the low-pass filter) or
@@ -34,14 +34,6 @@ SurfaceRequest levelSetRequest(const RenderSettings& settings, const Camera& cam
 /// footprint (Eq. 35). False unless it facesEye, or if it does not project.
 bool projectSurface(const SurfaceKernel& kernel, double sigma, const Camera& camera, const ProjectionParams& params,
     Vec3d& t, Vec3d& normal, Footprint& fp);
-
-/// Fog volumes with an iso-surface (Sec. 6.4): append @a surfaces to @a set as thin splats of
-/// the slab compositor. Each covers its pixels with optical depth -ln(1 - settings.surface.isoOpacity)
-/// (capped at 20) x area x footprint (the kernels sum to one over the surface), shaded
-/// Lambert from the light, times @a shadows (one per surface kernel) and the kernel's material
-/// colour; back faces are culled.
-void appendSurfaceSplats(SplatSet& set, const SurfaceSet& surfaces, const std::vector<Rgb>& shadows,
-    const Camera& camera, const RenderSettings& settings, double voxelLength, const PassRequest& passes);
 
 } // namespace detail
 } // namespace vdb_ewa

@@ -75,7 +75,7 @@ Vec3d shade(SurfaceShader shader, const Vec3d& normal, const Vec3d& rayDir, cons
 /// weights) or whose square meets the disc's raster box (coverage is sampled across each
 /// pixel's square).
 bool projectSurfaceSplat(const SurfaceKernel& k, const SurfaceSet& set, const Camera& camera, const ProjectionParams& params,
-    SurfaceShader shader, SurfaceSplat& s)
+    SurfaceShader shader, const Rgb* colour, SurfaceSplat& s)
 {
     Vec3d t, normal;
     Footprint fp;
@@ -98,9 +98,13 @@ bool projectSurfaceSplat(const SurfaceKernel& k, const SurfaceSet& set, const Ca
     if (!pixelBox(box, camera.width(), camera.height(), s.x0, s.y0, s.x1, s.y1)) return false;
     setFootprint(s, fp, params.cutoffRadius);
     s.weight = float(k.area * fp.peak);
-    const Vec3d rayDir = params.perspective ? glm::normalize(k.pWorld - camera.eye()) : glm::transpose(camera.cameraFromWorld())[2];
-    const Vec3d c = k.albedo * shade(shader, k.normal, rayDir, k.pWorld, set);
-    for (int ch = 0; ch < 3; ++ch) s.colour[ch] = float(c[ch]);
+    if (colour) {
+        for (int ch = 0; ch < 3; ++ch) s.colour[ch] = (*colour)[std::size_t(ch)];
+    } else {
+        const Vec3d rayDir = params.perspective ? glm::normalize(k.pWorld - camera.eye()) : glm::transpose(camera.cameraFromWorld())[2];
+        const Vec3d c = k.albedo * shade(shader, k.normal, rayDir, k.pWorld, set);
+        for (int ch = 0; ch < 3; ++ch) s.colour[ch] = float(c[ch]);
+    }
     s.depth = t.z;
     s.depthRange = k.discRadius + 2.0 * (params.perspective ? t.z : 1.0) / camera.focalPixels();
     return true;
@@ -108,7 +112,8 @@ bool projectSurfaceSplat(const SurfaceKernel& k, const SurfaceSet& set, const Ca
 
 /// The splats of the kernels facing the eye, in the kernels' order; those outside the frame
 /// have an empty pixel box (x1 < x0). Only the kernels facing the eye take memory.
-LargeArray<SurfaceSplat> projectSurfaceSplats(const SurfaceSet& set, const Camera& camera, const RenderSettings& settings)
+LargeArray<SurfaceSplat> projectSurfaceSplats(const SurfaceSet& set, const Camera& camera, const RenderSettings& settings,
+    const std::vector<Rgb>* colours)
 {
     ProjectionParams params = projectionParams(camera, settings.splat);
     params.cutoffRadius = std::min(params.cutoffRadius, kSurfaceCutoffRadius);
@@ -130,7 +135,7 @@ LargeArray<SurfaceSplat> projectSurfaceSplats(const SurfaceSet& set, const Camer
         for (std::size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
             if (!facesEye(set.kernels[i], camera, t, normal)) continue;
             SurfaceSplat& s = splats[next++];
-            if (!projectSurfaceSplat(set.kernels[i], set, camera, params, settings.surface.shader, s)) {
+            if (!projectSurfaceSplat(set.kernels[i], set, camera, params, settings.surface.shader, colours ? &(*colours)[i] : nullptr, s)) {
                 s.x0 = s.y0 = 0;
                 s.x1 = s.y1 = -1;
             }
@@ -141,12 +146,16 @@ LargeArray<SurfaceSplat> projectSurfaceSplats(const SurfaceSet& set, const Camer
 
 } // namespace
 
-Frame rasterizeSurfaces(const SurfaceSet& set, const Camera& camera, const RenderSettings& settings,
-    const PassRequest& passes, SurfaceStats& stats, Progress* progress, const MemoryBudget* budget)
+SurfaceLayer rasterizeSurfaceLayer(const SurfaceSet& set, const Camera& camera, const RenderSettings& settings,
+    SurfaceStats& stats, Progress* progress, const MemoryBudget* budget, const std::vector<Rgb>* colours)
 {
     const int width = camera.width(), height = camera.height();
-    Frame frame = blankFrame(width, height, passes);
-    const LargeArray<SurfaceSplat> splats = projectSurfaceSplats(set, camera, settings);
+    SurfaceLayer layer;
+    layer.width = width;
+    layer.height = height;
+    layer.rgba.assign(4 * std::size_t(width) * std::size_t(height), 0.0f);
+    layer.depth.assign(std::size_t(width) * std::size_t(height), std::numeric_limits<float>::quiet_NaN());
+    const LargeArray<SurfaceSplat> splats = projectSurfaceSplats(set, camera, settings, colours);
     stats.splats = std::size_t(std::count_if(splats.begin(), splats.end(), [](const SurfaceSplat& s) { return s.x0 <= s.x1; }));
     stats.culled = set.kernels.size() - stats.splats;
     const TileBins bins = binSplats(splats, width, height, budget);
@@ -267,16 +276,30 @@ Frame rasterizeSurfaces(const SurfaceSet& set, const Camera& camera, const Rende
                 for (int lx = 0; lx < w; ++lx) {
                     const int p = ly * kTileSize + lx;
                     const std::size_t i = std::size_t(y0 + ly) * std::size_t(width) + std::size_t(x0 + lx);
-                    const double alpha = double(__builtin_popcount(covered[p])) / kSubsamples;
-                    float* px = frame.beauty.pixel(x0 + lx, y0 + ly);
-                    for (int c = 0; c < 3; ++c) px[c] = float(out[p][c]);
-                    px[3] = float(alpha);
-                    if (passes.depth && alpha >= 0.5) frame.depth[i] = float(depth[p]);
-                    if (passes.transmittance) std::fill_n(&frame.transmittance[3 * i], 3, float(1.0 - alpha));
+                    for (int c = 0; c < 3; ++c) layer.rgba[4 * i + std::size_t(c)] = float(out[p][c]);
+                    layer.rgba[4 * i + 3] = float(double(__builtin_popcount(covered[p])) / kSubsamples);
+                    layer.depth[i] = float(depth[p]);
                 }
             advance(progress);
         }
     });
+    return layer;
+}
+
+Frame rasterizeSurfaces(const SurfaceSet& set, const Camera& camera, const RenderSettings& settings,
+    const PassRequest& passes, SurfaceStats& stats, Progress* progress, const MemoryBudget* budget)
+{
+    const SurfaceLayer layer = rasterizeSurfaceLayer(set, camera, settings, stats, progress, budget);
+    Frame frame = blankFrame(layer.width, layer.height, passes);
+    for (int y = 0; y < layer.height; ++y)
+        for (int x = 0; x < layer.width; ++x) {
+            const std::size_t i = std::size_t(y) * std::size_t(layer.width) + std::size_t(x);
+            float* px = frame.beauty.pixel(x, y);
+            for (int c = 0; c < 4; ++c) px[c] = layer.rgba[4 * i + std::size_t(c)];
+            const float alpha = px[3];
+            if (passes.depth && alpha >= 0.5f) frame.depth[i] = layer.depth[i];
+            if (passes.transmittance) std::fill_n(&frame.transmittance[3 * i], 3, 1.0f - alpha);
+        }
     return frame;
 }
 

@@ -4,8 +4,11 @@
 ///        by the accumulated weights (Zwicker et al. 2002, Sec. 7.2).
 #pragma once
 
-#include "raster/tile_rasterizer.h"
+#include "raster/surface_layer.h"
 #include "source/source.h"
+#include "support/memory_budget.h"
+#include "support/progress.h"
+#include "support/rgb.h"
 
 #include <vdb_ewa/camera.h>
 #include <vdb_ewa/frame.h>
@@ -35,6 +38,13 @@ struct SurfaceStats
 Frame rasterizeSurfaces(const SurfaceSet& surfaces, const Camera& camera, const RenderSettings& settings,
     const PassRequest& passes, SurfaceStats& stats, Progress* progress = nullptr,
     const MemoryBudget* budget = nullptr);
+
+/// The same surface as a layer: premultiplied colour, coverage alpha and the front layer's
+/// camera depth per pixel. @a colours: each kernel's colour (index-aligned with the kernels),
+/// used instead of settings.surface.shader (fog --iso surfaces, lit by the light); null: shaded.
+SurfaceLayer rasterizeSurfaceLayer(const SurfaceSet& surfaces, const Camera& camera, const RenderSettings& settings,
+    SurfaceStats& stats, Progress* progress = nullptr, const MemoryBudget* budget = nullptr,
+    const std::vector<Rgb>* colours = nullptr);
 
 } // namespace detail
 } // namespace vdb_ewa

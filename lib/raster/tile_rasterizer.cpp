@@ -56,6 +56,12 @@ struct CompositeOptions
     const Camera* camera = nullptr;
     bool tinted = false; ///< scattering weights differ from optical depths (material colours)
     bool emissive = true; ///< some splat has a pre-shaded source term (Splat::emission)
+    /// An opaque or semi-opaque surface composited at its depth (fog --iso surfaces): its layer,
+    /// the slab coordinate of each pixel's surface (frame order, NaN where none) and, for the
+    /// shadow pass, the light's transmittance at the surface as a layer. Null: none.
+    const SurfaceLayer* surface = nullptr;
+    const float* surfaceAt = nullptr;
+    const SurfaceLayer* surfaceShadow = nullptr;
 };
 
 /// A tile's deep samples, grouped by tile pixel in depth order (depths still along the ray).
@@ -108,6 +114,15 @@ public:
         for (int y = 0; y < h; ++y)
             for (int x = 0; x < w; ++x) mAlive[y * kTileSize + x] = 1;
         mAliveCount = w * h;
+        std::fill(std::begin(mSurfacePending), std::end(mSurfacePending), 0);
+        std::fill(std::begin(mDeepBack), std::end(mDeepBack), -std::numeric_limits<float>::infinity());
+        if (options.surface) {
+            for (int y = 0; y < h; ++y)
+                for (int x = 0; x < w; ++x) {
+                    const std::size_t i = frameIndex(y * kTileSize + x);
+                    mSurfacePending[y * kTileSize + x] = options.surface->rgba[4 * i + 3] > 0.0f && std::isfinite(options.surfaceAt[i]);
+                }
+        }
     }
 
     bool opaque() const { return mAliveCount == 0; }
@@ -231,6 +246,10 @@ public:
     void finish(Frame& frame, const std::vector<float>& depthScale, TileDeep* deep)
     {
         flushBefore(std::numeric_limits<std::int64_t>::max());
+        // Surfaces behind every slab of their pixel.
+        for (int p = 0; p < kTilePixels; ++p) {
+            if (mSurfacePending[p] && mAlive[p]) compositeSurface(p, std::numeric_limits<float>::infinity());
+        }
         const PassRequest& passes = mOptions.passes;
         const int width = frame.beauty.width;
         for (int ly = 0; ly < mH; ++ly)
@@ -349,7 +368,53 @@ private:
                 d.b = colour[channel(2)];
                 d.a = 1.0f - (t[0] + t[channel(1)] + t[channel(2)]) / 3.0f;
                 mDeep.emplace_back(std::uint16_t(p), d);
+                mDeepBack[p] = d.zBack;
             }
+        }
+    }
+
+    std::size_t frameIndex(int p) const
+    {
+        return std::size_t(mY0 + p / kTileSize) * std::size_t(mOptions.surface->width) + std::size_t(mX0 + p % kTileSize);
+    }
+
+    /// Composite pixel p's surface over what lies behind it: C += T c, T *= 1 - a (c the
+    /// layer's premultiplied colour, a its coverage), and its share of the passes: Z where the
+    /// alpha crosses 0.5, the shadow pass (the light's transmittance at the surface), a deep
+    /// point sample at the surface's depth, kept between the pixel's last deep sample and
+    /// @a before (the front of the slab composited next), so the samples stay in order.
+    void compositeSurface(int p, float before)
+    {
+        mSurfacePending[p] = 0;
+        const std::size_t i = frameIndex(p);
+        const float* rgba = &mOptions.surface->rgba[4 * i];
+        const float meanBefore = meanT(p), z = mOptions.surfaceAt[i];
+        float tBefore[C];
+        float t2 = 0.0f;
+        for (int c = 0; c < C; ++c) {
+            float& t = mT[c * kTilePixels + p];
+            tBefore[c] = t;
+            mC[c * kTilePixels + p] += t * rgba[c];
+            t *= 1.0f - rgba[3];
+            t2 += t * t;
+        }
+        const PassRequest& passes = mOptions.passes;
+        if (passes.depth && meanBefore > 0.5f && meanT(p) <= 0.5f && std::isinf(mZ[p])) mZ[p] = z;
+        if (passes.shadow && mOptions.surfaceShadow) {
+            for (int c = 0; c < C; ++c) mPassC[std::size_t(c) * kTilePixels + std::size_t(p)] += tBefore[c] * mOptions.surfaceShadow->rgba[4 * i + std::size_t(c)];
+        }
+        if (passes.deep) {
+            DeepSample d;
+            d.z = d.zBack = std::max(std::min(z, before), mDeepBack[p]);
+            d.r = rgba[0];
+            d.g = rgba[1];
+            d.b = rgba[2];
+            d.a = rgba[3];
+            mDeep.emplace_back(std::uint16_t(p), d);
+        }
+        if (t2 * float(3 / C) < mCutoff) {
+            mAlive[p] = 0;
+            --mAliveCount;
         }
     }
 
@@ -424,6 +489,11 @@ private:
         for (int ly = d.y0; ly <= d.y1; ++ly)
             for (int lx = d.x0; lx <= d.x1; ++lx) {
                 const int p = ly * kTileSize + lx;
+                // A surface in front of the slab's middle comes first.
+                if (mSurfacePending[p] && mAlive[p] &&
+                    mOptions.surfaceAt[frameIndex(p)] < float(mOptions.slabs.start(slab) + 0.5 * mOptions.slabs.thickness)) {
+                    compositeSurface(p, float(mOptions.slabs.start(slab)));
+                }
                 if (mAlive[p]) {
                     float meanBefore = 0.0f;
                     if (passes) {
@@ -536,6 +606,8 @@ private:
     float mT[C * kTilePixels];
     float mC[C * kTilePixels];
     std::uint8_t mAlive[kTilePixels];
+    std::uint8_t mSurfacePending[kTilePixels]; ///< the pixel's surface is still to be composited
+    float mDeepBack[kTilePixels];              ///< the back of the pixel's last deep sample (surfaces only)
     int mAliveCount = 0;
 };
 
@@ -709,7 +781,7 @@ DeepImage assembleDeep(std::vector<TileDeep>& tiles, const TileBins& bins, int w
 
 Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSettings& settings,
     const PassRequest& passes, RasterStats& stats, const LightMap* light, bool tinted, Progress* progress,
-    const MemoryBudget* budget)
+    const MemoryBudget* budget, const SurfaceLayer* surface, const SurfaceLayer* surfaceShadow)
 {
     const OpticalModel model(settings);
     const int width = camera.width(), height = camera.height();
@@ -737,10 +809,27 @@ Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSet
     options.tinted = tinted && options.light;
     options.emissive = std::any_of(set.splats.begin(), set.splats.end(),
         [](const Splat& s) { return s.emission[0] != 0.0f || s.emission[1] != 0.0f || s.emission[2] != 0.0f; });
-    const std::vector<float> depthScale = (passes.depth || passes.deep) ? depthScales(camera) : std::vector<float>{};
+    const std::vector<float> depthScale = (passes.depth || passes.deep || surface) ? depthScales(camera) : std::vector<float>{};
+    // The surface's slab coordinate per pixel: its camera depth along the pixel's ray.
+    std::vector<float> surfaceAt;
+    if (surface) {
+        surfaceAt.resize(surface->depth.size());
+        for (std::size_t i = 0; i < surfaceAt.size(); ++i) surfaceAt[i] = surface->depth[i] / depthScale[i];
+        options.surface = surface;
+        options.surfaceAt = surfaceAt.data();
+        options.surfaceShadow = surfaceShadow;
+    }
     std::vector<TileDeep> deep(passes.deep ? std::size_t(tiles) : 0);
     setUnits(progress, std::uint64_t(bins.tilesX) * std::uint64_t(bins.tilesY));
-    if (allGrey(set, model)) compositeTiles<1>(set, bins, options, depthScale, frame, deep, skipped, work, progress);
+    // A surface keeps the one-channel path where its colours (and the shadow pass's) are grey.
+    const auto grey = [](const SurfaceLayer* layer) {
+        if (!layer) return true;
+        for (std::size_t i = 0; i < layer->rgba.size(); i += 4) {
+            if (layer->rgba[i] != layer->rgba[i + 1] || layer->rgba[i] != layer->rgba[i + 2]) return false;
+        }
+        return true;
+    };
+    if (allGrey(set, model) && grey(surface) && grey(surfaceShadow)) compositeTiles<1>(set, bins, options, depthScale, frame, deep, skipped, work, progress);
     else compositeTiles<3>(set, bins, options, depthScale, frame, deep, skipped, work, progress);
     if (passes.deep) frame.deep = assembleDeep(deep, bins, width, height, depthScale);
     stats.tiles = std::uint64_t(tiles);

@@ -4,6 +4,7 @@
 #pragma once
 
 #include "projection/projection.h"
+#include "raster/surface_layer.h"
 #include "raster/tile_bins.h"
 #include "shading/shading.h"
 
@@ -30,9 +31,13 @@ struct RasterStats
 /// sample (null: unlit); @a tinted: the splats' scattering weights carry material colours.
 /// @a progress: one unit per screen tile; throws Cancelled. @a budget: the splat-tile pairs are
 /// counted against it before they are stored (BudgetError).
+/// @a surface: a surface composited at its depth in each pixel's slab sweep (fog --iso
+/// surfaces: before the first slab whose middle lies behind it), with its coverage as
+/// opacity; @a surfaceShadow: the light's transmittance at it, for the shadow pass.
 Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSettings& settings,
     const PassRequest& passes, RasterStats& stats, const LightMap* light = nullptr, bool tinted = false,
-    Progress* progress = nullptr, const MemoryBudget* budget = nullptr);
+    Progress* progress = nullptr, const MemoryBudget* budget = nullptr, const SurfaceLayer* surface = nullptr,
+    const SurfaceLayer* surfaceShadow = nullptr);
 
 } // namespace detail
 } // namespace vdb_ewa

@@ -48,12 +48,13 @@ struct SurfaceSet
 };
 
 /// A voxel keeps its kernel when its Newton step onto the surface stays within this many voxels
-/// of its centre along every index axis. Disc coverage (level sets) needs one kernel per cell,
-/// 0.5: the discs reach their neighbours' (0.5 halves the kernels and the time against 1, with
-/// no hole in the tests). The slab compositor's optical depth (fog --iso surfaces) sums the
-/// kernels' weights, whose partition of unity leaves gaps where the gradient turns unless the
-/// cells overlap, 1 (with 0.5 a blob behind an opaque iso-surface showed through).
-constexpr double kReachForDiscs = 0.5, kReachForWeights = 1.0;
+/// of its centre along every index axis. A level set's band is active on both sides of its
+/// surface, so one kernel per cell is enough, 0.5: the discs reach their neighbours' (0.5
+/// halves the kernels and the time against 1, with no hole in the tests). A fog volume is
+/// active only inside: where the density steps from 1 to 0, the last voxel's step to
+/// --iso 0.5 is a whole voxel, and with 0.5 a ball's faces along the axes had no kernel. So
+/// fog --iso surfaces keep the steps within 1 voxel.
+constexpr double kReachForDiscs = 0.5, kReachForFog = 1.0;
 
 /// What extractSurfaceKernels builds.
 struct SurfaceRequest

@@ -1,0 +1,19 @@
+/// @file surface_layer.h
+/// @brief A surface rasterised on its own (raster/surface_rasterizer.h): a level set's frame, or
+///        the layer the slab compositor composites at the surface's depth (fog --iso surfaces).
+#pragma once
+
+#include <vector>
+
+namespace vdb_ewa {
+namespace detail {
+
+struct SurfaceLayer
+{
+    int width = 0, height = 0;
+    std::vector<float> rgba;  ///< premultiplied RGB and coverage alpha, 4 floats a pixel, frame order
+    std::vector<float> depth; ///< camera depth of the pixel's front layer where alpha > 0, else NaN
+};
+
+} // namespace detail
+} // namespace vdb_ewa
