@@ -67,6 +67,8 @@ IsoSurface isoSurface(const RenderSettings& settings, const GridSource::Impl& gr
     const detail::LightMap& light, detail::Progress& progress, const detail::MemoryBudget& budget)
 {
     budget.check(double(grid.activeVoxels), "active voxels (surface kernels)", detail::kBytesPerKernel);
+    // Two layers of 5 floats a pixel (colour, coverage, depth) and the depth along each ray.
+    budget.check(double(camera.width()) * double(camera.height()), "pixels of the --iso surface's layers", 44.0);
     const int lattice = detail::LevelOfDetail(grid, camera, settings.splat.lodPixels).surfaceLattice(detail::kMaxSurfaceLattice);
     detail::SurfaceRequest request = detail::levelSetRequest(settings, camera, grid.voxelLength, lattice);
     request.isovalue = settings.surface.iso;
