@@ -56,6 +56,13 @@ TEST_F(Cli, RendersAnExr)
     EXPECT_EQ(img.height, 48);
     EXPECT_GT(alphaSum(img), 20.0);
     EXPECT_NE(r.out.find("timings (s): load"), std::string::npos);
+    // -v ends its timings with the process's peak memory: a process that loaded OpenVDB, OCIO
+    // and a grid holds more than 5 MB, and this one far less than 5 GB.
+    const std::size_t at = r.out.find("peak memory ");
+    ASSERT_NE(at, std::string::npos) << r.out;
+    const double mb = std::stod(r.out.substr(at + 12));
+    EXPECT_GT(mb, 5.0);
+    EXPECT_LT(mb, 5000.0);
 }
 
 TEST_F(Cli, OutputIsByteIdenticalForOneAndTwoThreads)

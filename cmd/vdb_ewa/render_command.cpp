@@ -20,6 +20,8 @@
 #include <iostream>
 #include <sstream>
 
+#include <sys/resource.h>
+
 namespace vdb_ewa::cli {
 namespace {
 
@@ -133,7 +135,7 @@ public:
             "JSON job file of option: value pairs (long option names, plus input and output); options on the "
             "command line override it, unknown keys are an error (docs/batch.md)");
         mApp->add_flag("-v,--verbose", mVerbose,
-            "-v: also print the resolved settings, counts and stage timings; -vv: for every frame (default: "
+            "-v: also print the resolved settings, counts, stage timings and the peak memory; -vv: for every frame (default: "
             "progress, warnings and one line per frame)");
         mApp->add_flag("-q,--quiet", mQuiet, "print errors only");
     }
@@ -405,6 +407,13 @@ private:
         }
     }
 
+    /// The process's peak resident memory so far (getrusage's maxrss, KiB on Linux), in MB.
+    static double peakMegabytes()
+    {
+        rusage usage{};
+        return getrusage(RUSAGE_SELF, &usage) == 0 ? double(usage.ru_maxrss) * 1024.0 / 1e6 : 0.0;
+    }
+
     static void printStats(const RenderStats& s, double loadSeconds, double writeSeconds)
     {
         std::cout << "vdb_ewa: " << s.activeVoxels << " active voxels and " << s.activeTiles << " active tiles read; "
@@ -417,7 +426,8 @@ private:
                   << s.footprintSamples << " footprint samples, " << s.slabComposites << " slab composites\n"
                   << std::fixed << std::setprecision(3) << "vdb_ewa: timings (s): load " << loadSeconds << ", kernels "
                   << s.kernelSeconds << ", shadows " << s.shadowSeconds << ", project " << s.projectSeconds
-                  << ", rasterise " << s.rasterSeconds << ", write " << writeSeconds << "\n";
+                  << ", rasterise " << s.rasterSeconds << ", write " << writeSeconds << "; peak memory "
+                  << std::setprecision(0) << peakMegabytes() << " MB\n";
     }
 
     CLI::App* mApp = nullptr;
