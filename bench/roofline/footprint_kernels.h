@@ -1,7 +1,7 @@
 /// @file footprint_kernels.h
 /// @brief The volume rasteriser's inner loop, isolated for the roofline benchmark: a splat's
 ///        footprint weights exp(-r/2) over its row spans in a 16x16 tile, spread into one slab
-///        accumulator (optical depth and the two position moments: lib/raster/tile_rasterizer.cpp,
+///        accumulator (optical depth and the two position moments: lib/raster/scalar_slab_compositor.cpp,
 ///        TileCompositor::add), and a slab's front-to-back composite per pixel (flush).
 #pragma once
 

@@ -83,7 +83,8 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels, c
     const auto& xform = grid.grid->transform();
 
     const std::size_t n = kernels.kernels.size();
-    const int passCount = int(passes.shadow) + int(passes.emission);
+    const PassLayout layout(passes);
+    const int passCount = layout.count;
     LargeArray<float> passSources(n * std::size_t(passCount) * 3);
     LargeArray<std::uint8_t> visible(n, 0);
     LargeArray<Splat> splats(n);
@@ -153,9 +154,8 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels, c
                     const double color = colors.empty() ? 1.0 : double(colors[i][c]);
                     sp.emission[c] = float(tau * model.emitted(c));
                     sp.scatter[c] = float(tau * color);
-                    int j = 0;
-                    if (passes.shadow) pass[3 * j++ + c] = 0.0f; // lit per slab sample
-                    if (passes.emission) pass[3 * j++ + c] = float(tau * model.emitted(c));
+                    if (layout.shadow >= 0) pass[3 * layout.shadow + c] = 0.0f; // lit per slab sample
+                    if (layout.emission >= 0) pass[3 * layout.emission + c] = float(tau * model.emitted(c));
                 }
                 visible[i] = 1;
             }

@@ -33,6 +33,22 @@ struct Splat
     std::uint32_t slabCount;   ///< number of slabs it overlaps
 };
 
+/// The layout of the passes beside the beauty that have source terms of their own: the shadow
+/// pass first, then the emission pass, each only if asked for. SplatSet::passSources holds a
+/// splat's terms in this order, and the slab compositor its pass planes.
+struct PassLayout
+{
+    int shadow = -1, emission = -1; ///< index of each pass, -1 if not asked for
+    int count = 0;
+
+    PassLayout() = default;
+    explicit PassLayout(const PassRequest& passes)
+    {
+        if (passes.shadow) shadow = count++;
+        if (passes.emission) emission = count++;
+    }
+};
+
 struct SplatSet
 {
     LargeArray<Splat> splats; ///< in kernel order (deterministic)

@@ -1,0 +1,107 @@
+/// @file slab_compositor.h
+/// @brief The slab compositor's seam: what a backend is given for a frame (the splats in sweep
+///        order, binned to tiles, and the options every tile shares) and what it returns (the
+///        frame's pixels and passes, each tile's deep samples and counters). The scalar backend
+///        (scalar_slab_compositor.cpp) is the test oracle of any other (SIMD, GPU).
+#pragma once
+
+#include "projection/projection.h"
+#include "raster/surface_layer.h"
+#include "raster/tile_bins.h"
+#include "shading/shading.h"
+
+#include <vdb_ewa/frame.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+namespace vdb_ewa {
+namespace detail {
+
+/// exp(-r/2) for r in [0, rMax] in a 1D table, linearly interpolated (Sec. 7.1).
+class ExpTable
+{
+public:
+    explicit ExpTable(float rMax) : mScale(float(kSize - 1) / rMax)
+    {
+        for (int i = 0; i < kSize; ++i) mValues[i] = std::exp(-0.5f * float(i) / mScale);
+        mValues[kSize] = mValues[kSize - 1];
+    }
+    float lookup(float r) const
+    {
+        const float x = std::min(r * mScale, float(kSize - 1));
+        const int i = int(x);
+        return mValues[i] + (x - float(i)) * (mValues[i + 1] - mValues[i]);
+    }
+
+private:
+    static constexpr int kSize = 1024;
+    float mScale;
+    float mValues[kSize + 1];
+};
+
+/// What every tile compositor of a frame shares.
+struct CompositeOptions
+{
+    float cutoff = 0.0f;
+    ExpEvaluation exp = ExpEvaluation::Incremental;
+    const ExpTable* table = nullptr;
+    SlabGrid slabs;
+    PassRequest passes;
+    PassLayout layout; ///< where the shadow and emission passes' source terms are (SplatSet::passSources)
+    /// Shading per slab sample (docs/numerics.md#shading-per-slab-sample): the light's
+    /// transmittance at each (pixel, slab) from the light map lights the splats' scattering
+    /// weights; null when nothing scatters.
+    const LightMap* light = nullptr;
+    const OpticalModel* model = nullptr;
+    const Camera* camera = nullptr;
+    bool tinted = false; ///< scattering weights differ from optical depths (material colours)
+    bool emissive = true; ///< some splat has a pre-shaded source term (Splat::emission)
+    /// An opaque or semi-opaque surface composited at its depth (fog --iso surfaces): its layer,
+    /// the slab coordinate of each pixel's surface (frame order, NaN where none) and, for the
+    /// shadow pass, the light's transmittance at the surface as a layer. Null: none.
+    const SurfaceLayer* surface = nullptr;
+    const float* surfaceAt = nullptr;
+    const SurfaceLayer* surfaceShadow = nullptr;
+};
+
+/// A tile's deep samples, grouped by tile pixel in depth order (depths still along the ray).
+struct TileDeep
+{
+    std::uint32_t counts[kTilePixels] = {};
+    std::vector<DeepSample> samples;
+};
+
+/// What a tile's sweep counted: the pairs skipped once the tile was opaque, the footprint
+/// weights evaluated and the (pixel, slab) samples composited (bench/roofline's units).
+struct TileCounters
+{
+    std::uint64_t skipped = 0, samples = 0, composites = 0;
+};
+
+/// One way of compositing a frame's tiles. Every tile sweeps its splats (bins: in the sweep
+/// order, first slab then kernel index) front to back into slab accumulators, lit per slab
+/// sample, until it is opaque, and writes its pixels and passes into @a frame (@a deep: one
+/// TileDeep per tile when deep samples are asked for, else empty; @a counters: one per tile).
+/// @a depthScale: camera depth per unit of distance along each pixel's ray (frame order; empty
+/// unless Z, deep samples or a surface are asked for). The result must not depend on the
+/// thread count. @a progress: one unit per tile; throws Cancelled.
+class SlabCompositor
+{
+public:
+    virtual ~SlabCompositor() = default;
+    virtual void composite(const SplatSet& set, const TileBins& bins, const CompositeOptions& options,
+        const std::vector<float>& depthScale, Frame& frame, std::vector<TileDeep>& deep, std::vector<TileCounters>& counters,
+        Progress* progress) const = 0;
+};
+
+/// The scalar backend carrying @a channels colour channels: 3, or 1 when every splat, the light
+/// and any surface layer are grey (the same arithmetic per channel: bit-identical, a third of
+/// the work).
+std::unique_ptr<SlabCompositor> scalarSlabCompositor(int channels);
+
+} // namespace detail
+} // namespace vdb_ewa
