@@ -52,7 +52,6 @@ std::string countLine(std::uint64_t n, const std::string& what)
     return s.str();
 }
 
-
 /// A fog volume's --iso surface rasterised on its own with disc coverage (the level sets'
 /// method: docs/equations.md#surface-coverage), for the slab compositor to composite at its
 /// depth; lit as the volume is: the light's colour x the material colour x the cosine x the
@@ -94,6 +93,7 @@ IsoSurface isoSurface(const RenderSettings& settings, const GridSource::Impl& gr
     }
     return out;
 }
+
 } // namespace
 
 Renderer::Renderer(const RenderSettings& settings) : mSettings(settings)

@@ -42,8 +42,9 @@ struct SurfaceSplat
 /// Pair::r of a pair outside its footprint's cut-off: it may cover, and does not weigh.
 constexpr double kNoWeight = std::numeric_limits<double>::infinity();
 
-/// A (splat, tile pixel) pair inside the splat's reach: its plane depth along the pixel's
-/// central ray, its conic distance and the pixel's subsamples its disc covers.
+/// A (splat, tile pixel) pair where the pixel's centre lies inside the splat's cut-off or its
+/// square meets the disc's box: its plane depth along the pixel's central ray, its conic
+/// distance (kNoWeight outside the cut-off) and the pixel's subsamples its disc covers.
 struct Pair
 {
     double z;
