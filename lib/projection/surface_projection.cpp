@@ -67,10 +67,8 @@ SurfaceRequest levelSetRequest(const RenderSettings& settings, const Camera& cam
     return request;
 }
 
-bool projectSurface(const SurfaceKernel& kernel, double sigma, const Camera& camera, const ProjectionParams& params,
-    Vec3d& t, Vec3d& normal, Footprint& fp)
+bool projectSurface(const Vec3d& t, const Vec3d& normal, double sigma, const ProjectionParams& params, Footprint& fp)
 {
-    if (!facesEye(kernel, camera, t, normal)) return false;
     const Vec3d helper = std::abs(normal.x) < 0.6 ? Vec3d(1, 0, 0) : Vec3d(0, 1, 0);
     const Vec3d t0 = glm::normalize(glm::cross(normal, helper)), t1 = glm::cross(normal, t0);
     fp = projectSurfaceKernel(t, t0, t1, sigma, params);

@@ -30,10 +30,9 @@ bool boxMayBeSeen(const Camera& camera, const Vec3d& lo, const Vec3d& hi, double
 /// every kernel (SurfaceCoverage.RelatingOnlyTheDrawnKernelsLeavesTheImageUnchanged).
 SurfaceRequest levelSetRequest(const RenderSettings& settings, const Camera& camera, double voxelLength, int lattice);
 
-/// A surface kernel seen through @a camera: its camera-space centre @a t and normal, and its
-/// footprint (Eq. 35). False unless it facesEye, or if it does not project.
-bool projectSurface(const SurfaceKernel& kernel, double sigma, const Camera& camera, const ProjectionParams& params,
-    Vec3d& t, Vec3d& normal, Footprint& fp);
+/// The footprint (Eq. 35) of a surface kernel of tangential std. deviation @a sigma with
+/// camera-space centre @a t and @a normal (as facesEye gives them). False if it does not project.
+bool projectSurface(const Vec3d& t, const Vec3d& normal, double sigma, const ProjectionParams& params, Footprint& fp);
 
 } // namespace detail
 } // namespace vdb_ewa

@@ -71,16 +71,15 @@ Vec3d shade(SurfaceShader shader, const Vec3d& normal, const Vec3d& rayDir, cons
     return Vec3d(1.0);
 }
 
-/// Projects kernel @a k into @a s: false where it is not drawn (a back face, or outside the
-/// frame). The pixels visited are those whose centre lies in the footprint's cut-off (the
+/// Projects kernel @a k, facing the eye with camera-space centre @a t and @a normal (facesEye),
+/// into @a s: false where it is not drawn (outside the frame). The pixels visited are those whose centre lies in the footprint's cut-off (the
 /// weights) or whose square meets the disc's raster box (coverage is sampled across each
 /// pixel's square).
-bool projectSurfaceSplat(const SurfaceKernel& k, const SurfaceSet& set, const Camera& camera, const ProjectionParams& params,
-    SurfaceShader shader, const Rgb* colour, SurfaceSplat& s)
+bool projectSurfaceSplat(const SurfaceKernel& k, const Vec3d& t, const Vec3d& normal, const SurfaceSet& set, const Camera& camera,
+    const ProjectionParams& params, SurfaceShader shader, const Rgb* colour, SurfaceSplat& s)
 {
-    Vec3d t, normal;
     Footprint fp;
-    if (!projectSurface(k, set.sigma, camera, params, t, normal, fp)) return false; // back faces are culled
+    if (!projectSurface(t, normal, set.sigma, params, fp)) return false;
     Vec3d clipDirections[3];
     double clipDistances[3];
     for (int l = 0; l < k.clipCount; ++l) {
@@ -136,7 +135,7 @@ LargeArray<SurfaceSplat> projectSurfaceSplats(const SurfaceSet& set, const Camer
         for (std::size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
             if (!facesEye(set.kernels[i], camera, t, normal)) continue;
             SurfaceSplat& s = splats[next++];
-            if (!projectSurfaceSplat(set.kernels[i], set, camera, params, settings.surface.shader, colours ? &(*colours)[i] : nullptr, s)) {
+            if (!projectSurfaceSplat(set.kernels[i], t, normal, set, camera, params, settings.surface.shader, colours ? &(*colours)[i] : nullptr, s)) {
                 s.x0 = s.y0 = 0;
                 s.x1 = s.y1 = -1;
             }
