@@ -231,18 +231,7 @@ TEST(Passes, DeepSamplesAreTidyAndFlattenToTheBeauty)
 TEST(Passes, IsoSurfaceIsInEveryPass)
 {
     // A fog ball of radius 1: density 0.5 inside, a linear ramp 4 voxels wide, 0.25 on the sphere.
-    const double voxel = 0.05;
-    auto grid = openvdb::FloatGrid::create(0.0f);
-    grid->setTransform(openvdb::math::Transform::createLinearTransform(voxel));
-    grid->setName("density");
-    auto acc = grid->getAccessor();
-    for (int i = -25; i <= 25; ++i)
-        for (int j = -25; j <= 25; ++j)
-            for (int k = -25; k <= 25; ++k) {
-                const double density = 0.5 * std::clamp(0.5 - (glm::length(Vec3d(i, j, k) * voxel) - 1.0) / (4.0 * voxel), 0.0, 1.0);
-                if (density > 0.0) acc.setValueOn(openvdb::Coord(i, j, k), float(density));
-            }
-    const GridSource ball = gridSourceFromOpenVDB(grid);
+    const GridSource ball = gridSourceFromOpenVDB(makeFogAround([](const Vec3d& p) { return glm::length(p) - 1.0; }, 0.5, 25, 0.05));
     const Camera camera(orthoDownZ(0.0, 0.0, 5.0, 2.4, 48), Vec3d(0.0)); // the sphere's top at depth 4
     RenderSettings s;
     s.surface.iso = 0.25;

@@ -214,18 +214,8 @@ TEST(SurfaceCoverage, FogIsoSurfacesAreOpaqueWhereverTheyAreHit)
 {
     for (const Scene& scene : scenes()) {
         if (std::string(scene.name) == "thin plate") continue;
-        auto grid = openvdb::FloatGrid::create(0.0f);
-        grid->setTransform(openvdb::math::Transform::createLinearTransform(kVoxel));
-        grid->setName("density");
-        const int n = int(std::ceil(scene.extent / kVoxel)) + 4;
-        auto acc = grid->getAccessor();
-        for (int i = -n; i <= n; ++i)
-            for (int j = -n; j <= n; ++j)
-                for (int k = -n; k <= n; ++k) {
-                    const double density = 0.002 * std::clamp(0.5 - scene.sdf(Vec3d(i, j, k) * kVoxel) / (4.0 * kVoxel), 0.0, 1.0);
-                    if (density > 0.0) acc.setValueOn(openvdb::Coord(i, j, k), float(density));
-                }
-        const GridSource source = gridSourceFromOpenVDB(grid);
+        const GridSource source =
+            gridSourceFromOpenVDB(makeFogAround(scene.sdf, 0.002, int(std::ceil(scene.extent / kVoxel)) + 4, kVoxel));
         RenderSettings s;
         s.surface.iso = 0.001;
         for (const View& view : views(scene)) {
