@@ -1,0 +1,609 @@
+/// @file tile_compositor-inl.h
+/// @brief The slab sweep of one screen tile, shared by the slab compositor's backends
+///        (raster/slab_compositor.h): a ring of slab accumulators filled splat by splat
+///        (Sec. 7.1's footprint evaluation) and flushed front to back with the exact update, lit
+///        per slab sample.
+///
+/// Included inside a backend's own namespace, once per instruction set: scalar_slab_compositor.cpp
+/// once, simd_slab_compositor.cpp once per Highway target. So every instantiation is compiled for
+/// its target and none is shared between targets (no ODR clash between, say, an AVX2 and a
+/// baseline copy of one inline function). Hence no include guard and no includes: the including
+/// file includes raster/slab_compositor.h, <tbb/parallel_for.h>, <algorithm>, <array>, <cmath>
+/// and <limits> first, outside its namespace. A backend defines TileCompositor<C>'s two inner
+/// loops, rowWeights and flushRow; the scalar ones are the others' test oracle.
+
+
+/// The slab sweep of one screen tile: a ring of slab accumulators (optical depth, emission
+/// and the passes' source terms per channel and pixel), flushed front to back with the exact
+/// update; the flush also finds Z and emits deep samples when asked.
+/// @tparam C colour channels carried: 3, or 1 when every splat is grey (tau and emission the
+///           same in R, G and B, as with vdb_render's default model): the same arithmetic per
+///           channel, so the image is bit-identical, at a third of the work.
+template <int C>
+class TileCompositor
+{
+public:
+    TileCompositor(int x0, int y0, int w, int h, int ringSize, const CompositeOptions& options)
+        : mX0(x0), mY0(y0), mW(w), mH(h), mMask(ringSize - 1), mCutoff(options.cutoff), mExp(options.exp),
+          mTable(options.table), mOptions(options), mPassCount(options.layout.count),
+          mTau(std::size_t(ringSize) * C * kTilePixels, 0.0f),
+          mEmission(options.emissive ? std::size_t(ringSize) * C * kTilePixels : 0, 0.0f),
+          mPassEmission(std::size_t(ringSize) * std::size_t(mPassCount) * C * kTilePixels, 0.0f),
+          mPassC(std::size_t(mPassCount) * C * kTilePixels, 0.0f),
+          mScatter(options.tinted ? std::size_t(ringSize) * C * kTilePixels : 0, 0.0f),
+          mMoment(options.light ? std::size_t(ringSize) * kTilePixels : 0, 0.0f),
+          mMoment2(options.light ? std::size_t(ringSize) * kTilePixels : 0, 0.0f),
+          mDirty(std::size_t(ringSize))
+    {
+        if (options.light) {
+            // Each pixel's ray in light-map coordinates: q(z) = base + z dir, z the slab
+            // coordinate (distance from the eye, or depth for orthographic cameras).
+            const Camera& camera = *options.camera;
+            for (int ly = 0; ly < h; ++ly)
+                for (int lx = 0; lx < w; ++lx) {
+                    Vec3d origin, dir;
+                    camera.worldRay(x0 + lx + 0.5, y0 + ly + 0.5, origin, dir);
+                    const Vec3d base = camera.projection() == Projection::Perspective ? camera.eye() : origin - camera.near() * dir;
+                    mRayBase[ly * kTileSize + lx] = options.light->coordinates(base);
+                    mRayDir[ly * kTileSize + lx] = options.light->direction(dir);
+                }
+        }
+        for (int c = 0; c < C; ++c) mLightScale[c] = float(options.model->scattered(c, 1.0, 1.0));
+        std::fill(std::begin(mT), std::end(mT), 1.0f);
+        std::fill(std::begin(mC), std::end(mC), 0.0f);
+        std::fill(std::begin(mZ), std::end(mZ), std::numeric_limits<float>::infinity());
+        std::fill(std::begin(mAlive), std::end(mAlive), 0);
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) mAlive[y * kTileSize + x] = 1;
+        mAliveCount = w * h;
+        std::fill(std::begin(mSurfacePending), std::end(mSurfacePending), 0);
+        std::fill(std::begin(mDeepBack), std::end(mDeepBack), -std::numeric_limits<float>::infinity());
+        if (options.surface) {
+            for (int y = 0; y < h; ++y)
+                for (int x = 0; x < w; ++x) {
+                    const std::size_t i = frameIndex(y * kTileSize + x);
+                    mSurfacePending[y * kTileSize + x] = options.surface->rgba[4 * i + 3] > 0.0f && std::isfinite(options.surfaceAt[i]);
+                }
+        }
+    }
+
+    bool opaque() const { return mAliveCount == 0; }
+    /// The footprint weights evaluated (pixels inside a cut-off, each spread into every slab
+    /// its kernel overlaps) and the (pixel, slab) samples composited: the work the roofline
+    /// benchmark's rates are measured in (bench/roofline).
+    std::uint64_t samples() const { return mSamples; }
+    std::uint64_t composites() const { return mComposites; }
+
+    /// The row's footprint values exp(-r/2), r = qa dx^2 + 2 qb dx dy + qc dy^2 at dx = dx0,
+    /// dx0 + 1, ..., dx0 + n - 1 (k = exp(-qa)), 0 at terminated pixels (mAlive[p0 + i] == 0).
+    /// Defined by each backend.
+    void rowWeights(double qa, double qb, double qc, double dx0, double dy, int n, float k, int p0, float* out) const;
+
+    /// @a passSources: the splat's extra source terms (mPassCount x RGB), or null if none.
+    /// @a moments: the position moments of each share in its slab (SplatSet::shareMoments).
+    void add(const Splat& s, const float* shares, const float* moments, const float* passSources)
+    {
+        // Slabs in front of this splat's first one can receive nothing more: flush them.
+        flushBefore(s.firstSlab);
+        const int lx0 = std::max(s.x0 - mX0, 0), lx1 = std::min(s.x1 - mX0, mW - 1);
+        const int ly0 = std::max(s.y0 - mY0, 0), ly1 = std::min(s.y1 - mY0, mH - 1);
+        if (lx0 > lx1 || ly0 > ly1) return;
+        const int count = int(s.slabCount);
+        for (int k = 0; k < count; ++k) markDirty(s.firstSlab + k, lx0, ly0, lx1, ly1);
+        const float kx = float(std::exp(-double(s.qa)));
+        // Row spans of the ellipse d^T Q d < cutoff (Sec. 7.1), solved for dx in float with
+        // det Q formed in double (no cancellation), once per splat.
+        const float invQa = float(1.0 / double(s.qa));
+        const float detQ = float(double(s.qa) * double(s.qc) - double(s.qb) * double(s.qb));
+        const float qaCutoff = float(double(s.qa) * double(s.cutoff));
+        const double qa = s.qa, qb = s.qb, qc = s.qc;
+        for (int ly = ly0; ly <= ly1; ++ly) {
+            const float dyf = float(mY0 + ly) + 0.5f - s.cy;
+            const float disc = qaCutoff - detQ * dyf * dyf;
+            if (!(disc > 0.0f)) continue;
+            const float half = std::sqrt(disc) * invQa;
+            const float xc = s.cx - 0.5f - s.qb * dyf * invQa;
+            // Clamped to the tile before the conversion to int (huge footprints).
+            const float xFirst = std::max(xc - half, float(mX0 + lx0) - 1.0f);
+            const float xLast = std::min(xc + half, float(mX0 + lx1) + 1.0f);
+            const int lxa = std::max(lx0, int(std::ceil(xFirst)) - mX0);
+            const int lxb = std::min(lx1, int(std::floor(xLast)) - mX0);
+            if (lxa > lxb) continue;
+            const double dy = double(mY0 + ly) + 0.5 - double(s.cy);
+            // The row's footprint values exp(-r/2), 0 for terminated pixels.
+            float weights[kTileSize];
+            const int n = lxb - lxa + 1;
+            const int p0 = ly * kTileSize + lxa;
+            const double dx0 = double(mX0 + lxa) + 0.5 - double(s.cx);
+            rowWeights(qa, qb, qc, dx0, dy, n, kx, p0, weights);
+            mSamples += std::uint64_t(n);
+            // Spread the row into every slab the kernel overlaps: contiguous, vectorisable.
+            for (int j = 0; j < count; ++j) {
+                const std::size_t base = slot(s.firstSlab + j) * C * kTilePixels + std::size_t(p0);
+                if (!mMoment.empty()) {
+                    // The first and second moments of the optical depth's position in the slab.
+                    // Weighted by the optical depth summed over R, G, B, the same in both paths.
+                    const float w = shares[j] * (s.tau[0] + s.tau[1] + s.tau[2]);
+                    const float w1 = w * moments[2 * j], w2 = w * moments[2 * j + 1];
+                    const std::size_t mb = slot(s.firstSlab + j) * kTilePixels + std::size_t(p0);
+                    float* m1 = &mMoment[mb];
+                    float* m2 = &mMoment2[mb];
+                    for (int i = 0; i < n; ++i) {
+                        m1[i] += weights[i] * w1;
+                        m2[i] += weights[i] * w2;
+                    }
+                }
+                for (int c = 0; c < C; ++c) {
+                    const float wt = shares[j] * s.tau[c], we = shares[j] * s.emission[c];
+                    float* tau = &mTau[base + std::size_t(c) * kTilePixels];
+                    for (int i = 0; i < n; ++i) tau[i] += weights[i] * wt;
+                    if (!mEmission.empty()) {
+                        float* em = &mEmission[base + std::size_t(c) * kTilePixels];
+                        for (int i = 0; i < n; ++i) em[i] += weights[i] * we;
+                    }
+                    if (!mScatter.empty()) {
+                        const float ws = shares[j] * s.scatter[c];
+                        float* sc = &mScatter[base + std::size_t(c) * kTilePixels];
+                        for (int i = 0; i < n; ++i) sc[i] += weights[i] * ws;
+                    }
+                    for (int k = 0; k < mPassCount; ++k) {
+                        const float wp = shares[j] * passSources[3 * k + c];
+                        float* pe = &mPassEmission[passIndex(s.firstSlab + j, k, c) + std::size_t(p0)];
+                        for (int i = 0; i < n; ++i) pe[i] += weights[i] * wp;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Flush every pending slab and write the tile's pixels and passes. @a depthScale: camera
+    /// depth per unit of distance along each pixel's ray (frame order).
+    void finish(Frame& frame, const std::vector<float>& depthScale, TileDeep* deep)
+    {
+        flushBefore(std::numeric_limits<std::int64_t>::max());
+        // Surfaces behind every slab of their pixel.
+        for (int p = 0; p < kTilePixels; ++p) {
+            if (mSurfacePending[p] && mAlive[p]) compositeSurface(p, std::numeric_limits<float>::infinity());
+        }
+        const PassRequest& passes = mOptions.passes;
+        const int width = frame.beauty.width;
+        for (int ly = 0; ly < mH; ++ly)
+            for (int lx = 0; lx < mW; ++lx) {
+                const int p = ly * kTileSize + lx;
+                const std::size_t i = std::size_t(mY0 + ly) * std::size_t(width) + std::size_t(mX0 + lx);
+                float* px = frame.beauty.pixel(mX0 + lx, mY0 + ly);
+                for (int c = 0; c < 3; ++c) px[c] = mC[channel(c) * kTilePixels + p];
+                px[3] = 1.0f - meanT(p);
+                if (passes.depth) frame.depth[i] = mZ[p] * depthScale[i];
+                if (passes.transmittance) {
+                    for (int c = 0; c < 3; ++c) frame.transmittance[3 * i + c] = mT[channel(c) * kTilePixels + p];
+                }
+                for (const auto& [k, pass] : {std::pair{mOptions.layout.shadow, &frame.shadow}, std::pair{mOptions.layout.emission, &frame.emission}}) {
+                    if (k < 0) continue;
+                    for (int c = 0; c < 3; ++c) (*pass)[3 * i + c] = mPassC[(std::size_t(k) * C + channel(c)) * kTilePixels + p];
+                }
+            }
+        if (deep) {
+            // Group the samples by pixel; a stable sort keeps each pixel's depth order.
+            std::stable_sort(mDeep.begin(), mDeep.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+            deep->samples.reserve(mDeep.size());
+            for (const auto& [p, sample] : mDeep) {
+                ++deep->counts[p];
+                deep->samples.push_back(sample);
+            }
+        }
+    }
+
+private:
+    struct Dirty
+    {
+        bool on = false;
+        std::int64_t slab = 0;
+        int x0 = 0, y0 = 0, x1 = -1, y1 = -1;
+    };
+
+    std::size_t slot(std::int64_t slab) const { return std::size_t(slab & mMask); }
+    /// Channel carried for colour channel c (all three share channel 0 when C == 1).
+    static int channel(int c) { return C == 1 ? 0 : c; }
+    /// Start of pass k, channel c of a slab in mPassEmission.
+    std::size_t passIndex(std::int64_t slab, int k, int c) const
+    {
+        return ((slot(slab) * std::size_t(mPassCount) + std::size_t(k)) * C + std::size_t(c)) * kTilePixels;
+    }
+
+    void markDirty(std::int64_t slab, int x0, int y0, int x1, int y1)
+    {
+        Dirty& d = mDirty[slot(slab)];
+        if (!d.on) {
+            d = {true, slab, x0, y0, x1, y1};
+            mPending.push_back(slab);
+            return;
+        }
+        d.x0 = std::min(d.x0, x0);
+        d.y0 = std::min(d.y0, y0);
+        d.x1 = std::max(d.x1, x1);
+        d.y1 = std::max(d.y1, y1);
+    }
+
+    /// Composite, in depth order, every pending slab in front of @a slab.
+    void flushBefore(std::int64_t slab)
+    {
+        if (mPending.empty() || mPending.front() >= slab) return;
+        std::sort(mPending.begin(), mPending.end());
+        std::size_t n = 0;
+        while (n < mPending.size() && mPending[n] < slab) flush(mPending[n++]);
+        mPending.erase(mPending.begin(), mPending.begin() + std::ptrdiff_t(n));
+    }
+
+    /// Mean transmittance over R, G, B of pixel p, with the same rounding whatever C is (so
+    /// alpha is bit-identical between the grey and the three-channel paths).
+    float meanT(int p) const
+    {
+        return (mT[p] + mT[channel(1) * kTilePixels + p] + mT[channel(2) * kTilePixels + p]) / 3.0f;
+    }
+
+    /// The passes' share of a slab at pixel p: Z crossing, deep sample, extra sources.
+    /// @a emission: the slab's pre-shaded emission per channel; @a lit: the scattering weight x
+    /// the light integrated across the slab per channel (the shadow pass's source).
+    void flushPasses(std::int64_t slab, int p, float meanBefore, const float* emission, const float* lit)
+    {
+        const std::size_t base = slot(slab) * C * kTilePixels + std::size_t(p);
+        if (mOptions.passes.depth && meanBefore > 0.5f && std::isinf(mZ[p])) {
+            const double u = halfAlphaFraction(meanBefore, meanT(p));
+            if (u <= 1.0) mZ[p] = float(mOptions.slabs.start(slab) + u * mOptions.slabs.thickness);
+        }
+        for (int k = 0; k < mPassCount; ++k)
+            for (int c = 0; c < C; ++c) {
+                // The beauty's transmittance before this slab, recovered per channel.
+                float t = mTBefore[c];
+                const float source = mPassEmission[passIndex(slab, k, c) + std::size_t(p)];
+                const float tau = mTau[base + c * kTilePixels];
+                compositeSlab(tau, slabAbsorbed(tau), source, k == mOptions.layout.shadow ? lit[c] : 0.0f,
+                    mPassC[(std::size_t(k) * C + c) * kTilePixels + p], t);
+            }
+        if (mOptions.passes.deep) {
+            // The slab on its own: colour and transmittance as if nothing were in front.
+            float colour[C], t[C];
+            bool empty = true;
+            for (int c = 0; c < C; ++c) {
+                colour[c] = 0.0f;
+                t[c] = 1.0f;
+                const float tau = mTau[base + c * kTilePixels];
+                compositeSlab(tau, slabAbsorbed(tau), emission[c], mLightScale[c] * lit[c], colour[c], t[c]);
+                empty = empty && !(mTau[base + c * kTilePixels] > 0.0f);
+            }
+            if (!empty) {
+                DeepSample d;
+                d.z = float(mOptions.slabs.start(slab));
+                d.zBack = float(mOptions.slabs.start(slab + 1));
+                d.r = colour[0];
+                d.g = colour[channel(1)];
+                d.b = colour[channel(2)];
+                d.a = 1.0f - (t[0] + t[channel(1)] + t[channel(2)]) / 3.0f;
+                mDeep.emplace_back(std::uint16_t(p), d);
+                mDeepBack[p] = d.zBack;
+            }
+        }
+    }
+
+    std::size_t frameIndex(int p) const
+    {
+        return std::size_t(mY0 + p / kTileSize) * std::size_t(mOptions.surface->width) + std::size_t(mX0 + p % kTileSize);
+    }
+
+    /// Composite pixel p's surface over what lies behind it: C += T c, T *= 1 - a (c the
+    /// layer's premultiplied colour, a its coverage), and its share of the passes: Z where the
+    /// alpha crosses 0.5, the shadow pass (the light's transmittance at the surface), a deep
+    /// point sample at the surface's depth, kept between the pixel's last deep sample and
+    /// @a before (the front of the slab composited next), so the samples stay in order.
+    void compositeSurface(int p, float before)
+    {
+        mSurfacePending[p] = 0;
+        const std::size_t i = frameIndex(p);
+        const float* rgba = &mOptions.surface->rgba[4 * i];
+        const float meanBefore = meanT(p), z = mOptions.surfaceAt[i];
+        float tBefore[C];
+        float t2 = 0.0f;
+        for (int c = 0; c < C; ++c) {
+            float& t = mT[c * kTilePixels + p];
+            tBefore[c] = t;
+            mC[c * kTilePixels + p] += t * rgba[c];
+            t *= 1.0f - rgba[3];
+            t2 += t * t;
+        }
+        const PassRequest& passes = mOptions.passes;
+        if (passes.depth && meanBefore > 0.5f && meanT(p) <= 0.5f && std::isinf(mZ[p])) mZ[p] = z;
+        if (mOptions.layout.shadow >= 0 && mOptions.surfaceShadow) {
+            for (int c = 0; c < C; ++c) {
+                mPassC[(std::size_t(mOptions.layout.shadow) * C + std::size_t(c)) * kTilePixels + std::size_t(p)] +=
+                    tBefore[c] * mOptions.surfaceShadow->rgba[4 * i + std::size_t(c)];
+            }
+        }
+        if (passes.deep) {
+            DeepSample d;
+            d.z = d.zBack = std::max(std::min(z, before), mDeepBack[p]);
+            d.r = rgba[0];
+            d.g = rgba[1];
+            d.b = rgba[2];
+            d.a = rgba[3];
+            mDeep.emplace_back(std::uint16_t(p), d);
+        }
+        if (t2 * float(3 / C) < mCutoff) terminate(p);
+    }
+
+    /// The fraction of the slab at @a base in front of where pixel p's |T_rgb|^2 falls to the
+    /// cutoff (the slab's optical depth taken as uniform across it); 1 if it does not.
+    float terminationFraction(std::size_t base, int p) const
+    {
+        // |T(u)|^2 = sum_c T_c^2 exp(-2 u tau_c): its logarithm falls with u and is convex (a
+        // log-sum-exp of lines), so Newton's method on ln|T(u)|^2 - ln cutoff from u = 0 climbs
+        // to the crossing from below without overshooting, quadratically; one exact step when
+        // the channels are equal (C == 1: a line).
+        double t2[C], tau[C];
+        for (int c = 0; c < C; ++c) {
+            const double t = mT[c * kTilePixels + p];
+            t2[c] = t * t;
+            // As composited: a slab's optical depth counts from 0 (halo kernels weigh negative).
+            tau[c] = std::max(double(mTau[base + std::size_t(c) * kTilePixels + std::size_t(p)]), 0.0);
+        }
+        const auto t2At = [&](double u, double* slope) {
+            double f = 0.0, df = 0.0;
+            for (int c = 0; c < C; ++c) {
+                const double e = t2[c] * std::exp(-2.0 * u * tau[c]);
+                f += e;
+                df -= 2.0 * tau[c] * e;
+            }
+            // C == 1: the three equal channels, scaled after the sum as e + e + e == 3 e.
+            if (slope) *slope = df * double(3 / C);
+            return f * double(3 / C);
+        };
+        const double logCutoff = std::log(double(mCutoff));
+        if (!(t2At(1.0, nullptr) < double(mCutoff)) || !(t2At(0.0, nullptr) >= double(mCutoff))) return 1.0f;
+        double u = 0.0;
+        for (int n = 0; n < 32; ++n) {
+            double slope;
+            const double f = t2At(u, &slope);
+            const double step = (std::log(f) - logCutoff) * f / -slope;
+            if (!(step > 1e-9)) break;
+            u += step;
+            if (C == 1) break;
+        }
+        return float(std::min(u, 1.0));
+    }
+
+    /// The light on pixel p's ray across the layer from fraction @a u0 to @a u1 of @a slab's
+    /// thickness, for the C channels carried: its transmittance at the front, and ln(front /
+    /// back) (slabLightIntegral).
+    void lightAt(int p, std::int64_t slab, float u0, float u1, std::array<float, 3>& front, std::array<float, 3>& logRatio) const
+    {
+        const double z = mOptions.slabs.start(slab);
+        const double z0 = z + double(u0) * mOptions.slabs.thickness, z1 = z + double(u1) * mOptions.slabs.thickness;
+        float d0, d1;
+        mOptions.light->densityDepths(mRayBase[p] + z0 * mRayDir[p], mRayBase[p] + z1 * mRayDir[p], d0, d1);
+        if (C == 1) {
+            const float log0 = mOptions.light->greyLogTransmittanceOfDepth(d0);
+            front[0] = std::exp(log0);
+            logRatio[0] = lightLogRatio(log0, mOptions.light->greyLogTransmittanceOfDepth(d1));
+        } else {
+            const std::array<float, 3> log0 = mOptions.light->logTransmittanceOfDepth(d0);
+            const std::array<float, 3> log1 = mOptions.light->logTransmittanceOfDepth(d1);
+            for (std::size_t c = 0; c < 3; ++c) {
+                front[c] = std::exp(log0[c]);
+                logRatio[c] = lightLogRatio(log0[c], log1[c]);
+            }
+        }
+    }
+
+    void flush(std::int64_t slab)
+    {
+        Dirty& d = mDirty[slot(slab)];
+        for (int ly = d.y0; ly <= d.y1; ++ly) flushRow(slab, ly, d.x0, d.x1);
+        d.on = false;
+    }
+
+    /// Composite @a slab at pixels (x0..x1, y) of the tile (flushPixel's result at each) and
+    /// clear their accumulators (clearPixel). Defined by each backend.
+    void flushRow(std::int64_t slab, int y, int x0, int x1);
+
+    /// Pixel p's surface, if it lies in front of @a slab's middle, then the slab itself.
+    void flushPixel(std::int64_t slab, int p)
+    {
+        const std::size_t base = slot(slab) * C * kTilePixels;
+        const bool passes = mPassCount > 0 || mOptions.passes.depth || mOptions.passes.deep;
+        // A surface in front of the slab's middle comes first.
+        if (surfaceInFront(slab, p)) compositeSurface(p, float(mOptions.slabs.start(slab)));
+        if (!mAlive[p]) return;
+        float meanBefore = 0.0f;
+        if (passes) {
+            for (int c = 0; c < C; ++c) mTBefore[c] = mT[c * kTilePixels + p];
+            meanBefore = meanT(p);
+        }
+        // emission: the splats' pre-shaded sources; lit: the scattering weight x the
+        // light integrated across the slab (slabLightIntegral), per unit light colour.
+        float emission[C], lit[C];
+        for (int c = 0; c < C; ++c) {
+            const std::size_t i = base + c * kTilePixels + std::size_t(p);
+            // Halo kernels (--prefilter) weigh negative: a slab's sums stay >= 0.
+            emission[c] = mEmission.empty() ? 0.0f : std::max(mEmission[i], 0.0f);
+            lit[c] = 0.0f;
+        }
+        const float mass = slabMass(base, p);
+        float absorbed[C]; // 1 - exp(-tau), once per channel for light, termination, composite
+        for (int c = 0; c < C; ++c) absorbed[c] = slabAbsorbed(mTau[base + c * kTilePixels + std::size_t(p)]);
+        if (mOptions.light && mass > 0.0f) lightSlab(slab, p, mass, lit);
+        // vdb_render's ray termination: |T|^2 < cutoff (early termination, Sec. 5).
+        // A ray stops where it crosses the threshold, so only the slab's part in
+        // front of the crossing is composited: every stopped pixel keeps vdb_render's
+        // residual (about sqrt(cutoff / 3)), whatever the slab thickness.
+        // (No optical depth: the ray goes on, and terminationFraction would say so.)
+        // The exact crossing (in double) only where the slab's back is below the cutoff.
+        float t2After = 0.0f;
+        for (int c = 0; c < C; ++c) {
+            const float t = mT[c * kTilePixels + p] * (1.0f - absorbed[c]);
+            t2After += t * t;
+        }
+        const float u = mass > 0.0f && t2After * float(3 / C) < mCutoff ? terminationFraction(base, p) : 1.0f;
+        if (u < 1.0f) {
+            for (int c = 0; c < C; ++c) {
+                const std::size_t i = base + c * kTilePixels + std::size_t(p);
+                mTau[i] *= u;
+                const float before = absorbed[c];
+                absorbed[c] = slabAbsorbed(mTau[i]);
+                emission[c] *= u;
+                // The light kept its value across the slab, (1 - exp(-tau)) / tau of it
+                // integrated (slabLightIntegral = slabLightTransmittance x that): the
+                // front part keeps the same light with its own (1 - exp(-u tau)) / (u tau).
+                lit[c] = before > 0.0f ? lit[c] * (absorbed[c] / before) : 0.0f;
+                for (int k = 0; k < mPassCount; ++k) mPassEmission[passIndex(slab, k, c) + std::size_t(p)] *= u;
+            }
+        }
+        float t2 = 0.0f; // |T|^2 over R, G, B
+        for (int c = 0; c < C; ++c) {
+            const std::size_t i = base + c * kTilePixels + std::size_t(p);
+            float& t = mT[c * kTilePixels + p];
+            compositeSlab(mTau[i], absorbed[c], emission[c], mLightScale[c] * lit[c], mC[c * kTilePixels + p], t);
+            t2 += t * t;
+        }
+        if (passes) flushPasses(slab, p, meanBefore, emission, lit);
+        ++mComposites;
+        if (u < 1.0f || t2 * float(3 / C) < mCutoff) terminate(p);
+    }
+
+    /// Pixel p's surface is still to be composited and lies in front of @a slab's middle.
+    bool surfaceInFront(std::int64_t slab, int p) const
+    {
+        return mSurfacePending[p] && mAlive[p] &&
+               mOptions.surfaceAt[frameIndex(p)] < float(mOptions.slabs.start(slab) + 0.5 * mOptions.slabs.thickness);
+    }
+
+    /// The slab's optical depth at pixel p summed over R, G, B (as in add()).
+    float slabMass(std::size_t base, int p) const
+    {
+        float mass = 0.0f;
+        for (int c = 0; c < 3; ++c) mass += mTau[base + std::size_t(channel(c)) * kTilePixels + std::size_t(p)];
+        return mass;
+    }
+
+    /// Shading per slab sample (docs/numerics.md#shading-per-slab-sample): the slab's @a mass
+    /// (> 0) at pixel p, as a uniform layer with the mean and variance of its position, lit by
+    /// the light's transmittance at the layer's front and back and integrated with the slab's
+    /// own attenuation: @a lit, the scattering weight x slabLightIntegral per channel.
+    void lightSlab(std::int64_t slab, int p, float mass, float* lit) const
+    {
+        const std::size_t base = slot(slab) * C * kTilePixels;
+        const std::size_t m = slot(slab) * kTilePixels + std::size_t(p);
+        const float mean = std::clamp(mMoment[m] / mass, 0.0f, 1.0f);
+        const float half = std::sqrt(3.0f * std::max(mMoment2[m] / mass - mean * mean, 0.0f));
+        std::array<float, 3> front, logRatio;
+        lightAt(p, slab, std::max(mean - half, 0.0f), std::min(mean + half, 1.0f), front, logRatio);
+        for (int c = 0; c < C; ++c) {
+            const std::size_t i = base + c * kTilePixels + std::size_t(p);
+            lit[c] = std::max(mScatter.empty() ? mTau[i] : mScatter[i], 0.0f) *
+                     slabLightIntegral(mTau[i], front[std::size_t(c)], logRatio[std::size_t(c)]);
+        }
+    }
+
+    /// Pixel p's ray stops: |T|^2 fell below the cutoff.
+    void terminate(int p)
+    {
+        mAlive[p] = 0;
+        --mAliveCount;
+    }
+
+    /// Zero pixel p's accumulators of @a slab (its ring slot is reused).
+    void clearPixel(std::int64_t slab, int p)
+    {
+        const std::size_t base = slot(slab) * C * kTilePixels;
+        if (!mMoment.empty()) mMoment[slot(slab) * kTilePixels + std::size_t(p)] = mMoment2[slot(slab) * kTilePixels + std::size_t(p)] = 0.0f;
+        for (int c = 0; c < C; ++c) {
+            const std::size_t i = base + c * kTilePixels + std::size_t(p);
+            mTau[i] = 0.0f;
+            if (!mEmission.empty()) mEmission[i] = 0.0f;
+            if (!mScatter.empty()) mScatter[i] = 0.0f;
+            for (int k = 0; k < mPassCount; ++k) mPassEmission[passIndex(slab, k, c) + std::size_t(p)] = 0.0f;
+        }
+    }
+
+    std::uint64_t mSamples = 0, mComposites = 0; ///< samples(), composites()
+    int mX0, mY0, mW, mH;
+    std::int64_t mMask;
+    float mCutoff;
+    ExpEvaluation mExp;
+    const ExpTable* mTable;
+    const CompositeOptions& mOptions;
+    int mPassCount;
+    std::vector<float> mTau, mEmission; ///< [slot][channel][pixel]; mEmission empty unless emissive
+    std::vector<float> mPassEmission;   ///< [slot][pass][channel][pixel]
+    std::vector<float> mPassC;          ///< [pass][channel][pixel]
+    std::vector<float> mScatter;        ///< [slot][channel][pixel] scattering weights (tinted only)
+    /// [slot][pixel] optical depth x position in the slab (0 front, 1 back), and x its square
+    /// (lit frames only): where the slab's mass lies, for shading.
+    std::vector<float> mMoment, mMoment2;
+    Vec3d mRayBase[kTilePixels], mRayDir[kTilePixels]; ///< pixel rays in light-map coordinates
+    float mZ[kTilePixels];              ///< Z pass along the ray, +inf until alpha reaches 0.5
+    float mTBefore[C];
+    float mLightScale[C]; ///< the light's colour x scattering coefficient per unit scattering weight
+    std::vector<std::pair<std::uint16_t, DeepSample>> mDeep;
+    std::vector<Dirty> mDirty;
+    std::vector<std::int64_t> mPending; ///< slabs holding contributions, not yet composited
+    float mT[C * kTilePixels];
+    float mC[C * kTilePixels];
+    std::uint8_t mAlive[kTilePixels];
+    std::uint8_t mSurfacePending[kTilePixels]; ///< the pixel's surface is still to be composited
+    float mDeepBack[kTilePixels];              ///< the back of the pixel's last deep sample (surfaces only)
+    int mAliveCount = 0;
+};
+
+int ringSizeFor(std::uint32_t maxSpan)
+{
+    int r = 1;
+    while (r < int(maxSpan) + 1) r *= 2;
+    return r;
+}
+
+/// A backend's SlabCompositor: each tile swept by a TileCompositor<C>, one task a tile.
+template <int C>
+class TileSweepCompositor final : public SlabCompositor
+{
+public:
+    void composite(const SplatSet& set, const TileBins& bins, const CompositeOptions& options, const std::vector<float>& depthScale,
+        Frame& frame, std::vector<TileDeep>& deep, std::vector<TileCounters>& counters, Progress* progress) const override;
+};
+
+template <int C>
+void TileSweepCompositor<C>::composite(const SplatSet& set, const TileBins& bins, const CompositeOptions& options,
+    const std::vector<float>& depthScale, Frame& frame, std::vector<TileDeep>& deep, std::vector<TileCounters>& counters,
+    Progress* progress) const
+{
+    const int width = frame.beauty.width, height = frame.beauty.height;
+    const int tiles = bins.tilesX * bins.tilesY;
+    tbb::parallel_for(tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& range) {
+        for (int t = range.begin(); t < range.end(); ++t) {
+            const int tx = t % bins.tilesX, ty = t / bins.tilesX;
+            const int x0 = tx * kTileSize, y0 = ty * kTileSize;
+            const int w = std::min(kTileSize, width - x0), h = std::min(kTileSize, height - y0);
+            // Indices arrive in (first slab, kernel index) order (sweepOrder).
+            const std::uint32_t* order = bins.indices.data() + bins.offsets[t];
+            const std::size_t count = std::size_t(bins.offsets[t + 1] - bins.offsets[t]);
+            TileCompositor<C> tile(x0, y0, w, h, ringSizeFor(std::max(bins.maxSpan[std::size_t(t)], 1u)), options);
+            std::size_t done = 0;
+            const std::size_t passFloats = std::size_t(set.passSourceCount) * 3;
+            for (; done < count && !tile.opaque(); ++done) {
+                // The list jumps across the splat array (depth order): fetch ahead.
+                if (done + 4 < count) __builtin_prefetch(&set.splats[order[done + 4]]);
+                if (done + 2 < count) {
+                    const Splat& ahead = set.splats[order[done + 2]];
+                    __builtin_prefetch(set.shares.data() + ahead.shareOffset);
+                    __builtin_prefetch(set.shareMoments.data() + 2 * ahead.shareOffset);
+                }
+                const Splat& s = set.splats[order[done]];
+                tile.add(s, set.shares.data() + s.shareOffset, set.shareMoments.data() + 2 * s.shareOffset,
+                    passFloats ? set.passSources.data() + order[done] * passFloats : nullptr);
+            }
+            tile.finish(frame, depthScale, deep.empty() ? nullptr : &deep[std::size_t(t)]);
+            counters[std::size_t(t)] = {count - done, tile.samples(), tile.composites()};
+            advance(progress);
+        }
+    });
+}
+
