@@ -200,6 +200,7 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     stats.splatTilePairsSkipped = raster.pairsSkipped;
     stats.footprintSamples = raster.footprintSamples;
     stats.slabComposites = raster.slabComposites;
+    stats.rasterBackend = raster.backend;
     if (kernels.activeVoxels == 0 && kernels.activeTiles == 0) stats.warnings.push_back("the grid has no active values: the image is empty");
     if (kernels.notANumber) stats.warnings.push_back(countLine(kernels.notANumber, "NaN voxel values skipped"));
     if (kernels.clamped) stats.warnings.push_back(countLine(kernels.clamped, "voxel values above 1e6 (or +Inf) clamped to 1e6"));

@@ -9,6 +9,7 @@ packages=(
   libopenvdb-dev libboost-iostreams-dev libopenexr-dev libimath-dev libtbb-dev libglm-dev
   libopencolorio-dev libpng-dev
   libcli11-dev nlohmann-json3-dev libgtest-dev
+  libhwy-dev         # Highway: the SIMD rasteriser's per-target code and run-time dispatch
   libopenvdb-tools   # vdb_render: the peer the tests and benchmarks compare against
   openimageio-tools  # oiiotool: EXR -> PNG previews and image diffs
   clang libclang-rt-14-dev  # the sanitized test build and the libFuzzer harnesses (tests/fuzz)

@@ -54,4 +54,11 @@ std::size_t compositeScalar(Accumulators& acc);
 std::size_t splatAvx2(const std::vector<Footprint>& splats, Accumulators& acc);
 std::size_t compositeAvx2(Accumulators& acc);
 
+/// The same with Highway (footprint_hwy.cpp): compiled
+/// for AVX2, SSE4 and a portable fallback, the best the CPU has picked at run time.
+std::size_t splatHwy(const std::vector<Footprint>& splats, Accumulators& acc);
+std::size_t compositeHwy(Accumulators& acc);
+/// The name of the target HWY_DYNAMIC_DISPATCH picks on this CPU ("AVX2", "SSE4", ...).
+const char* hwyTarget();
+
 } // namespace roofline

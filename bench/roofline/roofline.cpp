@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <cstring>
 #include <random>
+#include <string>
 
 namespace {
 
@@ -85,13 +86,15 @@ void slabComposites(benchmark::State& state)
 
 /// The vector kernels must do the scalar ones' work for their rate to mean anything: the same
 /// samples, and accumulators within 1e-4 (exp per lane against forward differencing).
+template <std::size_t (*Splat)(const std::vector<roofline::Footprint>&, roofline::Accumulators&),
+          std::size_t (*Composite)(roofline::Accumulators&)>
 bool vectorKernelsAgree()
 {
     const auto splats = typicalSplats(256);
     roofline::Accumulators a, b;
     std::memset(&a, 0, sizeof(a));
     std::memset(&b, 0, sizeof(b));
-    if (roofline::splatScalar(splats, a) != roofline::splatAvx2(splats, b)) return false;
+    if (roofline::splatScalar(splats, a) != Splat(splats, b)) return false;
     for (int p = 0; p < roofline::kPixels; ++p) {
         a.emission[p] = b.emission[p] = 0.5f;
         a.transmittance[p] = b.transmittance[p] = 1.0f;
@@ -102,7 +105,7 @@ bool vectorKernelsAgree()
         }
     }
     roofline::compositeScalar(a);
-    roofline::compositeAvx2(b);
+    Composite(b);
     for (int p = 0; p < roofline::kPixels; ++p) {
         if (!(std::abs(a.colour[p] - b.colour[p]) <= 1e-5f && std::abs(a.transmittance[p] - b.transmittance[p]) <= 1e-5f)) return false;
     }
@@ -114,13 +117,22 @@ int main(int argc, char** argv)
     benchmark::RegisterBenchmark("footprint_samples/scalar", footprintSamples<roofline::splatScalar>);
     benchmark::RegisterBenchmark("slab_composites/scalar", slabComposites<roofline::compositeScalar>);
     if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) {
-        if (!vectorKernelsAgree()) {
+        if (!vectorKernelsAgree<roofline::splatAvx2, roofline::compositeAvx2>()) {
             std::fprintf(stderr, "vdb_ewa_roofline: the AVX2 kernels disagree with the scalar ones\n");
             return 1;
         }
         benchmark::RegisterBenchmark("footprint_samples/avx2", footprintSamples<roofline::splatAvx2>);
         benchmark::RegisterBenchmark("slab_composites/avx2", slabComposites<roofline::compositeAvx2>);
     }
+    // Highway picks its target itself (HWY_DYNAMIC_DISPATCH); the name says which.
+    if (!vectorKernelsAgree<roofline::splatHwy, roofline::compositeHwy>()) {
+        std::fprintf(stderr, "vdb_ewa_roofline: the Highway kernels (%s) disagree with the scalar ones\n",
+                     roofline::hwyTarget());
+        return 1;
+    }
+    const std::string hwy = std::string("/hwy_") + roofline::hwyTarget();
+    benchmark::RegisterBenchmark(("footprint_samples" + hwy).c_str(), footprintSamples<roofline::splatHwy>);
+    benchmark::RegisterBenchmark(("slab_composites" + hwy).c_str(), slabComposites<roofline::compositeHwy>);
     benchmark::Initialize(&argc, argv);
     benchmark::RunSpecifiedBenchmarks();
     benchmark::Shutdown();

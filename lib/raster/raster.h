@@ -7,6 +7,7 @@
 #pragma once
 
 #include "raster/disc_coverage.h"
+#include "raster/slab_compositor.h"
 #include "raster/surface_rasterizer.h"
 #include "raster/tile_bins.h"
 #include "raster/tile_rasterizer.h"

@@ -18,9 +18,13 @@ namespace scalar_backend {
 #include "raster/tile_compositor-inl.h"
 
 template <int C>
-void TileCompositor<C>::rowWeights(double qa, double qb, double qc, double dx0, double dy, int n, float k, int p0, float* out) const
+void TileCompositor<C>::addRow(const Splat& s, const float* shares, const float* moments, const float* passSources, int y, int x0, int x1, float k)
 {
+    const double qa = s.qa, qb = s.qb, qc = s.qc;
+    const double dy = double(mY0 + y) + 0.5 - double(s.cy), dx0 = double(mX0 + x0) + 0.5 - double(s.cx);
     auto r = [&](double dx) { return qa * dx * dx + 2.0 * qb * dx * dy + qc * dy * dy; };
+    const int n = x1 - x0 + 1, p0 = y * kTileSize + x0;
+    float weights[kTileSize];
     // Very narrow footprints (qa > 16) would overflow the incremental factor: exact exp.
     const ExpEvaluation mode = (mExp == ExpEvaluation::Incremental && qa > 16.0) ? ExpEvaluation::Exact : mExp;
     switch (mode) {
@@ -31,22 +35,23 @@ void TileCompositor<C>::rowWeights(double qa, double qb, double qc, double dx0, 
         float g = std::exp(float(-0.5 * r(dx0)));
         float m = std::exp(float(-0.5 * (qa * (2.0 * dx0 + 1.0) + 2.0 * qb * dy)));
         for (int i = 0; i < n; ++i) {
-            out[i] = g;
+            weights[i] = g;
             g *= m;
             m *= k;
         }
         break;
     }
     case ExpEvaluation::Exact:
-        for (int i = 0; i < n; ++i) out[i] = float(std::exp(-0.5 * r(dx0 + double(i))));
+        for (int i = 0; i < n; ++i) weights[i] = float(std::exp(-0.5 * r(dx0 + double(i))));
         break;
     case ExpEvaluation::Table:
-        for (int i = 0; i < n; ++i) out[i] = mTable->lookup(float(r(dx0 + double(i))));
+        for (int i = 0; i < n; ++i) weights[i] = mTable->lookup(float(r(dx0 + double(i))));
         break;
     }
-    for (int i = 0; i < n; ++i) {
-        if (!mAlive[p0 + i]) out[i] = 0.0f;
-    }
+    // Spread the row into every slab the kernel overlaps: contiguous, vectorisable.
+    forEachPlane(s, shares, moments, passSources, p0, [&](float* plane, float factor) {
+        for (int i = 0; i < n; ++i) plane[i] += weights[i] * factor;
+    });
 }
 
 template <int C>

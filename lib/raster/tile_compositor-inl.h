@@ -74,10 +74,11 @@ public:
     std::uint64_t samples() const { return mSamples; }
     std::uint64_t composites() const { return mComposites; }
 
-    /// The row's footprint values exp(-r/2), r = qa dx^2 + 2 qb dx dy + qc dy^2 at dx = dx0,
-    /// dx0 + 1, ..., dx0 + n - 1 (k = exp(-qa)), 0 at terminated pixels (mAlive[p0 + i] == 0).
-    /// Defined by each backend.
-    void rowWeights(double qa, double qb, double qc, double dx0, double dy, int n, float k, int p0, float* out) const;
+    /// Add splat @a s's footprint values exp(-r/2) (Sec. 7.1, r = d^T Q d) on tile row @a y, pixels
+    /// x0..x1 (inside its cut-off ellipse), to every slab it overlaps (forEachPlane); what
+    /// terminated pixels receive is never composited. @a k: exp(-qa), for a backend that steps
+    /// along the row. Defined by each backend.
+    void addRow(const Splat& s, const float* shares, const float* moments, const float* passSources, int y, int x0, int x1, float k);
 
     /// @a passSources: the splat's extra source terms (mPassCount x RGB), or null if none.
     /// @a moments: the position moments of each share in its slab (SplatSet::shareMoments).
@@ -88,15 +89,13 @@ public:
         const int lx0 = std::max(s.x0 - mX0, 0), lx1 = std::min(s.x1 - mX0, mW - 1);
         const int ly0 = std::max(s.y0 - mY0, 0), ly1 = std::min(s.y1 - mY0, mH - 1);
         if (lx0 > lx1 || ly0 > ly1) return;
-        const int count = int(s.slabCount);
-        for (int k = 0; k < count; ++k) markDirty(s.firstSlab + k, lx0, ly0, lx1, ly1);
+        for (int k = 0; k < int(s.slabCount); ++k) markDirty(s.firstSlab + k, lx0, ly0, lx1, ly1);
         const float kx = float(std::exp(-double(s.qa)));
         // Row spans of the ellipse d^T Q d < cutoff (Sec. 7.1), solved for dx in float with
         // det Q formed in double (no cancellation), once per splat.
         const float invQa = float(1.0 / double(s.qa));
         const float detQ = float(double(s.qa) * double(s.qc) - double(s.qb) * double(s.qb));
         const float qaCutoff = float(double(s.qa) * double(s.cutoff));
-        const double qa = s.qa, qb = s.qb, qc = s.qc;
         for (int ly = ly0; ly <= ly1; ++ly) {
             const float dyf = float(mY0 + ly) + 0.5f - s.cy;
             const float disc = qaCutoff - detQ * dyf * dyf;
@@ -109,49 +108,34 @@ public:
             const int lxa = std::max(lx0, int(std::ceil(xFirst)) - mX0);
             const int lxb = std::min(lx1, int(std::floor(xLast)) - mX0);
             if (lxa > lxb) continue;
-            const double dy = double(mY0 + ly) + 0.5 - double(s.cy);
-            // The row's footprint values exp(-r/2), 0 for terminated pixels.
-            float weights[kTileSize];
-            const int n = lxb - lxa + 1;
-            const int p0 = ly * kTileSize + lxa;
-            const double dx0 = double(mX0 + lxa) + 0.5 - double(s.cx);
-            rowWeights(qa, qb, qc, dx0, dy, n, kx, p0, weights);
-            mSamples += std::uint64_t(n);
-            // Spread the row into every slab the kernel overlaps: contiguous, vectorisable.
-            for (int j = 0; j < count; ++j) {
-                const std::size_t base = slot(s.firstSlab + j) * C * kTilePixels + std::size_t(p0);
-                if (!mMoment.empty()) {
-                    // The first and second moments of the optical depth's position in the slab.
-                    // Weighted by the optical depth summed over R, G, B, the same in both paths.
-                    const float w = shares[j] * (s.tau[0] + s.tau[1] + s.tau[2]);
-                    const float w1 = w * moments[2 * j], w2 = w * moments[2 * j + 1];
-                    const std::size_t mb = slot(s.firstSlab + j) * kTilePixels + std::size_t(p0);
-                    float* m1 = &mMoment[mb];
-                    float* m2 = &mMoment2[mb];
-                    for (int i = 0; i < n; ++i) {
-                        m1[i] += weights[i] * w1;
-                        m2[i] += weights[i] * w2;
-                    }
-                }
-                for (int c = 0; c < C; ++c) {
-                    const float wt = shares[j] * s.tau[c], we = shares[j] * s.emission[c];
-                    float* tau = &mTau[base + std::size_t(c) * kTilePixels];
-                    for (int i = 0; i < n; ++i) tau[i] += weights[i] * wt;
-                    if (!mEmission.empty()) {
-                        float* em = &mEmission[base + std::size_t(c) * kTilePixels];
-                        for (int i = 0; i < n; ++i) em[i] += weights[i] * we;
-                    }
-                    if (!mScatter.empty()) {
-                        const float ws = shares[j] * s.scatter[c];
-                        float* sc = &mScatter[base + std::size_t(c) * kTilePixels];
-                        for (int i = 0; i < n; ++i) sc[i] += weights[i] * ws;
-                    }
-                    for (int k = 0; k < mPassCount; ++k) {
-                        const float wp = shares[j] * passSources[3 * k + c];
-                        float* pe = &mPassEmission[passIndex(s.firstSlab + j, k, c) + std::size_t(p0)];
-                        for (int i = 0; i < n; ++i) pe[i] += weights[i] * wp;
-                    }
-                }
+            addRow(s, shares, moments, passSources, ly, lxa, lxb, kx);
+            mSamples += std::uint64_t(lxb - lxa + 1);
+        }
+    }
+
+    /// Every accumulator plane a splat's row feeds and its factor, for @a add(plane, factor):
+    /// the row's footprint values x factor are added to plane[p], plane[p + 1], ... (p: the
+    /// tile pixel @a p). Per slab the kernel overlaps: the position moments (lit frames), then
+    /// per channel the optical depth, emission, scattering weight and the passes' sources.
+    template <typename Add>
+    void forEachPlane(const Splat& s, const float* shares, const float* moments, const float* passSources, int p, Add&& add)
+    {
+        for (int j = 0; j < int(s.slabCount); ++j) {
+            const std::size_t base = slot(s.firstSlab + j) * C * kTilePixels + std::size_t(p);
+            if (!mMoment.empty()) {
+                // The first and second moments of the optical depth's position in the slab.
+                // Weighted by the optical depth summed over R, G, B, the same in both paths.
+                const float w = shares[j] * (s.tau[0] + s.tau[1] + s.tau[2]);
+                const std::size_t mb = slot(s.firstSlab + j) * kTilePixels + std::size_t(p);
+                add(&mMoment[mb], w * moments[2 * j]);
+                add(&mMoment2[mb], w * moments[2 * j + 1]);
+            }
+            for (int c = 0; c < C; ++c) {
+                add(&mTau[base + std::size_t(c) * kTilePixels], shares[j] * s.tau[c]);
+                if (!mEmission.empty()) add(&mEmission[base + std::size_t(c) * kTilePixels], shares[j] * s.emission[c]);
+                if (!mScatter.empty()) add(&mScatter[base + std::size_t(c) * kTilePixels], shares[j] * s.scatter[c]);
+                for (int k = 0; k < mPassCount; ++k)
+                    add(&mPassEmission[passIndex(s.firstSlab + j, k, c) + std::size_t(p)], shares[j] * passSources[3 * k + c]);
             }
         }
     }

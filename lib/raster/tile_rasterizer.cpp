@@ -189,7 +189,10 @@ Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSet
         return true;
     };
     const int channels = allGrey(set, model) && grey(surface) && grey(surfaceShadow) ? 1 : 3;
-    scalarSlabCompositor(channels)->composite(set, bins, options, depthScale, frame, deep, counters, progress);
+    std::unique_ptr<SlabCompositor> backend = settings.simd ? simdSlabCompositor(channels) : nullptr;
+    stats.backend = backend ? simdTarget() : "scalar";
+    if (!backend) backend = scalarSlabCompositor(channels);
+    backend->composite(set, bins, options, depthScale, frame, deep, counters, progress);
     if (passes.deep) frame.deep = assembleDeep(deep, bins, width, height, depthScale);
     stats.tiles = std::uint64_t(tiles);
     for (const TileCounters& c : counters) {

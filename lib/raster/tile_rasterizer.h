@@ -21,6 +21,7 @@ struct RasterStats
     std::uint64_t pairsSkipped = 0; ///< pairs skipped in those tiles
     std::uint64_t footprintSamples = 0; ///< footprint weights evaluated (pixels inside a cut-off)
     std::uint64_t slabComposites = 0;   ///< (pixel, slab) samples composited
+    const char* backend = "scalar";     ///< the slab compositor: "scalar" or the SIMD target's name
 };
 
 /// Composite @a set into the camera's image (premultiplied RGB, A = 1 - mean T) and the
