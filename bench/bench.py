@@ -547,38 +547,45 @@ def roofline_binary(build):
 
 def cmd_roofline(args):
     """Issue 17: the rasteriser's achieved rate in real frames against this machine's peak for its
-    inner loop (bench/roofline, one core, data in L1), scalar and AVX2."""
+    inner loop (bench/roofline, one core, data in L1): the scalar backend (--simd off) against the
+    scalar peak, the SIMD backend (--simd on, Highway) against the best vector peak measured
+    (xsimd or Highway kernels)."""
     import json
     exe = roofline_binary(args.build)
     out = subprocess.run([exe, "--benchmark_format=json", "--benchmark_min_time=0.5"], check=True, capture_output=True, text=True).stdout
     peak = {b["name"]: b["items_per_second"] for b in json.loads(out)["benchmarks"]}
-    print(f"# peak of the inner loop on one core (bench/roofline, data in L1), {os.cpu_count()} cores")
-    print("| kernel | scalar (M/s) | AVX2 (M/s) | AVX2 / scalar |")
-    print("|---|---|---|---|")
+    kinds = ["scalar", "avx2"] + sorted({n.split("/")[1] for n in peak if "/hwy_" in n})
+    print(f"# peak of the inner loop on one core (bench/roofline, data in L1), {os.cpu_count()} cores; "
+          "avx2: xsimd, hwy_*: Highway (its dispatched target)")
+    print("| kernel | " + " | ".join(f"{k} (M/s)" for k in kinds) + " |")
+    print("|---|" + "---|" * len(kinds))
     for k in ("footprint_samples", "slab_composites"):
-        sc, vx = peak.get(k + "/scalar", nan), peak.get(k + "/avx2", nan)
-        print(f"| {k.replace('_', ' ')} | {sc / 1e6:.0f} | {vx / 1e6:.0f} | {vx / sc:.1f}x |")
+        print(f"| {k.replace('_', ' ')} | " + " | ".join(f"{peak.get(k + '/' + kind, nan) / 1e6:.0f}" for kind in kinds) + " |")
+    best = {k: max(peak.get(f"{k}/{kind}", 0.0) for kind in kinds[1:]) for k in ("footprint_samples", "slab_composites")}
     print(f"\n# achieved in real frames, {args.res}, one thread (--threads 1), median of {args.repeat}; "
-          "roofline time = samples / peak + composites / peak")
-    print("| scene | quality | footprint samples (M) | slab composites (M) | rasterise (s) | achieved (M samples/s) "
-          "| rasterise / roofline time, scalar | rasterise / roofline time, AVX2 |")
-    print("|---|---|---|---|---|---|---|---|")
+          "roofline time = samples / peak + composites / peak (vector peak: the best vector kernel above)")
+    print("| scene | quality | footprint samples (M) | slab composites (M) | rasterise, scalar (s) | rasterise, SIMD (s) "
+          "| SIMD speed-up | scalar / scalar roofline | SIMD / vector roofline |")
+    print("|---|---|---|---|---|---|---|---|---|")
     tmp = tempfile.mkdtemp(prefix="vdb_ewa_roofline_")
     for label, path, cam in [s for s in SCENES if s[0] in ROOFLINE_SCENES]:
         if not os.path.exists(path):
             continue
         for quality in args.quality.split(","):
-            times, samples, composites = [], 0, 0
-            for _ in range(args.repeat):
-                _, stdout = run([EWA, "render", path, os.path.join(tmp, "o.exr"), "-res", args.res, *cam.split(),
-                                 "--quality", quality, "--threads", "1", "-v"])
-                times.append(stages(stdout).get("rasterise", nan))
-                samples = int(re.search(r"([0-9]+) footprint samples", stdout).group(1))
-                composites = int(re.search(r"([0-9]+) slab composites", stdout).group(1))
-            t = statistics.median(times)
-            ideal = lambda kind: samples / peak["footprint_samples/" + kind] + composites / peak["slab_composites/" + kind]
-            print(f"| {label} | {quality} | {samples / 1e6:.1f} | {composites / 1e6:.1f} | {t:.3f} | {samples / t / 1e6:.0f} | "
-                  f"{t / ideal('scalar'):.1f} | {t / ideal('avx2') if 'footprint_samples/avx2' in peak else nan:.1f} |", flush=True)
+            t, samples, composites = {}, 0, 0
+            for simd in ("off", "on"):
+                times = []
+                for _ in range(args.repeat):
+                    _, stdout = run([EWA, "render", path, os.path.join(tmp, "o.exr"), "-res", args.res, *cam.split(),
+                                     "--quality", quality, "--threads", "1", "--simd", simd, "-v"])
+                    times.append(stages(stdout).get("rasterise", nan))
+                    samples = int(re.search(r"([0-9]+) footprint samples", stdout).group(1))
+                    composites = int(re.search(r"([0-9]+) slab composites", stdout).group(1))
+                t[simd] = statistics.median(times)
+            scalar = samples / peak["footprint_samples/scalar"] + composites / peak["slab_composites/scalar"]
+            vector = samples / best["footprint_samples"] + composites / best["slab_composites"]
+            print(f"| {label} | {quality} | {samples / 1e6:.1f} | {composites / 1e6:.1f} | {t['off']:.3f} | {t['on']:.3f} | "
+                  f"{t['off'] / t['on']:.2f}x | {t['off'] / scalar:.1f} | {t['on'] / vector:.1f} |", flush=True)
 
 
 def plot(rows, path):

@@ -65,6 +65,124 @@ inline Floats absorbedOf(Floats tau)
     return hn::IfThenElseZero(hn::Gt(tau, hn::Zero(d)), hn::Neg(hn::Expm1(d, hn::Neg(tau))));
 }
 
+/// slabLightIntegral per lane: front E(tau + k), E(x) = (1 - e^-x) / x (its series near 0).
+inline Floats lightIntegral(Floats tau, Floats front, Floats logRatio)
+{
+    const FloatTag d;
+    const Floats x = hn::Add(hn::Max(tau, hn::Zero(d)), logRatio);
+    const Floats series = hn::Sub(hn::Set(d, 1.0f), hn::Mul(x, hn::Sub(hn::Set(d, 0.5f), hn::Div(x, hn::Set(d, 6.0f)))));
+    const Floats mean = hn::IfThenElse(hn::Lt(hn::Abs(x), hn::Set(d, 1e-3f)), series, hn::Div(hn::Neg(hn::Expm1(d, hn::Neg(x))), x));
+    return hn::Mul(hn::Max(front, hn::Set(d, 1e-30f)), mean);
+}
+
+using IntTag = hn::RebindToSigned<FloatTag>;
+using Ints = hn::Vec<IntTag>;
+using DoubleTag = hn::Repartition<double, FloatTag>; // half the lanes
+using Doubles = hn::Vec<DoubleTag>;
+
+/// A vector of points on pixel rays in light-map coordinates, as LightMap::cell reads them: the
+/// lattice cell (i, j) clamped to [-1, nu] x [-1, nv], bilinear weights (a, b), and along the
+/// light the sample floor(w) and w - floor(w) (the same values the scalar lookup forms in double).
+struct MapPoints
+{
+    Ints i, j, kw;
+    Floats a, b, fw;
+};
+
+/// The points base + z dir of the lanes at tile pixel @a p, z = z0 + u thickness.
+inline MapPoints mapPoints(const LightMap::Lattice& map, const double (*base)[kTilePixels], const double (*dir)[kTilePixels], int p,
+    Floats u, double z0, double thickness)
+{
+    const DoubleTag dd;
+    const hn::Rebind<std::int32_t, DoubleTag> di;
+    const hn::Rebind<float, DoubleTag> df;
+    constexpr int kHalf = kLanes / 2;
+    hn::Vec<decltype(di)> i[2], j[2], kw[2];
+    hn::Vec<decltype(df)> a[2], b[2], fw[2];
+    const Doubles lo = hn::Set(dd, -1.0), wLimit = hn::Set(dd, 1073741824.0); // 2^30: far past any ray's samples
+    for (int h = 0; h < 2; ++h) {
+        const Doubles uh = h == 0 ? hn::PromoteTo(dd, hn::LowerHalf(u)) : hn::PromoteTo(dd, hn::UpperHalf(hn::Half<FloatTag>(), u));
+        const Doubles z = hn::MulAdd(uh, hn::Set(dd, thickness), hn::Set(dd, z0));
+        const int q = p + h * kHalf;
+        const Doubles x = hn::MulAdd(z, hn::LoadU(dd, &dir[0][q]), hn::LoadU(dd, &base[0][q]));
+        const Doubles y = hn::MulAdd(z, hn::LoadU(dd, &dir[1][q]), hn::LoadU(dd, &base[1][q]));
+        const Doubles w = hn::Min(hn::Max(hn::MulAdd(z, hn::LoadU(dd, &dir[2][q]), hn::LoadU(dd, &base[2][q])), hn::Neg(wLimit)), wLimit);
+        const Doubles fu = hn::Floor(x), fv = hn::Floor(y), fk = hn::Floor(w);
+        i[h] = hn::DemoteTo(di, hn::Min(hn::Max(fu, lo), hn::Set(dd, double(map.nu))));
+        j[h] = hn::DemoteTo(di, hn::Min(hn::Max(fv, lo), hn::Set(dd, double(map.nv))));
+        kw[h] = hn::DemoteTo(di, fk);
+        a[h] = hn::DemoteTo(df, hn::Sub(x, fu));
+        b[h] = hn::DemoteTo(df, hn::Sub(y, fv));
+        fw[h] = hn::DemoteTo(df, hn::Sub(w, fk));
+    }
+    const IntTag dint;
+    const FloatTag d;
+    return {hn::Combine(dint, i[1], i[0]), hn::Combine(dint, j[1], j[0]), hn::Combine(dint, kw[1], kw[0]),
+        hn::Combine(d, a[1], a[0]), hn::Combine(d, b[1], b[0]), hn::Combine(d, fw[1], fw[0])};
+}
+
+/// LightMap::depthOnRay for lattice ray (i, j) at each lane's points (0 off the lattice, on a
+/// ray without density, or past its stored samples).
+inline Floats depthOnRays(const LightMap::Lattice& map, Ints i, Ints j, Ints kw, Floats fw)
+{
+    const IntTag di;
+    const FloatTag d;
+    const Ints zero = hn::Zero(di), one = hn::Set(di, 1);
+    const auto onLattice = hn::And(hn::And(hn::Gt(i, hn::Set(di, -1)), hn::Lt(i, hn::Set(di, map.nu))),
+        hn::And(hn::Gt(j, hn::Set(di, -1)), hn::Lt(j, hn::Set(di, map.nv))));
+    const Ints ray = hn::IfThenElseZero(onLattice, hn::Add(hn::Mul(j, hn::Set(di, map.nu)), i));
+    const Ints count = hn::IfThenElseZero(onLattice, hn::GatherIndex(di, map.count, ray));
+    // Below the stored range: its first value (x = max(w - kLo, 0)).
+    const Ints rel = hn::Sub(kw, hn::GatherIndex(di, map.kLo, ray));
+    const auto below = hn::Lt(rel, zero);
+    const Ints k = hn::IfThenZeroElse(below, rel);
+    const Floats f = hn::IfThenZeroElse(hn::RebindMask(d, below), fw);
+    const auto stored = hn::Lt(k, count); // also false where count is 0
+    const auto hasNext = hn::And(stored, hn::Lt(hn::Add(k, one), count));
+    const Ints at = hn::Add(hn::GatherIndex(di, map.offset, ray), k);
+    const Floats here = hn::IfThenElseZero(hn::RebindMask(d, stored), hn::GatherIndex(d, map.depth, hn::IfThenElseZero(stored, at)));
+    const Floats next = hn::IfThenElseZero(hn::RebindMask(d, hasNext), hn::GatherIndex(d, map.depth, hn::IfThenElseZero(hasNext, hn::Add(at, one))));
+    return hn::IfThenElseZero(hn::RebindMask(d, stored), hn::MulAdd(f, hn::Sub(next, here), here));
+}
+
+/// LightMap::densityDepth per lane: bilinear across the light in the four rays around each point.
+inline Floats densityDepths(const LightMap::Lattice& map, const MapPoints& q)
+{
+    const IntTag di;
+    const FloatTag d;
+    if (!map.depth) return hn::Zero(d);
+    const Ints one = hn::Set(di, 1);
+    const Ints i1 = hn::Add(q.i, one), j1 = hn::Add(q.j, one);
+    const Floats d00 = depthOnRays(map, q.i, q.j, q.kw, q.fw), d10 = depthOnRays(map, i1, q.j, q.kw, q.fw);
+    const Floats d01 = depthOnRays(map, q.i, j1, q.kw, q.fw), d11 = depthOnRays(map, i1, j1, q.kw, q.fw);
+    const Floats oneF = hn::Set(d, 1.0f), ra = hn::Sub(oneF, q.a), rb = hn::Sub(oneF, q.b);
+    return hn::Add(hn::Mul(rb, hn::Add(hn::Mul(ra, d00), hn::Mul(q.a, d10))), hn::Mul(q.b, hn::Add(hn::Mul(ra, d01), hn::Mul(q.a, d11))));
+}
+
+/// LightMap::logTransmittanceOfDepth per lane, for @a channels channels (1: the grey value).
+inline void logTransmittances(const LightMap::Lattice& map, Floats depth, int channels, Floats* logT)
+{
+    const FloatTag d;
+    const Floats zero = hn::Zero(d);
+    const auto positive = hn::Gt(depth, zero);
+    if (map.grey || channels == 1) {
+        // |T|^2 = 3 T^2 < cutoff where T < sqrt(cutoff / 3): the floor, in the log domain.
+        const Floats grey = hn::IfThenElseZero(positive, hn::Max(hn::Mul(hn::Set(d, -map.extinction[0]), depth), hn::Set(d, map.logGreyFloor)));
+        for (int c = 0; c < channels; ++c) logT[c] = grey;
+        return;
+    }
+    // vdb_render's early stop of the shadow ray as a floor on |T|^2, relative to the brightest
+    // channel (no underflow at any depth).
+    for (int c = 0; c < 3; ++c) logT[c] = hn::IfThenElseZero(positive, hn::Mul(hn::Set(d, -map.extinction[c]), depth));
+    const Floats brightest = hn::Max(hn::Max(logT[0], logT[1]), logT[2]);
+    Floats sum = zero;
+    for (int c = 0; c < 3; ++c) sum = hn::Add(sum, hn::Exp(d, hn::Mul(hn::Set(d, 2.0f), hn::Sub(logT[c], brightest))));
+    const Floats logT2 = hn::MulAdd(hn::Set(d, 2.0f), brightest, hn::Log(d, sum));
+    const Floats lift = hn::IfThenElseZero(hn::And(positive, hn::Lt(logT2, hn::Set(d, map.logCutoff))),
+        hn::Mul(hn::Set(d, 0.5f), hn::Sub(hn::Set(d, map.logCutoff), logT2)));
+    for (int c = 0; c < 3; ++c) logT[c] = hn::Add(logT[c], lift);
+}
+
 template <int C>
 void TileCompositor<C>::addRow(const Splat& s, const float* shares, const float* moments, const float* passSources, int y, int x0, int x1, float)
 {
@@ -129,10 +247,11 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
         // 2. Per lane: pixels with a surface to composite, or whose ray stops inside the slab,
         // take flushPixel's path; the others are composited below, lit per slab sample.
         alignas(64) float composite[kLanes], lit[C][kLanes], emission[C][kLanes], tBefore[C][kLanes], meanBefore[kLanes];
+        alignas(64) float lighted[kLanes];
+        bool anyLighted = false;
         for (int i = 0; i < kLanes; ++i) {
             const int x = first + i, q = p + i;
-            composite[i] = 0.0f;
-            for (int c = 0; c < C; ++c) lit[c][i] = 0.0f;
+            composite[i] = lighted[i] = 0.0f;
             if (x < x0 || x > x1) continue;
             if (mSurfacePending[q] || (mAlive[q] && mass[i] > 0.0f && t2After[i] * float(3 / C) < mCutoff)) {
                 flushPixel(slab, q);
@@ -144,18 +263,45 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
                     meanBefore[i] = meanT(q);
                 }
                 if (mOptions.light && mass[i] > 0.0f) {
-                    float l[C];
-                    lightSlab(slab, q, mass[i], l);
-                    for (int c = 0; c < C; ++c) lit[c][i] = l[c];
+                    lighted[i] = 1.0f;
+                    anyLighted = true;
                 }
             }
         }
-        // 3. The exact front-to-back update (compositeSlab) of those lanes.
+        // 3. The light on those lanes' layers (lightSlab: the slab's mass with the mean and
+        // variance of its position, lit at its front and back from the light map, lightAt).
+        const auto lightedLanes = hn::Ne(hn::Load(d, lighted), zero);
+        Floats front[C], logRatio[C];
+        for (int c = 0; c < C; ++c) front[c] = logRatio[c] = zero;
+        if (anyLighted) {
+            const std::size_t m = slot(slab) * kTilePixels + std::size_t(p);
+            const Floats massLanes = hn::Load(d, mass);
+            const Floats mean = hn::Min(hn::Max(hn::Div(hn::LoadU(d, &mMoment[m]), massLanes), zero), one);
+            const Floats spread = hn::Sub(hn::Div(hn::LoadU(d, &mMoment2[m]), massLanes), hn::Mul(mean, mean));
+            const Floats half = hn::Sqrt(hn::Mul(hn::Set(d, 3.0f), hn::Max(spread, zero)));
+            const Floats u0 = hn::IfThenElseZero(lightedLanes, hn::Max(hn::Sub(mean, half), zero));
+            const Floats u1 = hn::IfThenElseZero(lightedLanes, hn::Min(hn::Add(mean, half), one));
+            const LightMap::Lattice map = mOptions.light->lattice();
+            const double z = mOptions.slabs.start(slab), thickness = mOptions.slabs.thickness;
+            Floats log0[3], log1[3];
+            logTransmittances(map, densityDepths(map, mapPoints(map, mRayBase, mRayDir, p, u0, z, thickness)), C, log0);
+            logTransmittances(map, densityDepths(map, mapPoints(map, mRayBase, mRayDir, p, u1, z, thickness)), C, log1);
+            const Floats floor = hn::Set(d, -69.0775528f); // ln 1e-30, as lightLogRatio
+            for (int c = 0; c < C; ++c) {
+                front[c] = hn::Exp(d, log0[c]);
+                logRatio[c] = hn::Sub(hn::Max(log0[c], floor), hn::Max(log1[c], floor));
+            }
+        }
+        // 4. The scattering weight x the light across the slab (lightSlab), and the exact
+        // front-to-back update (compositeSlab) of those lanes.
         const auto chosen = hn::Ne(hn::Load(d, composite), zero);
         Floats t2Now = zero;
         for (int c = 0; c < C; ++c) {
             const std::size_t i = base + std::size_t(c) * kTilePixels + std::size_t(p);
             const Floats tau = hn::LoadU(d, &mTau[i]), a = hn::Load(d, absorbed[c]);
+            const Floats weight = hn::Max(hn::LoadU(d, mScatter.empty() ? &mTau[i] : &mScatter[i]), zero);
+            const Floats l = hn::IfThenElseZero(lightedLanes, hn::Mul(weight, lightIntegral(tau, front[c], logRatio[c])));
+            hn::Store(l, d, lit[c]);
             Floats emitted = zero, em = zero;
             if (!mEmission.empty()) {
                 // Halo kernels (--prefilter) weigh negative: a slab's sums stay >= 0.
@@ -163,7 +309,7 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
                 emitted = hn::IfThenElse(hn::Gt(tau, hn::Set(d, 1e-7f)), hn::Mul(hn::Div(em, tau), a), em);
             }
             hn::Store(em, d, emission[c]);
-            const Floats source = hn::MulAdd(hn::Set(d, mLightScale[c]), hn::Load(d, lit[c]), emitted);
+            const Floats source = hn::MulAdd(hn::Set(d, mLightScale[c]), l, emitted);
             const auto update = hn::And(chosen, hn::Gt(tau, zero));
             float* colour = &mC[c * kTilePixels + p];
             float* transmittance = &mT[c * kTilePixels + p];
@@ -173,7 +319,7 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
             hn::StoreU(tNew, d, transmittance);
             t2Now = hn::MulAdd(tNew, tNew, t2Now);
         }
-        // 4. The passes' share (Z, deep sample, extra sources: flushPasses), vdb_render's ray
+        // 5. The passes' share (Z, deep sample, extra sources: flushPasses), vdb_render's ray
         // termination (|T|^2 < cutoff), and the slab's accumulators cleared (lanes outside
         // x0..x1 hold zeros: nothing outside the dirty box was added).
         alignas(64) float t2Lanes[kLanes];

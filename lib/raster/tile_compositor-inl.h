@@ -44,8 +44,11 @@ public:
                     Vec3d origin, dir;
                     camera.worldRay(x0 + lx + 0.5, y0 + ly + 0.5, origin, dir);
                     const Vec3d base = camera.projection() == Projection::Perspective ? camera.eye() : origin - camera.near() * dir;
-                    mRayBase[ly * kTileSize + lx] = options.light->coordinates(base);
-                    mRayDir[ly * kTileSize + lx] = options.light->direction(dir);
+                    const Vec3d q = options.light->coordinates(base), v = options.light->direction(dir);
+                    for (int k = 0; k < 3; ++k) {
+                        mRayBase[k][ly * kTileSize + lx] = q[k];
+                        mRayDir[k][ly * kTileSize + lx] = v[k];
+                    }
                 }
         }
         for (int c = 0; c < C; ++c) mLightScale[c] = float(options.model->scattered(c, 1.0, 1.0));
@@ -363,7 +366,8 @@ private:
         const double z = mOptions.slabs.start(slab);
         const double z0 = z + double(u0) * mOptions.slabs.thickness, z1 = z + double(u1) * mOptions.slabs.thickness;
         float d0, d1;
-        mOptions.light->densityDepths(mRayBase[p] + z0 * mRayDir[p], mRayBase[p] + z1 * mRayDir[p], d0, d1);
+        const Vec3d base(mRayBase[0][p], mRayBase[1][p], mRayBase[2][p]), dir(mRayDir[0][p], mRayDir[1][p], mRayDir[2][p]);
+        mOptions.light->densityDepths(base + z0 * dir, base + z1 * dir, d0, d1);
         if (C == 1) {
             const float log0 = mOptions.light->greyLogTransmittanceOfDepth(d0);
             front[0] = std::exp(log0);
@@ -523,7 +527,8 @@ private:
     /// [slot][pixel] optical depth x position in the slab (0 front, 1 back), and x its square
     /// (lit frames only): where the slab's mass lies, for shading.
     std::vector<float> mMoment, mMoment2;
-    Vec3d mRayBase[kTilePixels], mRayDir[kTilePixels]; ///< pixel rays in light-map coordinates
+    /// Pixel rays in light-map coordinates, base + z dir (z: the slab coordinate), x, y, z apart.
+    double mRayBase[3][kTilePixels], mRayDir[3][kTilePixels];
     float mZ[kTilePixels];              ///< Z pass along the ray, +inf until alpha reaches 0.5
     float mTBefore[C];
     float mLightScale[C]; ///< the light's colour x scattering coefficient per unit scattering weight

@@ -4,10 +4,14 @@
 #include "support/empty_space.h"
 #include "support/openvdb_tools.h"
 
+#include <vdb_ewa/error.h>
+
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <string>
 
 namespace vdb_ewa {
 namespace detail {
@@ -105,7 +109,7 @@ LightMap::LightMap(const GridSource::Impl& grid, const RenderSettings& settings,
     };
 
     std::vector<std::vector<float>> rows(static_cast<std::size_t>(mNv));
-    mRays.resize(std::size_t(mNu) * std::size_t(mNv));
+    std::vector<Ray> rays(std::size_t(mNu) * std::size_t(mNv));
     setUnits(progress, std::uint64_t(mNv));
     tbb::parallel_for(tbb::blocked_range<int>(0, mNv), [&](const tbb::blocked_range<int>& range) {
         EmptySpaceSkipper skipper(*grid.field, 0);
@@ -135,7 +139,7 @@ LightMap::LightMap(const GridSource::Impl& grid, const RenderSettings& settings,
                         kBottom = k;
                     }
                 }
-                Ray& ray = mRays[std::size_t(j) * std::size_t(mNu) + std::size_t(i)];
+                Ray& ray = rays[std::size_t(j) * std::size_t(mNu) + std::size_t(i)];
                 if (kTop < 0) continue;
                 // Stored: from a margin below the lowest density up to just below the highest
                 // (above it the depth is 0). Filtered from the light side down over that range
@@ -161,66 +165,42 @@ LightMap::LightMap(const GridSource::Impl& grid, const RenderSettings& settings,
     });
     std::vector<std::uint64_t> rowStart(std::size_t(mNv) + 1, 0);
     for (int j = 0; j < mNv; ++j) rowStart[std::size_t(j) + 1] = rowStart[std::size_t(j)] + rows[std::size_t(j)].size();
+    // The budget (5e8 points) keeps the samples' offsets within 32 bits (mRayOffset).
+    if (rowStart.back() > std::uint64_t(std::numeric_limits<std::int32_t>::max())) {
+        throw BudgetError("the light map would hold " + std::to_string(rowStart.back()) +
+                          " samples, past 2^31; raise --shadowstep or --shadow-res");
+    }
     mDepth.resize(rowStart.back());
     for (int j = 0; j < mNv; ++j) {
         std::copy(rows[std::size_t(j)].begin(), rows[std::size_t(j)].end(), mDepth.begin() + std::ptrdiff_t(rowStart[std::size_t(j)]));
-        for (int i = 0; i < mNu; ++i) mRays[std::size_t(j) * std::size_t(mNu) + std::size_t(i)].offset += rowStart[std::size_t(j)];
+        for (int i = 0; i < mNu; ++i) rays[std::size_t(j) * std::size_t(mNu) + std::size_t(i)].offset += rowStart[std::size_t(j)];
+    }
+    mRayKLo.resize(rays.size());
+    mRayCount.resize(rays.size());
+    mRayOffset.resize(rays.size());
+    for (std::size_t r = 0; r < rays.size(); ++r) {
+        mRayKLo[r] = rays[r].kLo;
+        mRayCount[r] = rays[r].count;
+        mRayOffset[r] = std::int32_t(rays[r].offset);
     }
 }
 
-const LightMap::Ray* LightMap::ray(int i, int j) const
+LightMap::Lattice LightMap::lattice() const
 {
-    if (i < 0 || j < 0 || i >= mNu || j >= mNv) return nullptr;
-    const Ray& r = mRays[std::size_t(j) * std::size_t(mNu) + std::size_t(i)];
-    return r.count > 0 ? &r : nullptr;
-}
-
-float LightMap::depthOnRay(const Ray* ray, double w) const
-{
-    if (!ray) return 0.0f;
-    const double x = std::max(w - double(ray->kLo), 0.0); // below the stored range: its first value
-    const int k = int(x);
-    if (k >= ray->count) return 0.0f;
-    const float* d = mDepth.data() + ray->offset;
-    const float next = k + 1 < ray->count ? d[k + 1] : 0.0f;
-    return d[k] + float(x - double(k)) * (next - d[k]);
-}
-
-LightMap::Cell LightMap::cell(const Vec3d& q) const
-{
-    const double fu = std::floor(q.x), fv = std::floor(q.y);
-    const int i = int(std::clamp(fu, -1.0, double(mNu))), j = int(std::clamp(fv, -1.0, double(mNv)));
-    return {{ray(i, j), ray(i + 1, j), ray(i, j + 1), ray(i + 1, j + 1)}, float(q.x - fu), float(q.y - fv)};
-}
-
-float LightMap::depthInCell(const Cell& c, double w) const
-{
-    const float d00 = depthOnRay(c.rays[0], w), d10 = depthOnRay(c.rays[1], w);
-    const float d01 = depthOnRay(c.rays[2], w), d11 = depthOnRay(c.rays[3], w);
-    return (1.0f - c.b) * ((1.0f - c.a) * d00 + c.a * d10) + c.b * ((1.0f - c.a) * d01 + c.a * d11);
-}
-
-float LightMap::densityDepth(const Vec3d& q) const
-{
-    if (mRays.empty()) return 0.0f;
-    return depthInCell(cell(q), q.z);
-}
-
-void LightMap::densityDepths(const Vec3d& q0, const Vec3d& q1, float& d0, float& d1) const
-{
-    if (mRays.empty()) {
-        d0 = d1 = 0.0f;
-        return;
+    Lattice l;
+    l.nu = mNu;
+    l.nv = mNv;
+    if (!mRayCount.empty()) {
+        l.kLo = mRayKLo.data();
+        l.count = mRayCount.data();
+        l.offset = mRayOffset.data();
+        l.depth = mDepth.empty() ? nullptr : mDepth.data();
     }
-    Cell c = cell(q0);
-    d0 = depthInCell(c, q0.z);
-    if (std::floor(q0.x) == std::floor(q1.x) && std::floor(q0.y) == std::floor(q1.y)) {
-        c.a = float(q1.x - std::floor(q1.x));
-        c.b = float(q1.y - std::floor(q1.y));
-    } else {
-        c = cell(q1);
-    }
-    d1 = depthInCell(c, q1.z);
+    std::copy(std::begin(mExtinction), std::end(mExtinction), l.extinction);
+    l.logCutoff = mLogCutoff;
+    l.logGreyFloor = mLogGreyFloor;
+    l.grey = mGrey;
+    return l;
 }
 
 std::array<float, 3> LightMap::logTransmittanceOfDepth(float depth) const
@@ -248,11 +228,6 @@ std::array<float, 3> LightMap::logTransmittanceOfDepth(float depth) const
     return logT;
 }
 
-float LightMap::greyLogTransmittanceOfDepth(float depth) const
-{
-    // |T|^2 = 3 T^2 < cutoff where T < sqrt(cutoff / 3): the floor, in the log domain.
-    return depth > 0.0f ? std::max(-mExtinction[0] * depth, mLogGreyFloor) : 0.0f;
-}
 
 std::array<float, 3> LightMap::transmittanceOfDepth(float depth) const
 {

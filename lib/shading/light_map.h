@@ -15,7 +15,9 @@
 
 #include <vdb_ewa/render_settings.h>
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -81,21 +83,37 @@ public:
     /// The same where every channel's extinction is the same (the grey fast path): one value.
     float greyLogTransmittanceOfDepth(float depth) const;
 
+    /// The map as plain arrays, for a vector lookup of densityDepth and logTransmittanceOfDepth
+    /// (the SIMD rasteriser): the data and constants the scalar lookups read.
+    struct Lattice
+    {
+        int nu = 0, nv = 0;                   ///< rays across the light; ray (i, j) at [j * nu + i]
+        const std::int32_t* kLo = nullptr;    ///< per ray: sample index of its first stored sample
+        const std::int32_t* count = nullptr;  ///< stored samples (0: no density on the ray)
+        const std::int32_t* offset = nullptr; ///< its first stored sample in depth
+        const float* depth = nullptr;         ///< null: no ray holds density (every depth 0)
+        float extinction[3] = {0.0f, 0.0f, 0.0f};
+        float logCutoff = 0.0f, logGreyFloor = 0.0f;
+        bool grey = true;
+    };
+    Lattice lattice() const;
+
 private:
+    /// A lattice ray as marched (stored as mRayKLo, mRayCount, mRayOffset).
     struct Ray
     {
         std::uint64_t offset = 0; ///< first stored sample in mDepth
         std::int32_t kLo = 0;     ///< sample index of the first stored sample
         std::int32_t count = 0;   ///< stored samples; above them (towards the light) the depth is 0
     };
-    /// The lattice ray (i, j), null outside the lattice or where it holds no density.
-    const Ray* ray(int i, int j) const;
-    /// Optical depth on @a ray (or 0 if null) at @a w steps along the light.
-    float depthOnRay(const Ray* ray, double w) const;
+    /// The lattice ray (i, j), -1 outside the lattice or where it holds no density.
+    int ray(int i, int j) const;
+    /// Optical depth on ray @a r (or 0 if r < 0) at @a w steps along the light.
+    float depthOnRay(int r, double w) const;
     /// The four lattice rays around (u, v), bilinear weights a, b: the cell densityDepth reads.
     struct Cell
     {
-        const Ray* rays[4];
+        int rays[4];
         float a, b;
     };
     Cell cell(const Vec3d& q) const;
@@ -105,7 +123,9 @@ private:
     Vec3d mOrigin{0.0};    ///< world position of map coordinates (0, 0, 0)
     int mNu = 0, mNv = 0, mNw = 0;
     double mShadowStep = 0.0, mShadowResolution = 0.0;
-    std::vector<Ray> mRays; ///< [j * mNu + i]
+    /// Per ray [j * mNu + i]: Ray's fields, one array each (LightMap::Lattice). Offsets fit 32
+    /// bits: the point budget is below 2^31.
+    std::vector<std::int32_t> mRayKLo, mRayCount, mRayOffset;
     LargeArray<float> mDepth;
     float mExtinction[3];
     float mLogCutoff;    ///< ln cutoff: vdb_render's |T|^2 floor
@@ -113,6 +133,70 @@ private:
     bool mGrey = true;   ///< the same extinction in R, G and B
     bool mUnlit;
 };
+
+// The lookups, inline: the rasteriser makes one per lit (pixel, slab) sample.
+
+inline int LightMap::ray(int i, int j) const
+{
+    if (i < 0 || j < 0 || i >= mNu || j >= mNv) return -1;
+    const int r = j * mNu + i;
+    return mRayCount[std::size_t(r)] > 0 ? r : -1;
+}
+
+inline float LightMap::depthOnRay(int r, double w) const
+{
+    if (r < 0) return 0.0f;
+    const double x = std::max(w - double(mRayKLo[std::size_t(r)]), 0.0); // below the stored range: its first value
+    const int k = int(x), count = mRayCount[std::size_t(r)];
+    if (k >= count) return 0.0f;
+    const float* d = mDepth.data() + mRayOffset[std::size_t(r)];
+    const float next = k + 1 < count ? d[k + 1] : 0.0f;
+    return d[k] + float(x - double(k)) * (next - d[k]);
+}
+
+inline LightMap::Cell LightMap::cell(const Vec3d& q) const
+{
+    const double fu = std::floor(q.x), fv = std::floor(q.y);
+    const int i = int(std::clamp(fu, -1.0, double(mNu))), j = int(std::clamp(fv, -1.0, double(mNv)));
+    return {{ray(i, j), ray(i + 1, j), ray(i, j + 1), ray(i + 1, j + 1)}, float(q.x - fu), float(q.y - fv)};
+}
+
+inline float LightMap::depthInCell(const Cell& c, double w) const
+{
+    const float d00 = depthOnRay(c.rays[0], w), d10 = depthOnRay(c.rays[1], w);
+    const float d01 = depthOnRay(c.rays[2], w), d11 = depthOnRay(c.rays[3], w);
+    return (1.0f - c.b) * ((1.0f - c.a) * d00 + c.a * d10) + c.b * ((1.0f - c.a) * d01 + c.a * d11);
+}
+
+inline float LightMap::densityDepth(const Vec3d& q) const
+{
+    if (mRayCount.empty()) return 0.0f;
+    return depthInCell(cell(q), q.z);
+}
+
+inline void LightMap::densityDepths(const Vec3d& q0, const Vec3d& q1, float& d0, float& d1) const
+{
+    if (mRayCount.empty()) {
+        d0 = d1 = 0.0f;
+        return;
+    }
+    Cell c = cell(q0);
+    d0 = depthInCell(c, q0.z);
+    if (std::floor(q0.x) == std::floor(q1.x) && std::floor(q0.y) == std::floor(q1.y)) {
+        c.a = float(q1.x - std::floor(q1.x));
+        c.b = float(q1.y - std::floor(q1.y));
+    } else {
+        c = cell(q1);
+    }
+    d1 = depthInCell(c, q1.z);
+}
+
+
+inline float LightMap::greyLogTransmittanceOfDepth(float depth) const
+{
+    // |T|^2 = 3 T^2 < cutoff where T < sqrt(cutoff / 3): the floor, in the log domain.
+    return depth > 0.0f ? std::max(-mExtinction[0] * depth, mLogGreyFloor) : 0.0f;
+}
 
 } // namespace detail
 } // namespace vdb_ewa
