@@ -25,6 +25,10 @@
   bench/bench.py roofline [--res 1920x1080] [--quality draft,default] [--build DIR]
                                                          issue 17: the rasteriser's achieved rate against
                                                          the peak of its inner loop (bench/roofline)
+  bench/bench.py scaling [--res 1920x1080] [--millions 0.1,0.3,1,3,10,30,100] [--peer-max 3]
+                                                         issue 17: time and peak memory against active
+                                                         voxels, on the sample cloud made finer
+                                                         (make-grid), vdb_render up to --peer-max M
   bench/bench.py holes [--res 640x480] [--only sphere,cube] [--keep DIR]
                                                          issue 16's coverage: IoU and holes against
                                                          vdb_render's hit mask (-shader matte), level
@@ -588,6 +592,85 @@ def cmd_roofline(args):
                   f"{t['off'] / t['on']:.2f}x | {t['off'] / scalar:.1f} | {t['on'] / vector:.1f} |", flush=True)
 
 
+CLOUD_VOXELS_AT_004 = 40049  # active voxels of `make-grid cloud --voxel-size 0.04`
+
+
+def timed(cmd):
+    """(wall seconds, peak resident MB, stdout, exit code) of @a cmd, under /usr/bin/time."""
+    t0 = time.perf_counter()
+    p = subprocess.run(["/usr/bin/time", "-f", "%M", *cmd], capture_output=True, text=True)
+    dt = time.perf_counter() - t0
+    peak = float(p.stderr.strip().splitlines()[-1]) / 1024.0 * 1.048576  # KiB -> MB
+    return dt, peak, p.stdout, p.returncode
+
+
+def cmd_scaling(args):
+    """Issue 17: the same cloud (make-grid cloud) at voxel sizes giving 0.1M to 100M active voxels,
+    rendered at one camera: time and peak memory of vdb_ewa --quality default and draft, and of
+    vdb_render's defaults up to --peer-max million voxels (its time grows as voxels^(4/3): more
+    voxels across every primary and shadow ray)."""
+    tmp = args.keep or tempfile.mkdtemp(prefix="vdb_ewa_scaling_")
+    os.makedirs(tmp, exist_ok=True)
+    cam = "-translate 1.5,0.8,4.5 -lookat 0,0,0".split()
+    print(f"# the sample cloud at {args.res}, one run each, {os.cpu_count()} cores; peak = resident set (getrusage / time -f %M)")
+    print("| active voxels | voxel size | make-grid (s) | vdb_render (s) | vdb_render peak (MB) | default (s) | default peak (MB) "
+          "| default B/voxel | speed-up | draft (s) | draft peak (MB) | draft B/voxel | speed-up |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    rows = []
+    for millions in (float(m) for m in args.millions.split(",")):
+        size = 0.04 * (CLOUD_VOXELS_AT_004 / (millions * 1e6)) ** (1.0 / 3.0)
+        path = os.path.join(tmp, f"cloud_{millions:g}M.vdb")
+        made = 0.0
+        if not os.path.exists(path):
+            made, _ = run([EWA, "make-grid", "cloud", path, "--voxel-size", f"{size:.6f}"])
+        # -v prints the grid's count before rendering (an 8x8 frame may still exceed the budget).
+        probe = subprocess.run([*EWA_RENDER, path, os.path.join(tmp, "o.exr"), "-res", "8x8", *cam, "-v"], capture_output=True, text=True)
+        voxels = int(re.search(r"(\d+) active voxels", probe.stdout).group(1))
+        row = {"voxels": voxels}
+        cells = [f"{voxels / 1e6:.2f} M", f"{size:.4f}", f"{made:.1f}" if made else "(kept)"]
+        if millions <= args.peer_max:
+            dt, peak, _, code = timed(["vdb_render", path, os.path.join(tmp, "theirs.exr"), "-res", args.res, *cam])
+            row["vdb_render"] = dt if code == 0 else nan
+            cells += [f"{dt:.2f}" if code == 0 else f"exit {code}", f"{peak:.0f}"]
+        else:
+            row["vdb_render"] = nan
+            cells += ["not run", ""]
+        for quality in ("default", "draft"):
+            dt, peak, out, code = timed([*EWA_RENDER, path, os.path.join(tmp, "ours.exr"), "-res", args.res, *cam, "--quality", quality, "-v"])
+            row[quality], row[quality + "_peak"] = (dt, peak) if code == 0 else (nan, nan)
+            speed = f"{row['vdb_render'] / dt:.1f}x" if code == 0 and row["vdb_render"] == row["vdb_render"] else ""
+            cells += [f"{dt:.2f}" if code == 0 else f"exit {code}", f"{peak:.0f}", f"{peak * 1e6 / voxels:.0f}" if code == 0 else "", speed]
+        rows.append(row)
+        print("| " + " | ".join(cells) + " |", flush=True)
+    if args.plot:
+        try:
+            import matplotlib
+            matplotlib.use("Agg")
+            import matplotlib.pyplot as plt
+        except ImportError:
+            print("# no plot: apt-get install python3-matplotlib", file=sys.stderr)
+            return
+        fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.5))
+        v = [r["voxels"] for r in rows]
+        for key, colour, label in (("vdb_render", "tab:red", "vdb_render defaults"), ("default", "tab:blue", "vdb_ewa default"),
+                                   ("draft", "tab:green", "vdb_ewa draft")):
+            ax1.plot(v, [r[key] for r in rows], "o-", color=colour, label=label)
+        ax1.plot(v, [rows[0]["default"] * x / v[0] for x in v], ":", color="grey", label="linear in voxels")
+        for key, colour, label in (("default_peak", "tab:blue", "vdb_ewa default"), ("draft_peak", "tab:green", "vdb_ewa draft")):
+            ax2.plot(v, [r[key] for r in rows], "o-", color=colour, label=label)
+        ax2.plot(v, [80e-6 * x for x in v], ":", color="grey", label="80 bytes per voxel")
+        for ax, title in ((ax1, "wall time (s)"), (ax2, "peak memory (MB)")):
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+            ax.set_xlabel("active voxels")
+            ax.set_title(f"{title}, {args.res}")
+            ax.grid(True, alpha=0.3)
+            ax.legend()
+        fig.tight_layout()
+        fig.savefig(args.plot, dpi=110)
+        print(f"# wrote {args.plot}")
+
+
 def plot(rows, path):
     try:
         import matplotlib
@@ -670,6 +753,12 @@ def main():
     sr.add_argument("--quality", default="draft,default")
     sr.add_argument("--repeat", type=int, default=3)
     sr.add_argument("--build", default=os.path.join(ROOT, "build-bench"), help="where bench/roofline is built")
+    sc = sub.add_parser("scaling")
+    sc.add_argument("--res", default="1920x1080")
+    sc.add_argument("--millions", default="0.1,0.3,1,3,10,30,100")
+    sc.add_argument("--peer-max", type=float, default=3.0, help="largest cloud (million voxels) vdb_render renders")
+    sc.add_argument("--keep", default="", help="folder that keeps the generated clouds between runs")
+    sc.add_argument("--plot", default="", help="write the scaling plot (PNG) here")
     sa = sub.add_parser("analytic")
     sa.add_argument("--res", default="320x180")
     sp2 = sub.add_parser("plot")
@@ -679,7 +768,7 @@ def main():
     a = ap.parse_args()
     {"speed": cmd_speed, "sigma": cmd_sigma, "tradeoff": cmd_tradeoff, "targets": cmd_targets,
      "output": cmd_output, "surfaces": cmd_surfaces, "holes": cmd_holes, "plot": cmd_plot, "ladder": cmd_ladder,
-     "analytic": cmd_analytic, "roofline": cmd_roofline}[a.cmd](a)
+     "analytic": cmd_analytic, "roofline": cmd_roofline, "scaling": cmd_scaling}[a.cmd](a)
 
 
 if __name__ == "__main__":

@@ -20,7 +20,7 @@ public:
                                         "sheared (rotated and sheared map) or tiles (constant core as active tiles)")
             ->required();
         mApp->add_option("output", mOutput, "output .vdb file")->required();
-        mApp->add_option("--voxel-size", mVoxelSize, "smallest voxel edge in world units, range [0.01, 2.4] (default: 0.04)");
+        mApp->add_option("--voxel-size", mVoxelSize, "smallest voxel edge in world units, range [0.0025, 2.4]; the cloud has about 40,000 active voxels at 0.04, 8x as many at half the size (default: 0.04)");
     }
 
     CLI::App* subcommand() const override { return mApp; }
