@@ -147,6 +147,7 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     const detail::MemoryBudget budget = budgetFor(g, mSettings);
     const detail::LevelOfDetail lod(g, camera, mSettings.splat.lodPixels);
     detail::KernelSet kernels = detail::extractKernels(g, mSettings, &lod, &progress, &budget);
+    budget.check(double(kernels.kernels.size()), "kernels", detail::kBytesPerKernel);
     // Refined kernels where voxels are large on screen, quasi-interpolating weights for the rest.
     const double alpha = mSettings.splat.prefilter ? detail::quasiInterpolationAlpha(mSettings.splat.kernelSigma) : 0.0;
     openvdb::MaskGrid sampled(false);

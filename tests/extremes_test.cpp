@@ -322,3 +322,27 @@ TEST(Extremes, MemoryBudgetStopsEachStageBeforeItAllocates)
     });
     EXPECT_NE(surfacePairs.find("splat-tile pairs need"), std::string::npos) << surfacePairs;
 }
+
+TEST(Extremes, MemoryBudgetCountsKernelsAfterTheLevelOfDetailMergesThem)
+{
+    // A voxel costs a 32-byte kernel slot until the level of detail has merged its block; only
+    // the kernels left pay the pipeline's 256 bytes. 320,200 voxels: 10 MB of slots, 82 MB as
+    // unmerged kernels, over a 64 MB budget; from far away they merge into a few thousand.
+    const GridSource cloud = makeSampleGrid(SampleGrid::Cloud, 0.02);
+    const Camera far(lookAtCamera(Vec3d(3.0, 1.6, 9.0), Vec3d(0.0), 160, 90), cloud.worldCentre());
+    RenderSettings merged;
+    merged.maxMemory = 64.0 * 1024 * 1024;
+    RenderStats stats;
+    const Image image = Renderer(merged).render(cloud, far, &stats);
+    EXPECT_EQ(stats.activeVoxels, 320200u);
+    EXPECT_LT(stats.kernels * 256, 64u * 1024 * 1024);
+    EXPECT_GT(alphaSum(image), 50.0);
+    RenderSettings unmerged = merged;
+    unmerged.splat.lodPixels = 0.0;
+    try {
+        Renderer(unmerged).render(cloud, far);
+        ADD_FAILURE() << "no BudgetError";
+    } catch (const BudgetError& e) {
+        EXPECT_NE(std::string(e.what()).find("kernels need"), std::string::npos) << e.what();
+    }
+}

@@ -53,7 +53,9 @@ KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& set
     std::vector<std::size_t> offsets(leaves.size() + 1, 0);
     for (std::size_t i = 0; i < leaves.size(); ++i) offsets[i + 1] = offsets[i] + leaves[i]->onVoxelCount();
     set.activeVoxels = offsets.back();
-    if (budget) budget->check(double(offsets.back()), "voxel kernels", kBytesPerKernel);
+    // The slots cost a Kernel each; what the kernels cost further down the pipeline is checked
+    // once the level of detail has merged them (Renderer: kBytesPerKernel a kernel).
+    if (budget) budget->check(double(offsets.back()), "active voxels (kernel slots)", double(sizeof(Kernel)));
     LargeArray<Kernel> voxels(offsets.back(), Kernel{Vec3d(0.0), 0.0f, 1.0f});
     std::vector<std::uint64_t> counts(leaves.size() * 5, 0); // below cutoff, NaN, clamped, merged voxels, merged kernels
     setUnits(progress, leaves.size());
@@ -107,6 +109,8 @@ KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& set
     // Compacted in place (stable: tree order), without a second array of kernels to touch.
     voxels.erase(std::remove_if(voxels.begin(), voxels.end(), [](const Kernel& k) { return !(k.density > 0.0f); }),
         voxels.end());
+    // Where the level of detail merged most voxels, the slots' memory goes back.
+    if (voxels.size() < voxels.capacity() / 2) voxels.shrink_to_fit();
     set.kernels = std::move(voxels);
 
     // Active tiles: a lattice of larger kernels (rule in docs/equations.md#active-tiles).
