@@ -48,14 +48,26 @@ KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& set
     leaves.reserve(tree.leafCount());
     tree.getNodes(leaves);
 
-    // Pass 1: each leaf writes its kernels into its own slot range, one slot per active
-    // voxel (merged blocks need fewer; unused slots keep density 0 and are dropped).
+    // Pass 1: each leaf writes its kernels into its own slot range: one slot per active voxel,
+    // or per block where the level of detail merges blocks of voxels (at most as many as the
+    // leaf's active voxels; unused slots keep density 0 and are dropped).
     std::vector<std::size_t> offsets(leaves.size() + 1, 0);
-    for (std::size_t i = 0; i < leaves.size(); ++i) offsets[i + 1] = offsets[i] + leaves[i]->onVoxelCount();
-    set.activeVoxels = offsets.back();
+    std::vector<int> blockSizes(leaves.size(), 1);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size()), [&](const tbb::blocked_range<std::size_t>& range) {
+        for (std::size_t i = range.begin(); i < range.end(); ++i) {
+            const int block = lod ? lod->blockSize(leaves[i]->origin(), int(LeafT::DIM)) : 1;
+            const std::size_t blocks = std::size_t(LeafT::DIM / block) * std::size_t(LeafT::DIM / block) * std::size_t(LeafT::DIM / block);
+            blockSizes[i] = block;
+            offsets[i + 1] = std::min<std::size_t>(leaves[i]->onVoxelCount(), blocks);
+        }
+    });
+    for (std::size_t i = 0; i < leaves.size(); ++i) {
+        set.activeVoxels += leaves[i]->onVoxelCount();
+        offsets[i + 1] += offsets[i];
+    }
     // The slots cost a Kernel each; what the kernels cost further down the pipeline is checked
     // once the level of detail has merged them (Renderer: kBytesPerKernel a kernel).
-    if (budget) budget->check(double(offsets.back()), "active voxels (kernel slots)", double(sizeof(Kernel)));
+    if (budget) budget->check(double(offsets.back()), "kernel slots", double(sizeof(Kernel)));
     LargeArray<Kernel> voxels(offsets.back(), Kernel{Vec3d(0.0), 0.0f, 1.0f});
     std::vector<std::uint64_t> counts(leaves.size() * 5, 0); // below cutoff, NaN, clamped, merged voxels, merged kernels
     setUnits(progress, leaves.size());
@@ -64,7 +76,7 @@ KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& set
             for (std::size_t i = range.begin(); i < range.end(); ++i) {
                 std::uint64_t* count = &counts[5 * i];
                 const openvdb::Coord origin = leaves[i]->origin();
-                const int block = lod ? lod->blockSize(origin, int(LeafT::DIM)) : 1;
+                const int block = blockSizes[i];
                 const int blocks = int(LeafT::DIM) / block;
                 float sums[LeafT::SIZE] = {}; // per block, used when block > 1
                 std::size_t slot = offsets[i];
