@@ -19,6 +19,8 @@
 #include <OpenEXR/ImfThreading.h>
 #include <Imath/half.h>
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
@@ -126,7 +128,9 @@ public:
         char* base = reinterpret_cast<char*>(const_cast<float*>(data));
         if (type == Imf::HALF) {
             std::vector<half>& h = mHalves.emplace_back(count);
-            std::transform(data, data + count, h.begin(), toHalf);
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1 << 16), [&](const tbb::blocked_range<std::size_t>& r) {
+                std::transform(data + r.begin(), data + r.end(), h.begin() + std::ptrdiff_t(r.begin()), toHalf);
+            });
             base = reinterpret_cast<char*>(h.data());
         }
         for (std::size_t c = 0; c < names.size(); ++c) {

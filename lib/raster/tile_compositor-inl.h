@@ -10,8 +10,7 @@
 /// baseline copy of one inline function). Hence no include guard and no includes: the including
 /// file includes raster/slab_compositor.h, <tbb/parallel_for.h>, <algorithm>, <array>, <cmath>
 /// and <limits> first, outside its namespace. A backend defines TileCompositor<C>'s two inner
-/// loops, rowWeights and flushRow; the scalar ones are the others' test oracle.
-
+/// loops, addRow and flushRow; the scalar ones are the others' test oracle.
 
 /// The slab sweep of one screen tile: a ring of slab accumulators (optical depth, emission
 /// and the passes' source terms per channel and pixel), flushed front to back with the exact
