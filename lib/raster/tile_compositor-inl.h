@@ -34,22 +34,6 @@ public:
           mMoment2(options.light ? std::size_t(ringSize) * kTilePixels : 0, 0.0f),
           mDirty(std::size_t(ringSize))
     {
-        if (options.light) {
-            // Each pixel's ray in light-map coordinates: q(z) = base + z dir, z the slab
-            // coordinate (distance from the eye, or depth for orthographic cameras).
-            const Camera& camera = *options.camera;
-            for (int ly = 0; ly < h; ++ly)
-                for (int lx = 0; lx < w; ++lx) {
-                    Vec3d origin, dir;
-                    camera.worldRay(x0 + lx + 0.5, y0 + ly + 0.5, origin, dir);
-                    const Vec3d base = camera.projection() == Projection::Perspective ? camera.eye() : origin - camera.near() * dir;
-                    const Vec3d q = options.light->coordinates(base), v = options.light->direction(dir);
-                    for (int k = 0; k < 3; ++k) {
-                        mRayBase[k][ly * kTileSize + lx] = q[k];
-                        mRayDir[k][ly * kTileSize + lx] = v[k];
-                    }
-                }
-        }
         for (int c = 0; c < C; ++c) mLightScale[c] = float(options.model->scattered(c, 1.0, 1.0));
         std::fill(std::begin(mT), std::end(mT), 1.0f);
         std::fill(std::begin(mC), std::end(mC), 0.0f);
@@ -86,6 +70,7 @@ public:
     /// @a moments: the position moments of each share in its slab (SplatSet::shareMoments).
     void add(const Splat& s, const float* shares, const float* moments, const float* passSources)
     {
+        if (!mRaysTraced) traceRays();
         // Slabs in front of this splat's first one can receive nothing more: flush them.
         flushBefore(s.firstSlab);
         const int lx0 = std::max(s.x0 - mX0, 0), lx1 = std::min(s.x1 - mX0, mW - 1);
@@ -490,6 +475,27 @@ private:
         }
     }
 
+    /// Each pixel's ray in light-map coordinates, q(z) = base + z dir, z the slab coordinate
+    /// (distance from the eye, or depth for orthographic cameras): at the tile's first splat,
+    /// so tiles without any (the background) skip it.
+    void traceRays()
+    {
+        mRaysTraced = true;
+        if (!mOptions.light) return;
+        const Camera& camera = *mOptions.camera;
+        for (int ly = 0; ly < mH; ++ly)
+            for (int lx = 0; lx < mW; ++lx) {
+                Vec3d origin, dir;
+                camera.worldRay(mX0 + lx + 0.5, mY0 + ly + 0.5, origin, dir);
+                const Vec3d base = camera.projection() == Projection::Perspective ? camera.eye() : origin - camera.near() * dir;
+                const Vec3d q = mOptions.light->coordinates(base), v = mOptions.light->direction(dir);
+                for (int k = 0; k < 3; ++k) {
+                    mRayBase[k][ly * kTileSize + lx] = q[k];
+                    mRayDir[k][ly * kTileSize + lx] = v[k];
+                }
+            }
+    }
+
     /// Pixel p's ray stops: |T|^2 fell below the cutoff.
     void terminate(int p)
     {
@@ -528,6 +534,7 @@ private:
     std::vector<float> mMoment, mMoment2;
     /// Pixel rays in light-map coordinates, base + z dir (z: the slab coordinate), x, y, z apart.
     double mRayBase[3][kTilePixels], mRayDir[3][kTilePixels];
+    bool mRaysTraced = false; ///< traceRays ran
     float mZ[kTilePixels];              ///< Z pass along the ray, +inf until alpha reaches 0.5
     float mTBefore[C];
     float mLightScale[C]; ///< the light's colour x scattering coefficient per unit scattering weight
