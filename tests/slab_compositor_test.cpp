@@ -3,12 +3,13 @@
 ///        the same frames within 1e-5 on random splats (sub-pixel, pixel-sized and
 ///        near-plane-huge footprints, emission, several slabs, every pass and deep samples) and
 ///        on lit renders of the sample cloud (grey and coloured), and bit-identical across
-///        thread counts.
+///        thread counts; each for every SIMD target the CPU has (AVX-512, AVX2), forced in turn.
 #include "fixtures.h"
 
 #include "raster/raster.h"
 
 #include <gtest/gtest.h>
+#include <hwy/targets.h>
 
 #include <algorithm>
 #include <cmath>
@@ -26,6 +27,22 @@ constexpr double kDepthTolerance = 1e-3; // Z pass, world units: 1e-3 of a rando
 bool haveSimd()
 {
     return detail::simdSlabCompositor(1) != nullptr;
+}
+
+/// Run @a check once for each SIMD target this CPU has (Highway's AVX3, i.e. AVX-512, and AVX2),
+/// the backend's dispatch forced to it.
+template <typename Check>
+void forEachSimdTarget(Check&& check)
+{
+    const std::int64_t supported = hwy::SupportedTargets();
+    for (const std::int64_t target : {std::int64_t(HWY_AVX3), std::int64_t(HWY_AVX2)}) {
+        if (!(supported & target)) continue;
+        hwy::SetSupportedTargetsForTest(target);
+        SCOPED_TRACE(hwy::TargetName(target));
+        EXPECT_STREQ(detail::simdTarget(), hwy::TargetName(target));
+        check();
+    }
+    hwy::SetSupportedTargetsForTest(0);
 }
 
 /// @a count random splats in a @a width x @a height image: footprint standard deviations
@@ -159,88 +176,98 @@ std::pair<Frame, Frame> bothBackends(const detail::SplatSet& set, int width, int
 TEST(SlabCompositor, SimdEqualsScalarOnRandomSplats)
 {
     if (!haveSimd()) GTEST_SKIP() << "no SIMD backend on this CPU (Highway target " << detail::simdTarget() << ")";
-    struct Case
-    {
-        const char* name;
-        double sigmaLo, sigmaHi, tauMax;
-        int count;
-    };
-    // Sub-pixel footprints (conics past the scalar path's incremental limit, qa > 16),
-    // pixel-sized ones, and near-plane ones larger than the image.
-    for (const Case& c : {Case{"sub-pixel", 0.1, 0.6, 3.0, 3000}, Case{"pixel-sized", 0.6, 4.0, 1.0, 1500},
-             Case{"huge", 150.0, 2000.0, 0.05, 40}}) {
-        for (const bool coloured : {false, true}) {
-            const detail::SplatSet set = randomSplats(7, c.count, 77, 45, c.sigmaLo, c.sigmaHi, c.tauMax, coloured);
-            const auto [simd, scalar] = bothBackends(set, 77, 45, PassRequest());
-            expectFramesAgree(simd, scalar, std::string(c.name) + (coloured ? " coloured" : " grey"));
-            EXPECT_GT(std::count_if(scalar.beauty.rgba.begin(), scalar.beauty.rgba.end(), [](float v) { return v > 0.01f; }), 100)
-                << c.name; // something was drawn
+    forEachSimdTarget([&] {
+        struct Case
+        {
+            const char* name;
+            double sigmaLo, sigmaHi, tauMax;
+            int count;
+        };
+        // Sub-pixel footprints (conics past the scalar path's incremental limit, qa > 16),
+        // pixel-sized ones, and near-plane ones larger than the image.
+        for (const Case& c : {Case{"sub-pixel", 0.1, 0.6, 3.0, 3000}, Case{"pixel-sized", 0.6, 4.0, 1.0, 1500},
+                 Case{"huge", 150.0, 2000.0, 0.05, 40}}) {
+            for (const bool coloured : {false, true}) {
+                const detail::SplatSet set = randomSplats(7, c.count, 77, 45, c.sigmaLo, c.sigmaHi, c.tauMax, coloured);
+                const auto [simd, scalar] = bothBackends(set, 77, 45, PassRequest());
+                expectFramesAgree(simd, scalar, std::string(c.name) + (coloured ? " coloured" : " grey"));
+                EXPECT_GT(std::count_if(scalar.beauty.rgba.begin(), scalar.beauty.rgba.end(), [](float v) { return v > 0.01f; }), 100)
+                    << c.name; // something was drawn
+            }
         }
-    }
+    });
 }
 
 TEST(SlabCompositor, SimdEqualsScalarInEveryPassAndInDeepSamples)
 {
     if (!haveSimd()) GTEST_SKIP() << "no SIMD backend on this CPU (Highway target " << detail::simdTarget() << ")";
-    PassRequest all;
-    all.depth = all.transmittance = all.shadow = all.emission = all.deep = true;
-    const detail::SplatSet set = randomSplats(11, 1500, 50, 37, 0.4, 3.0, 1.5, true, detail::PassLayout(all).count);
-    const auto [simd, scalar] = bothBackends(set, 50, 37, all);
-    expectFramesAgree(simd, scalar, "all passes");
-    EXPECT_GT(scalar.deep.samples.size(), 1000u);
+    forEachSimdTarget([&] {
+        PassRequest all;
+        all.depth = all.transmittance = all.shadow = all.emission = all.deep = true;
+        const detail::SplatSet set = randomSplats(11, 1500, 50, 37, 0.4, 3.0, 1.5, true, detail::PassLayout(all).count);
+        const auto [simd, scalar] = bothBackends(set, 50, 37, all);
+        expectFramesAgree(simd, scalar, "all passes");
+        EXPECT_GT(scalar.deep.samples.size(), 1000u);
+    });
 }
 
 TEST(SlabCompositor, SimdEqualsScalarWithTheExpTable)
 {
     if (!haveSimd()) GTEST_SKIP() << "no SIMD backend on this CPU (Highway target " << detail::simdTarget() << ")";
-    RenderSettings table;
-    table.splat.expEvaluation = ExpEvaluation::Table;
-    const detail::SplatSet set = randomSplats(5, 800, 40, 30, 0.4, 3.0, 1.0, false);
-    const auto [simd, scalar] = bothBackends(set, 40, 30, PassRequest(), table);
-    expectFramesAgree(simd, scalar, "exp table");
+    forEachSimdTarget([&] {
+        RenderSettings table;
+        table.splat.expEvaluation = ExpEvaluation::Table;
+        const detail::SplatSet set = randomSplats(5, 800, 40, 30, 0.4, 3.0, 1.0, false);
+        const auto [simd, scalar] = bothBackends(set, 40, 30, PassRequest(), table);
+        expectFramesAgree(simd, scalar, "exp table");
+    });
 }
 
 TEST(SlabCompositor, SimdEqualsScalarOnLitRenders)
 {
     // The light per slab sample (light map), grey and coloured, with the passes.
     if (!haveSimd()) GTEST_SKIP() << "no SIMD backend on this CPU (Highway target " << detail::simdTarget() << ")";
-    const GridSource cloud = makeSampleGrid(SampleGrid::Cloud, 0.05);
-    const Camera camera = cloudCamera(cloud, 96, 72);
-    PassRequest passes;
-    passes.depth = passes.shadow = true;
-    for (const bool coloured : {false, true}) {
-        RenderSettings on;
-        if (coloured) {
-            on.light.color = Vec3d(0.9, 0.5, 0.2);
-            on.medium.scatter = Vec3d(1.5, 1.0, 0.5);
+    forEachSimdTarget([&] {
+        const GridSource cloud = makeSampleGrid(SampleGrid::Cloud, 0.05);
+        const Camera camera = cloudCamera(cloud, 96, 72);
+        PassRequest passes;
+        passes.depth = passes.shadow = true;
+        for (const bool coloured : {false, true}) {
+            RenderSettings on;
+            if (coloured) {
+                on.light.color = Vec3d(0.9, 0.5, 0.2);
+                on.medium.scatter = Vec3d(1.5, 1.0, 0.5);
+            }
+            RenderSettings off = on;
+            off.simd = false;
+            for (const PassRequest& p : {PassRequest(), passes}) {
+                RenderStats a, b;
+                const Frame simd = Renderer(on).renderFrame(cloud, camera, p, &a);
+                const Frame scalar = Renderer(off).renderFrame(cloud, camera, p, &b);
+                EXPECT_NE(a.rasterBackend, "scalar");
+                EXPECT_EQ(b.rasterBackend, "scalar");
+                expectFramesAgree(simd, scalar, coloured ? "coloured" : "grey");
+                EXPECT_GT(alphaSum(scalar.beauty), 100.0);
+            }
         }
-        RenderSettings off = on;
-        off.simd = false;
-        for (const PassRequest& p : {PassRequest(), passes}) {
-            RenderStats a, b;
-            const Frame simd = Renderer(on).renderFrame(cloud, camera, p, &a);
-            const Frame scalar = Renderer(off).renderFrame(cloud, camera, p, &b);
-            EXPECT_NE(a.rasterBackend, "scalar");
-            EXPECT_EQ(b.rasterBackend, "scalar");
-            expectFramesAgree(simd, scalar, coloured ? "coloured" : "grey");
-            EXPECT_GT(alphaSum(scalar.beauty), 100.0);
-        }
-    }
+    });
 }
 
 TEST(SlabCompositor, SimdIsBitIdenticalAcrossThreadCounts)
 {
     if (!haveSimd()) GTEST_SKIP() << "no SIMD backend on this CPU (Highway target " << detail::simdTarget() << ")";
-    const GridSource cloud = makeSampleGrid(SampleGrid::Cloud, 0.05);
-    const Camera camera = cloudCamera(cloud, 120, 90);
-    RenderSettings one, two;
-    one.threads = 1;
-    two.threads = 2;
-    one.light.color = two.light.color = Vec3d(0.9, 0.5, 0.2);
-    RenderStats stats;
-    const Image a = Renderer(one).render(cloud, camera, &stats);
-    const Image b = Renderer(two).render(cloud, camera);
-    EXPECT_NE(stats.rasterBackend, "scalar");
-    ASSERT_EQ(a.rgba.size(), b.rgba.size());
-    EXPECT_EQ(std::memcmp(a.rgba.data(), b.rgba.data(), a.rgba.size() * sizeof(float)), 0);
+    forEachSimdTarget([&] {
+        const GridSource cloud = makeSampleGrid(SampleGrid::Cloud, 0.05);
+        const Camera camera = cloudCamera(cloud, 120, 90);
+        RenderSettings one, two;
+        one.threads = 1;
+        two.threads = 2;
+        one.light.color = two.light.color = Vec3d(0.9, 0.5, 0.2);
+        RenderStats stats;
+        const Image a = Renderer(one).render(cloud, camera, &stats);
+        const Image b = Renderer(two).render(cloud, camera);
+        EXPECT_NE(stats.rasterBackend, "scalar");
+        ASSERT_EQ(a.rgba.size(), b.rgba.size());
+        EXPECT_EQ(std::memcmp(a.rgba.data(), b.rgba.data(), a.rgba.size() * sizeof(float)), 0);
+    });
 }

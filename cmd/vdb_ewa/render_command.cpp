@@ -122,7 +122,7 @@ public:
             "without extra samples (default: 1)");
         mApp->add_option("--threads,--cpus", mThreads, "worker threads, 0 = all cores (default: 0)");
         mApp->add_option("--simd", mSimd,
-            "on: the volume rasteriser uses the CPU's vector unit (AVX2 with FMA, detected at run time; images within "
+            "on: the volume rasteriser uses the CPU's vector unit (AVX-512 or AVX2, detected at run time; images within "
             "1e-5 of off); off: one pixel at a time, the reference it is tested against (default: on)");
         mApp->add_option("--max-memory", mMaxMemory,
             "memory budget of a frame in bytes, with an optional K, M, G or T suffix (powers of 1024), range [64M, 1e18]; "

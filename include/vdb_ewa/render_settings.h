@@ -141,8 +141,8 @@ struct VDB_EWA_API RenderSettings
     /// Worker threads: N > 0 runs the render in its own tbb::task_arena of N threads; 0 runs it
     /// in the caller's arena (all cores, unless the host limits TBB). Never process-wide.
     int threads = 0;
-    /// The volume rasteriser's SIMD backend where the CPU has one (AVX2 with FMA, chosen at run
-    /// time; within 1e-5 of the scalar one); false: the scalar backend, its test oracle
+    /// The volume rasteriser's SIMD backend where the CPU has one (AVX-512 or AVX2 with FMA,
+    /// chosen at run time; within 1e-5 of the scalar one); false: the scalar backend, its test oracle
     /// (docs/architecture.md#simd-rasteriser).
     bool simd = true;
     /// Memory budget of one frame's arrays in bytes (kernels, splats, bins, the light map, the

@@ -45,7 +45,7 @@ struct RenderStats
     std::uint64_t splatTilePairsSkipped = 0; ///< pairs skipped because their tile was opaque
     std::uint64_t footprintSamples = 0; ///< fog volumes: footprint weights evaluated (pixels inside a cut-off)
     std::uint64_t slabComposites = 0;   ///< fog volumes: (pixel, slab) samples composited
-    std::string rasterBackend = "scalar"; ///< fog volumes: the slab compositor that ran ("scalar", or the SIMD target: "AVX2")
+    std::string rasterBackend = "scalar"; ///< fog volumes: the slab compositor that ran ("scalar", or the SIMD target: "AVX3" (AVX-512), "AVX2")
     std::vector<std::string> warnings; ///< what was clamped or skipped, one line each
 };
 

@@ -103,12 +103,13 @@ public:
 /// the work).
 std::unique_ptr<SlabCompositor> scalarSlabCompositor(int channels);
 
-/// The SIMD backend for this CPU (Highway's AVX2 target, chosen at run time), carrying
-/// @a channels like scalarSlabCompositor; null where the CPU has no AVX2 and FMA.
+/// The SIMD backend for this CPU (Highway's AVX-512 or AVX2 target, the best the CPU has,
+/// chosen at run time), carrying @a channels like scalarSlabCompositor; null where the CPU has
+/// no AVX2 and FMA.
 std::unique_ptr<SlabCompositor> simdSlabCompositor(int channels);
 
-/// The instruction set simdSlabCompositor uses: Highway's name for it ("AVX2"; "EMU128" or
-/// "SCALAR" where there is no SIMD backend).
+/// The instruction set simdSlabCompositor uses: Highway's name for it ("AVX3" for AVX-512,
+/// "AVX2"; "EMU128" or "SCALAR" where there is no SIMD backend).
 const char* simdTarget();
 
 } // namespace detail
