@@ -80,6 +80,11 @@ inline float slabMeanOfExp(float x)
     return std::abs(x) < 1e-3f ? 1.0f - x * (0.5f - x / 6.0f) : -std::expm1(-x) / x;
 }
 
+/// The least light the slab integrals use: values of the light's transmittance below it count
+/// as it (slabLightIntegral, slabLightTransmittance), and its logarithm floors lightLogRatio's.
+inline constexpr float kLightFloor = 1e-30f;
+inline constexpr float kLogLightFloor = -69.0775528f; ///< ln kLightFloor
+
 /// The light a uniform layer of optical depth @a tau (one channel) scatters towards the eye per
 /// unit scattering weight and light colour, when the light's transmittance along the viewing
 /// ray falls exponentially from @a front at the layer's front by @a logRatio = k =
@@ -92,15 +97,14 @@ inline float slabMeanOfExp(float x)
 /// @a front and in both logarithms behind @a logRatio.
 inline float slabLightIntegral(float tau, float front, float logRatio)
 {
-    return (front > 1e-30f ? front : 1e-30f) * slabMeanOfExp((tau > 0.0f ? tau : 0.0f) + logRatio);
+    return (front > kLightFloor ? front : kLightFloor) * slabMeanOfExp((tau > 0.0f ? tau : 0.0f) + logRatio);
 }
 
 /// ln(front / back) for slabLightIntegral from the logarithms of the light's transmittance at
 /// the layer's front and back (each floored at ln 1e-30).
 inline float lightLogRatio(float logFront, float logBack)
 {
-    constexpr float kLogFloor = -69.0775528f; // ln 1e-30
-    return (logFront > kLogFloor ? logFront : kLogFloor) - (logBack > kLogFloor ? logBack : kLogFloor);
+    return (logFront > kLogLightFloor ? logFront : kLogLightFloor) - (logBack > kLogLightFloor ? logBack : kLogLightFloor);
 }
 
 /// The light transmittance that, used as one value for the whole slab, lights the same layer
@@ -110,7 +114,7 @@ inline float lightLogRatio(float logFront, float logBack)
 /// of the exponential where it is thin.
 inline float slabLightTransmittance(float tau, float front, float back)
 {
-    const float f = front > 1e-30f ? front : 1e-30f, b = back > 1e-30f ? back : 1e-30f;
+    const float f = front > kLightFloor ? front : kLightFloor, b = back > kLightFloor ? back : kLightFloor;
     return slabLightIntegral(tau, f, std::log(f / b)) / slabMeanOfExp(tau > 0.0f ? tau : 0.0f);
 }
 

@@ -72,7 +72,7 @@ inline Floats lightIntegral(Floats tau, Floats front, Floats logRatio)
     const Floats x = hn::Add(hn::Max(tau, hn::Zero(d)), logRatio);
     const Floats series = hn::Sub(hn::Set(d, 1.0f), hn::Mul(x, hn::Sub(hn::Set(d, 0.5f), hn::Div(x, hn::Set(d, 6.0f)))));
     const Floats mean = hn::IfThenElse(hn::Lt(hn::Abs(x), hn::Set(d, 1e-3f)), series, hn::Div(hn::Neg(hn::Expm1(d, hn::Neg(x))), x));
-    return hn::Mul(hn::Max(front, hn::Set(d, 1e-30f)), mean);
+    return hn::Mul(hn::Max(front, hn::Set(d, kLightFloor)), mean);
 }
 
 using IntTag = hn::RebindToSigned<FloatTag>;
@@ -286,7 +286,7 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
             Floats log0[3], log1[3];
             logTransmittances(map, densityDepths(map, mapPoints(map, mRayBase, mRayDir, p, u0, z, thickness)), C, log0);
             logTransmittances(map, densityDepths(map, mapPoints(map, mRayBase, mRayDir, p, u1, z, thickness)), C, log1);
-            const Floats floor = hn::Set(d, -69.0775528f); // ln 1e-30, as lightLogRatio
+            const Floats floor = hn::Set(d, kLogLightFloor); // as lightLogRatio
             for (int c = 0; c < C; ++c) {
                 front[c] = hn::Exp(d, log0[c]);
                 logRatio[c] = hn::Sub(hn::Max(log0[c], floor), hn::Max(log1[c], floor));

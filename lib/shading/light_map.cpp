@@ -228,7 +228,6 @@ std::array<float, 3> LightMap::logTransmittanceOfDepth(float depth) const
     return logT;
 }
 
-
 std::array<float, 3> LightMap::transmittanceOfDepth(float depth) const
 {
     std::array<float, 3> t = logTransmittanceOfDepth(depth);

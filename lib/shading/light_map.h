@@ -191,7 +191,6 @@ inline void LightMap::densityDepths(const Vec3d& q0, const Vec3d& q1, float& d0,
     d1 = depthInCell(c, q1.z);
 }
 
-
 inline float LightMap::greyLogTransmittanceOfDepth(float depth) const
 {
     // |T|^2 = 3 T^2 < cutoff where T < sqrt(cutoff / 3): the floor, in the log domain.
