@@ -29,6 +29,9 @@
                                                          issue 17: time and peak memory against active
                                                          voxels, on the sample cloud made finer
                                                          (make-grid), vdb_render up to --peer-max M
+  bench/bench.py stability [--res 480x270] [--frames 24] [--quality default,draft] [--scenes all]
+                                                         issue 17: frame-to-frame change along an orbit
+                                                         and a dolly of each scene, default against draft
   bench/bench.py holes [--res 640x480] [--only sphere,cube] [--keep DIR]
                                                          issue 16's coverage: IoU and holes against
                                                          vdb_render's hit mask (-shader matte), level
@@ -595,7 +598,7 @@ def cmd_roofline(args):
 CLOUD_VOXELS_AT_004 = 40049  # active voxels of `make-grid cloud --voxel-size 0.04`
 
 
-def timed(cmd):
+def timed_peak(cmd):
     """(wall seconds, peak resident MB, stdout, exit code) of @a cmd, under /usr/bin/time."""
     t0 = time.perf_counter()
     p = subprocess.run(["/usr/bin/time", "-f", "%M", *cmd], capture_output=True, text=True)
@@ -629,14 +632,14 @@ def cmd_scaling(args):
         row = {"voxels": voxels}
         cells = [f"{voxels / 1e6:.2f} M", f"{size:.4f}", f"{made:.1f}" if made else "(kept)"]
         if millions <= args.peer_max:
-            dt, peak, _, code = timed(["vdb_render", path, os.path.join(tmp, "theirs.exr"), "-res", args.res, *cam])
+            dt, peak, _, code = timed_peak(["vdb_render", path, os.path.join(tmp, "theirs.exr"), "-res", args.res, *cam])
             row["vdb_render"] = dt if code == 0 else nan
             cells += [f"{dt:.2f}" if code == 0 else f"exit {code}", f"{peak:.0f}"]
         else:
             row["vdb_render"] = nan
             cells += ["not run", ""]
         for quality in ("default", "draft"):
-            dt, peak, out, code = timed([*EWA_RENDER, path, os.path.join(tmp, "ours.exr"), "-res", args.res, *cam, "--quality", quality, "-v"])
+            dt, peak, out, code = timed_peak([*EWA_RENDER, path, os.path.join(tmp, "ours.exr"), "-res", args.res, *cam, "--quality", quality, "-v"])
             row[quality], row[quality + "_peak"] = (dt, peak) if code == 0 else (nan, nan)
             speed = f"{row['vdb_render'] / dt:.1f}x" if code == 0 and row["vdb_render"] == row["vdb_render"] else ""
             cells += [f"{dt:.2f}" if code == 0 else f"exit {code}", f"{peak:.0f}", f"{peak * 1e6 / voxels:.0f}" if code == 0 else "", speed]
@@ -669,6 +672,88 @@ def cmd_scaling(args):
         fig.tight_layout()
         fig.savefig(args.plot, dpi=110)
         print(f"# wrote {args.plot}")
+
+STABILITY_SCENES = ["smoke", "pyro", "pig", "brain_mri", "cloud (grids/)"]
+
+
+def srgb8(path):
+    """The RGB of an EXR as display values 0-255 (linear sRGB clipped to [0, 1], sRGB curve)."""
+    import numpy as np
+    import OpenImageIO as oiio
+    img = oiio.ImageInput.open(path)
+    px = img.read_image(0, 0, 0, 3, "float")
+    img.close()
+    v = np.clip(np.asarray(px, dtype=np.float64), 0.0, 1.0)
+    return 255.0 * np.where(v <= 0.0031308, 12.92 * v, 1.055 * v ** (1.0 / 2.4) - 0.055)
+
+
+def camera_path(camera, move, frame, frames):
+    """vdb_render camera options of @a frame on an orbit (about the vertical through the look-at
+    point, 1 degree a frame) or a dolly (away from the look-at point, the distance x 2.5 over the
+    frames, geometrically) from the scene's camera."""
+    import math
+    words = camera.split()
+    eye = [float(x) for x in words[words.index("-translate") + 1].split(",")]
+    at = [float(x) for x in words[words.index("-lookat") + 1].split(",")]
+    d = [e - a for e, a in zip(eye, at)]
+    if move == "orbit":
+        t = math.radians(frame)
+        d = [d[0] * math.cos(t) + d[2] * math.sin(t), d[1], -d[0] * math.sin(t) + d[2] * math.cos(t)]
+    else:
+        k = 2.5 ** (frame / (frames - 1))
+        d = [x * k for x in d]
+    e = ",".join(f"{a + x:.6f}" for a, x in zip(at, d))
+    return ["-translate", e, "-lookat", ",".join(f"{a:.6f}" for a in at)]
+
+
+def cmd_stability(args):
+    """Issue 17: temporal stability. Each scene along an orbit and a dolly, frame by frame, in
+    --quality default and draft: the mean and the largest frame-to-frame change of the display
+    values (0-255, sRGB, mean over pixels and RGB). Motion changes every frame; what the level
+    of detail adds shows as draft's change over default's (the target: at most 1.5x), and as
+    flicker: the mean second difference |I(t+1) - 2 I(t) + I(t-1)|, small for smooth motion and
+    large where a frame jumps (popping) or a pattern finer than the motion aliases, and as jumps:
+    the largest change over both its neighbours' changes, max(0, d(t) - max(d(t-1), d(t+1))),
+    0 where the changes rise or fall smoothly (a dolly moves faster than flicker can tell). Frames
+    already in --keep are reused."""
+    import numpy as np
+    tmp = args.keep or tempfile.mkdtemp(prefix="vdb_ewa_stability_")
+    os.makedirs(tmp, exist_ok=True)
+    qualities = args.quality.split(",")
+    only = set(args.scenes.split(",")) if args.scenes != "all" else None
+    print(f"# frame-to-frame change (0-255 display values), {args.frames} frames at {args.res}; orbit 1 degree a frame, "
+          f"dolly 2.5x the distance over the frames")
+    head = " | ".join(f"{q} mean | {q} max | {q} flicker | {q} jump" for q in qualities)
+    print(f"| scene | move | {head} | {' | '.join(f'{q} / {qualities[0]}' for q in qualities[1:])} |")
+    print("|---|---|" + "---|" * (4 * len(qualities) + len(qualities) - 1))
+    # The sample cloud made finer: 1M voxels of about 0.1-0.3 pixels, where the level of detail merges most.
+    generated = os.path.join(tmp, "cloud_1M.vdb")
+    if (not only or "cloud1M" in only) and not os.path.exists(generated):
+        run([EWA, "make-grid", "cloud", generated, "--voxel-size", f"{0.04 * (CLOUD_VOXELS_AT_004 / 1e6) ** (1.0 / 3.0):.6f}"])
+    scenes = [s for s in SCENES if s[0] in STABILITY_SCENES] + [("cloud1M (generated)", generated, SCENES[5][2])]
+    for label, path, camera in scenes:
+        if (only and label.split()[0] not in only) or not os.path.exists(path):
+            continue
+        for move in ("orbit", "dolly"):
+            cells, means = [], []
+            for q in qualities:
+                changes, flicker, frames = [], [], []
+                for f in range(args.frames):
+                    out = os.path.join(tmp, f"{label.split()[0]}_{move}_{q}_{f:03d}.exr")
+                    if not (args.keep and os.path.exists(out)):
+                        run([*EWA_RENDER, path, out, "-res", args.res, *camera_path(camera, move, f, args.frames),
+                             "--quality", q, *args.extra.split()])
+                    frames.append(srgb8(out))
+                    if f >= 1:
+                        changes.append(float(np.mean(np.abs(frames[-1] - frames[-2]))))
+                    if f >= 2:
+                        flicker.append(float(np.mean(np.abs(frames[-1] - 2.0 * frames[-2] + frames[-3]))))
+                        frames.pop(0)
+                means.append(statistics.mean(changes))
+                jump = max(max(0.0, changes[t] - max(changes[t - 1], changes[t + 1])) for t in range(1, len(changes) - 1))
+                cells += [f"{means[-1]:.2f}", f"{max(changes):.2f}", f"{statistics.mean(flicker):.3f}", f"{jump:.3f}"]
+            ratios = [f"{m / means[0]:.2f}x" for m in means[1:]]
+            print(f"| {label} | {move} | {' | '.join(cells)} | {' | '.join(ratios)} |", flush=True)
 
 
 def plot(rows, path):
@@ -759,6 +844,13 @@ def main():
     sc.add_argument("--peer-max", type=float, default=3.0, help="largest cloud (million voxels) vdb_render renders")
     sc.add_argument("--keep", default="", help="folder that keeps the generated clouds between runs")
     sc.add_argument("--plot", default="", help="write the scaling plot (PNG) here")
+    sb = sub.add_parser("stability")
+    sb.add_argument("--res", default="480x270")
+    sb.add_argument("--frames", type=int, default=24)
+    sb.add_argument("--quality", default="default,draft")
+    sb.add_argument("--scenes", default="all", help="comma-separated: smoke,pyro,pig,brain_mri,cloud,cloud1M")
+    sb.add_argument("--extra", default="", help="more vdb_ewa options for every frame")
+    sb.add_argument("--keep", default="", help="folder that keeps the frames")
     sa = sub.add_parser("analytic")
     sa.add_argument("--res", default="320x180")
     sp2 = sub.add_parser("plot")
@@ -768,7 +860,8 @@ def main():
     a = ap.parse_args()
     {"speed": cmd_speed, "sigma": cmd_sigma, "tradeoff": cmd_tradeoff, "targets": cmd_targets,
      "output": cmd_output, "surfaces": cmd_surfaces, "holes": cmd_holes, "plot": cmd_plot, "ladder": cmd_ladder,
-     "analytic": cmd_analytic, "roofline": cmd_roofline, "scaling": cmd_scaling}[a.cmd](a)
+     "analytic": cmd_analytic, "roofline": cmd_roofline, "scaling": cmd_scaling,
+     "stability": cmd_stability}[a.cmd](a)
 
 
 if __name__ == "__main__":

@@ -49,6 +49,7 @@ void RenderSettings::validate() const
     if (splat.tileKernelSpacing < 1 || splat.tileKernelSpacing > 64) fail("tile kernel spacing must be in [1, 64] voxels");
     if (splat.refine < 1 || splat.refine > 4) fail("--refine must be in [1, 4]");
     if (!(splat.lodPixels >= 0.0 && splat.lodPixels <= 64.0)) fail("--lod must be in [0, 64] pixels");
+    if (!(splat.lodError >= 0.0 && splat.lodError <= 1.0)) fail("--lod-error must be in [0, 1] (a difference of transmittance)");
     if (!std::isfinite(surface.isovalue)) fail("--isovalue must be finite");
     if (std::isinf(surface.iso)) fail("--iso must be finite");
     if (!(surface.isoOpacity >= 0.0 && surface.isoOpacity <= 1.0)) fail("--iso-opacity must be in [0, 1]");
@@ -68,6 +69,7 @@ RenderSettings RenderSettings::preset(Quality quality)
         s.shadow.resolution = 2.0;
         s.splat.tileKernelSpacing = 8;
         s.splat.lodPixels = 10.0;
+        s.splat.lodError = 0.25;
         break;
     case Quality::Default:
         break;

@@ -68,7 +68,7 @@ IsoSurface isoSurface(const RenderSettings& settings, const GridSource::Impl& gr
     budget.check(double(grid.activeVoxels), "active voxels (surface kernels)", detail::kBytesPerKernel);
     // Two layers of 5 floats a pixel (colour, coverage, depth) and the depth along each ray.
     budget.check(double(camera.width()) * double(camera.height()), "pixels of the --iso surface's layers", 44.0);
-    const int lattice = detail::LevelOfDetail(grid, camera, settings.splat.lodPixels).surfaceLattice(detail::kMaxSurfaceLattice);
+    const int lattice = detail::LevelOfDetail(grid, camera, settings).surfaceLattice(detail::kMaxSurfaceLattice);
     detail::SurfaceRequest request = detail::levelSetRequest(settings, camera, grid.voxelLength, lattice);
     request.isovalue = settings.surface.iso;
     request.outwardDecreasing = true; // the outside is where the density falls
@@ -117,7 +117,7 @@ void Renderer::renderLevelSet(const GridSource::Impl& grid, const Camera& camera
     const detail::MemoryBudget budget = budgetFor(grid, mSettings);
     budget.check(double(grid.activeVoxels), "active voxels (surface kernels)", detail::kBytesPerKernel);
     // Level of detail: the kernels' lattice spacing projects to at most a quarter of --lod pixels.
-    const int lattice = detail::LevelOfDetail(grid, camera, mSettings.splat.lodPixels).surfaceLattice(detail::kMaxSurfaceLattice);
+    const int lattice = detail::LevelOfDetail(grid, camera, mSettings).surfaceLattice(detail::kMaxSurfaceLattice);
     const detail::SurfaceSet surfaces =
         detail::extractSurfaceKernels(grid, detail::levelSetRequest(mSettings, camera, grid.voxelLength, lattice), &progress);
     stats.kernelSeconds = timer.lap();
@@ -145,7 +145,7 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     StageTimer timer;
     progress.stage(0, 10);
     const detail::MemoryBudget budget = budgetFor(g, mSettings);
-    const detail::LevelOfDetail lod(g, camera, mSettings.splat.lodPixels);
+    const detail::LevelOfDetail lod(g, camera, mSettings);
     detail::KernelSet kernels = detail::extractKernels(g, mSettings, &lod, &progress, &budget);
     budget.check(double(kernels.kernels.size()), "kernels", detail::kBytesPerKernel);
     // Refined kernels where voxels are large on screen, quasi-interpolating weights for the rest.

@@ -31,7 +31,7 @@ detail::KernelSet kernelsOf(const GridSource& source, int n, bool prefilter = tr
     // A camera close enough that every voxel spans many pixels: every voxel is refined.
     CameraSettings cam;
     cam.translate = Vec3d(0.0, 0.0, 10.0);
-    const detail::LevelOfDetail scale(source.impl(), Camera(cam, Vec3d(0.0)), 0.0);
+    const detail::LevelOfDetail scale(source.impl(), Camera(cam, Vec3d(0.0)), s);
     openvdb::MaskGrid sampled(false);
     detail::refineKernels(source.impl(), n, alpha, float(s.cutoff), scale, set, sampled);
     if (alpha > 0.0) detail::quasiInterpolate(source.impl(), alpha, set, &sampled);
@@ -199,7 +199,7 @@ TEST(KernelRefinement, KeepsToItsBudget)
     s.splat.lodPixels = 0.0;
     CameraSettings cam;
     cam.translate = Vec3d(0.8, 0.8, 2.0);
-    const detail::LevelOfDetail scale(ramp.impl(), Camera(cam, Vec3d(0.8)), 0.0);
+    const detail::LevelOfDetail scale(ramp.impl(), Camera(cam, Vec3d(0.8)), s);
     for (const double budget : {1e6, 1e5, 1e3}) {
         detail::KernelSet set = detail::extractKernels(ramp.impl(), s);
         const std::size_t voxels = set.kernels.size();

@@ -341,9 +341,12 @@ TEST(Renderer, ActiveTilesAgreeWithTheirVoxels)
     cam.height = 120;
     cam.translate = Vec3d(0.3, 0.4, 4.0);
     const Camera camera(cam, voxels.worldCentre());
-    const Image reference = Renderer(RenderSettings()).render(voxels, camera);
+    // Without level of detail, which merges the voxelized tiles' leaves but not the tiles.
+    RenderSettings unmerged;
+    unmerged.splat.lodPixels = 0.0;
+    const Image reference = Renderer(unmerged).render(voxels, camera);
     for (int spacing : {1, 2, 4, 8}) {
-        RenderSettings s;
+        RenderSettings s = unmerged;
         s.splat.tileKernelSpacing = spacing;
         const Image img = Renderer(s).render(tiles, camera);
         const double e = rmse(img, reference);

@@ -103,7 +103,8 @@ public:
         mApp->add_option("--precision", mPrecision, "world-to-camera transform and covariances in double or float (default: double)");
         mApp->add_option("--tile-spacing", mTileSpacing, "largest kernel spacing in voxels for active tiles, 1 to voxelise them (default: 4)");
         mApp->add_option("--refine", mRefine, "where voxels span N pixels or more, their kernels on a lattice N times finer: the trilinear field sampled every 1/N voxel, kernels N times narrower, N^3 as many; range [1, 4], 1 = off (default: " + std::to_string(rs.splat.refine) + ")");
-        mApp->add_option("--lod", mLod, "level of detail, pixels in [0, 64]: fog volumes: blocks of 2, 4 or 8 voxels a side become one kernel where the block projects to at most this many pixels; level sets: one surface kernel a 2^3 or 4^3 block of voxels (for each sheet through it) where the block projects to at most a quarter as many; 0 = off (default: " + fmt(rs.splat.lodPixels) + ")");
+        mApp->add_option("--lod", mLod, "level of detail, pixels in [0, 64]: fog volumes: blocks of 2, 4 or 8 voxels a side become one kernel where the block projects to at most this many pixels, each voxel shared between two block sizes continuously with distance (no popping); level sets: one surface kernel a 2^3 or 4^3 block of voxels (for each sheet through it) where the block projects to at most a quarter as many; 0 = off (default: " + fmt(rs.splat.lodPixels) + ")");
+        mApp->add_option("--lod-error", mLodError, "level of detail, fog volumes: a block wider than a pixel merges only where its values are smooth: the transmittance through any depth of it differs by at most this much between its columns; range [0, 1], 1 = by screen size alone (default: " + fmt(rs.splat.lodError) + ", draft 0.25)");
         // Fog volumes with an iso-surface.
         mApp->add_option("--iso", mIso,
             "fog volumes: also render the iso-surface density = VALUE with flattened surface kernels, lit by "
@@ -343,6 +344,7 @@ private:
         if (!mPrecision.empty()) rs.splat.doublePrecision = parseChoice("precision", mPrecision, kPrecisions);
         if (mSlab) rs.splat.slab = *mSlab;
         if (mLod) rs.splat.lodPixels = *mLod;
+        if (mLodError) rs.splat.lodError = *mLodError;
         if (mIsovalue) rs.surface.isovalue = *mIsovalue;
         if (mIso) rs.surface.iso = *mIso;
         if (mIsoOpacity) rs.surface.isoOpacity = *mIsoOpacity;
@@ -389,7 +391,7 @@ private:
                  {"aa", choiceName(rs.splat.antiAliasing, kAntiAliasing)}, {"cutoff-radius", fmt(rs.splat.cutoffRadius)},
                  {"renormalize", choiceName(rs.splat.renormalize, kOnOff)}, {"exp", choiceName(rs.splat.expEvaluation, kExpEvaluations)},
                  {"precision", choiceName(rs.splat.doublePrecision, kPrecisions)}, {"slab", fmt(rs.splat.slab)},
-                 {"tile-spacing", std::to_string(rs.splat.tileKernelSpacing)}, {"refine", std::to_string(rs.splat.refine)}, {"lod", fmt(rs.splat.lodPixels)},
+                 {"tile-spacing", std::to_string(rs.splat.tileKernelSpacing)}, {"refine", std::to_string(rs.splat.refine)}, {"lod", fmt(rs.splat.lodPixels)}, {"lod-error", fmt(rs.splat.lodError)},
                  {"threads", std::to_string(rs.threads)}, {"simd", choiceName(rs.simd, kOnOff)}})
             method.emplace_back(k, v);
         return {cameraGroup, model, method, mOutputOptions.resolved()};
@@ -441,7 +443,7 @@ private:
     std::optional<double> mShadowRes;
     std::optional<double> mIsovalue, mIso, mIsoOpacity;
     std::string mShader, mColor;
-    std::optional<double> mFov, mFocal, mAperture, mFrame, mNear, mFar, mGain, mCutoff, mShadowStep, mStep, mLod;
+    std::optional<double> mFov, mFocal, mAperture, mFrame, mNear, mFar, mGain, mCutoff, mShadowStep, mStep, mLod, mLodError;
     std::optional<double> mKernelSigma, mSurfaceSigma, mLowpass, mCutoffRadius, mSlab;
     int mThreads = 0;
     std::string mSimd;

@@ -56,6 +56,9 @@ struct Medium
     Vec3d scatter{1.5, 1.5, 1.5};     ///< scattering per unit density per voxel length, RGB
     Vec3d emission{0.0, 0.0, 0.0};    ///< self-emission R,G,B per unit density per voxel length (radiance
                                       ///< per unit optical length, like scatter x light colour); 0 = none
+
+    /// Extinction sigma_t = absorb + scatter: optical depth per unit density per voxel length, RGB.
+    Vec3d extinction() const { return absorb + scatter; }
 };
 
 /// One directional light.
@@ -103,9 +106,14 @@ struct SplatOptions
     /// kernelSigma / n (n^3 the kernels; 1 = off; docs/numerics.md#refined-kernels).
     int refine = 1;
     double lodPixels = 2.0;     ///< level of detail: merge blocks of 2^L voxels into one kernel where
-                                ///< the block spacing projects to at most this many pixels (level
-                                ///< sets: one surface kernel a block and sheet, at a quarter of
-                                ///< it); 0 = off
+                                ///< the block spacing projects to at most this many pixels, each
+                                ///< voxel shared between two levels continuously with distance
+                                ///< (level sets: one surface kernel a block and sheet, at a quarter
+                                ///< of it); 0 = off
+    double lodError = 0.05;     ///< level of detail: a block spanning more than a pixel merges only where
+                                ///< the transmittance through any depth of it differs by at most this much
+                                ///< between its columns (values smooth enough), in [0, 1]; 1 = by screen
+                                ///< size alone
 };
 
 /// Surfaces (level-set grids, fog iso-surfaces; docs/equations.md#surface-kernels).

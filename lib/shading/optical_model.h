@@ -18,7 +18,7 @@ public:
     explicit OpticalModel(const RenderSettings& settings)
     {
         for (int c = 0; c < 3; ++c) {
-            mExtinction[c] = settings.medium.absorb[c] + settings.medium.scatter[c];
+            mExtinction[c] = settings.medium.extinction()[c];
             mAlbedo[c] = mExtinction[c] > 0.0 ? settings.light.color[c] * settings.medium.scatter[c] / mExtinction[c] : 0.0;
             mEmitted[c] = mExtinction[c] > 0.0 ? settings.medium.emission[c] / mExtinction[c] : 0.0;
         }

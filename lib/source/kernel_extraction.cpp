@@ -6,6 +6,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <bitset>
 #include <cmath>
 
 namespace vdb_ewa {
@@ -26,6 +27,98 @@ ValueClass classify(float value, float cutoff, float& density)
     return ValueClass::Keep;
 }
 
+using LeafT = openvdb::FloatTree::LeafNodeType;
+static_assert(int(LeafT::DIM) == LevelOfDetail::kLeafDim, "the level of detail's blocks tile a leaf node");
+
+/// A leaf node's values as the level of detail reads them: the sanitised values in offset
+/// order (0 where inactive or skipped) and which voxels are active.
+struct LeafValues
+{
+    float density[LeafT::SIZE];
+    std::bitset<LeafT::SIZE> active;
+};
+
+/// Reads @a leaf into @a out; counts below cutoff, NaN and clamped values into @a count[0..2]
+/// when given.
+void readLeaf(const LeafT& leaf, float cutoff, LeafValues& out, std::uint64_t* count)
+{
+    std::fill_n(out.density, LeafT::SIZE, 0.0f);
+    out.active.reset();
+    for (auto it = leaf.cbeginValueOn(); it; ++it) {
+        const ValueClass vc = classify(*it, cutoff, out.density[it.pos()]);
+        out.active.set(it.pos());
+        if (!count) continue;
+        if (vc == ValueClass::BelowCutoff) ++count[0];
+        if (vc == ValueClass::NotANumber) ++count[1];
+        if (vc == ValueClass::Clamped) ++count[2];
+    }
+}
+
+/// Calls @a f(offset, level, share) for each active voxel of a merged leaf node and each of the
+/// two levels its 2^3 block's continuous level @a levels splits into (LevelOfDetail::split),
+/// where the share is positive.
+template <typename F>
+void forEachShare(const std::bitset<LeafT::SIZE>& active, const float* levels, F&& f)
+{
+    for (int o = 0; o < int(LeafT::SIZE); ++o) {
+        if (!active[o]) continue;
+        const LevelOfDetail::Split v = LevelOfDetail::split(levels[LevelOfDetail::blockOf(o, 1)]);
+        if (v.upper < 1.0) f(o, v.level, 1.0 - v.upper);
+        if (v.upper > 0.0) f(o, v.level + 1, v.upper);
+    }
+}
+
+/// Slots a merged leaf node needs: one a voxel at level 0 and one a block of a higher level
+/// that some active voxel gives a share.
+std::size_t sharedSlots(const std::bitset<LeafT::SIZE>& active, const float* levels)
+{
+    std::size_t voxels = 0;
+    std::bitset<LevelOfDetail::kBlocks> blocks[LevelOfDetail::kMaxLevel + 1];
+    forEachShare(active, levels, [&](int o, int level, double) {
+        if (level == 0) ++voxels;
+        else blocks[level].set(std::size_t(LevelOfDetail::blockOf(o, level)));
+    });
+    for (int l = 1; l <= LevelOfDetail::kMaxLevel; ++l) voxels += blocks[l].count();
+    return voxels;
+}
+
+/// The kernels of a leaf node the level of detail merges, written from @a out on: each voxel's
+/// value goes to its blocks of the two levels of its continuous level @a levels
+/// (LevelOfDetail::blockLevels, split), a block's kernel has the mean of what it received
+/// over its voxels, at its centre, spacing = block size, so that the mass is kept
+/// (docs/equations.md#level-of-detail). Voxels (level 0) first, in offset order, then the
+/// blocks of levels 1 to 3. Counts the active voxels with a share above level 0
+/// (@a mergedVoxels) and the block kernels (@a mergedKernels).
+void shareBetweenLevels(const LeafValues& values, const float* levels, const openvdb::Coord& origin, Kernel* out,
+    std::uint64_t& mergedVoxels, std::uint64_t& mergedKernels)
+{
+    constexpr int kLevels = LevelOfDetail::kMaxLevel + 1;
+    double sums[kLevels][LevelOfDetail::kBlocks] = {}; // what each block of levels 1..3 receives
+    std::bitset<LeafT::SIZE> merged;
+    const Vec3d corner(origin.x(), origin.y(), origin.z());
+    forEachShare(values.active, levels, [&](int o, int level, double share) {
+        if (level > 0) merged.set(std::size_t(o));
+        const double mass = share * double(values.density[o]);
+        if (!(mass > 0.0)) return;
+        if (level == 0) *out++ = {corner + Vec3d(o >> 6, (o >> 3) & 7, o & 7), float(mass), 1.0f};
+        else sums[level][LevelOfDetail::blockOf(o, level)] += mass;
+    });
+    mergedVoxels += merged.count();
+    for (int level = 1; level < kLevels; ++level) {
+        const int block = 1 << level, n = LevelOfDetail::kLeafDim >> level;
+        const double volume = double(block) * block * block;
+        const Vec3d first = corner - 0.5 + 0.5 * double(block);
+        for (int bx = 0; bx < n; ++bx)
+            for (int by = 0; by < n; ++by)
+                for (int bz = 0; bz < n; ++bz) {
+                    const double sum = sums[level][(bx * n + by) * n + bz];
+                    if (!(sum > 0.0)) continue;
+                    *out++ = {first + double(block) * Vec3d(bx, by, bz), float(sum / volume), float(block)};
+                    ++mergedKernels;
+                }
+    }
+}
+
 } // namespace
 
 int tileLatticeSpacing(int tileDim, int maxSpacing)
@@ -39,7 +132,6 @@ int tileLatticeSpacing(int tileDim, int maxSpacing)
 KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& settings, const LevelOfDetail* lod,
     Progress* progress, const MemoryBudget* budget)
 {
-    using LeafT = openvdb::FloatTree::LeafNodeType;
     const openvdb::FloatTree& tree = grid.grid->tree();
     const float cutoff = float(settings.cutoff);
 
@@ -49,21 +141,38 @@ KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& set
     tree.getNodes(leaves);
 
     // Pass 1: each leaf writes its kernels into its own slot range: one slot per active voxel,
-    // or per block where the level of detail merges blocks of voxels (at most as many as the
-    // leaf's active voxels; unused slots keep density 0 and are dropped).
+    // or, where the level of detail merges, per voxel or block given a share (sharedSlots;
+    // unused slots keep density 0 and are dropped). The merged leaves' levels are kept for
+    // pass 2: one float a 2^3 block.
     std::vector<std::size_t> offsets(leaves.size() + 1, 0);
-    std::vector<int> blockSizes(leaves.size(), 1);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size()), [&](const tbb::blocked_range<std::size_t>& range) {
-        for (std::size_t i = range.begin(); i < range.end(); ++i) {
-            const int block = lod ? lod->blockSize(leaves[i]->origin(), int(LeafT::DIM)) : 1;
-            const std::size_t blocks = std::size_t(LeafT::DIM / block) * std::size_t(LeafT::DIM / block) * std::size_t(LeafT::DIM / block);
-            blockSizes[i] = block;
-            offsets[i + 1] = std::min<std::size_t>(leaves[i]->onVoxelCount(), blocks);
-        }
-    });
+    std::vector<std::uint8_t> merges(leaves.size(), 0);
+    std::vector<float> levels;
+    std::vector<std::size_t> levelsAt(leaves.size(), 0);
+    if (lod) {
+        std::vector<LevelOfDetail::NodeLevels> nodes(leaves.size(), LevelOfDetail::NodeLevels{-1.0, -1.0});
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size()), [&](const tbb::blocked_range<std::size_t>& range) {
+            for (std::size_t i = range.begin(); i < range.end(); ++i) {
+                nodes[i] = lod->nodeLevels(leaves[i]->origin(), int(LeafT::DIM));
+                merges[i] = nodes[i].merges();
+            }
+        });
+        std::size_t merged = 0;
+        for (std::size_t i = 0; i < leaves.size(); ++i) levelsAt[i] = merges[i] ? LevelOfDetail::kBlocks * merged++ : 0;
+        if (budget) budget->check(double(merged), "level-of-detail leaf nodes", LevelOfDetail::kBlocks * sizeof(float));
+        levels.resize(LevelOfDetail::kBlocks * merged);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size()), [&](const tbb::blocked_range<std::size_t>& range) {
+            LeafValues values;
+            for (std::size_t i = range.begin(); i < range.end(); ++i) {
+                if (!merges[i]) continue;
+                readLeaf(*leaves[i], cutoff, values, nullptr);
+                lod->blockLevels(values.density, nodes[i], &levels[levelsAt[i]]);
+                offsets[i + 1] = sharedSlots(values.active, &levels[levelsAt[i]]);
+            }
+        });
+    }
     for (std::size_t i = 0; i < leaves.size(); ++i) {
         set.activeVoxels += leaves[i]->onVoxelCount();
-        offsets[i + 1] += offsets[i];
+        offsets[i + 1] = offsets[i] + (merges[i] ? offsets[i + 1] : leaves[i]->onVoxelCount());
     }
     // The slots cost a Kernel each; what the kernels cost further down the pipeline is checked
     // once the level of detail has merged them (Renderer: kBytesPerKernel a kernel).
@@ -73,12 +182,14 @@ KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& set
     setUnits(progress, leaves.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size()),
         [&](const tbb::blocked_range<std::size_t>& range) {
+            LeafValues values;
             for (std::size_t i = range.begin(); i < range.end(); ++i) {
                 std::uint64_t* count = &counts[5 * i];
-                const openvdb::Coord origin = leaves[i]->origin();
-                const int block = blockSizes[i];
-                const int blocks = int(LeafT::DIM) / block;
-                float sums[LeafT::SIZE] = {}; // per block, used when block > 1
+                if (merges[i]) {
+                    readLeaf(*leaves[i], cutoff, values, count);
+                    shareBetweenLevels(values, &levels[levelsAt[i]], leaves[i]->origin(), &voxels[offsets[i]], count[3], count[4]);
+                    continue;
+                }
                 std::size_t slot = offsets[i];
                 for (auto it = leaves[i]->cbeginValueOn(); it; ++it) {
                     float density = 0.0f;
@@ -87,27 +198,8 @@ KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& set
                     if (vc == ValueClass::NotANumber) ++count[1];
                     if (vc == ValueClass::Clamped) ++count[2];
                     const openvdb::Coord c = it.getCoord();
-                    if (block == 1) {
-                        voxels[slot++] = {Vec3d(c.x(), c.y(), c.z()), density, 1.0f};
-                        continue;
-                    }
-                    const int bx = (c.x() - origin.x()) / block, by = (c.y() - origin.y()) / block,
-                              bz = (c.z() - origin.z()) / block;
-                    sums[(bx * blocks + by) * blocks + bz] += density;
-                    ++count[3];
+                    voxels[slot++] = {Vec3d(c.x(), c.y(), c.z()), density, 1.0f};
                 }
-                if (block == 1) continue;
-                // Merged kernel: the block's mean density at its centre (docs/equations.md#level-of-detail).
-                const double volume = double(block) * block * block;
-                const Vec3d first = Vec3d(origin.x(), origin.y(), origin.z()) - 0.5 + 0.5 * double(block);
-                for (int bx = 0; bx < blocks; ++bx)
-                    for (int by = 0; by < blocks; ++by)
-                        for (int bz = 0; bz < blocks; ++bz) {
-                            const float sum = sums[(bx * blocks + by) * blocks + bz];
-                            if (!(sum > 0.0f)) continue;
-                            voxels[slot++] = {first + double(block) * Vec3d(bx, by, bz), float(double(sum) / volume), float(block)};
-                            ++count[4];
-                        }
             }
             advance(progress, range.size());
         });

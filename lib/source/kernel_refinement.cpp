@@ -93,7 +93,8 @@ void sampleVoxel(const openvdb::Coord& ijk, const float (&v)[3][3][3], const Fin
 
 /// Which unit kernels of @a set to refine at @a n (2) and which to keep (1; 0: not a unit
 /// kernel): those of leaf nodes whose voxels span n pixels or more (the fine lattice spans a
-/// pixel or more), where the field is not uniform over the voxel's neighbourhood (there the
+/// pixel or more) and that the level of detail leaves whole (its voxels carry a share of
+/// their values), where the field is not uniform over the voxel's neighbourhood (there the
 /// voxel's own kernel is the field already, to its ripple).
 std::vector<std::uint8_t> chooseRefined(const GridSource::Impl& grid, int n, const LevelOfDetail& scale, const KernelSet& set)
 {
@@ -109,7 +110,7 @@ std::vector<std::uint8_t> chooseRefined(const GridSource::Impl& grid, int n, con
             const openvdb::Coord origin(ijk.x() & ~7, ijk.y() & ~7, ijk.z() & ~7);
             if (origin != node) { // kernels are in tree order: one lookup a node
                 node = origin;
-                large = scale.voxelPixels(origin, 8) >= double(n);
+                large = scale.voxelPixels(origin, 8) >= double(n) && !scale.nodeLevels(origin, 8).merges();
             }
             choice[i] = large && !uniformNeighbourhood(field, ijk) ? 2 : 1;
         }

@@ -58,7 +58,12 @@ std::uint64_t quasiInterpolate(const GridSource::Impl& grid, double alpha, Kerne
                 weights[i] = k.density;
                 if (!isUnitKernel(k)) continue;
                 const openvdb::Coord ijk = voxelOf(k);
-                weights[i] = prefiltered(field, ijk, alpha);
+                // A voxel the level of detail shares with a block carries that share of its
+                // value (kernel_extraction.cpp); its weight and its halo take the same share
+                // (1 exactly elsewhere: the kernel holds the field's value).
+                const float value = field.getValue(ijk);
+                const double share = value > 0.0f ? double(k.density) / double(value) : 1.0;
+                weights[i] = float(share * double(prefiltered(field, ijk, alpha)));
                 for (const openvdb::Coord& d : kFaceNeighbours) {
                     const openvdb::Coord h = ijk + d;
                     // A halo voxel: inactive (active ones have kernels of their own: voxels,
@@ -73,7 +78,7 @@ std::uint64_t quasiInterpolate(const GridSource::Impl& grid, double alpha, Kerne
                         }
                     }
                     if (first != ijk) continue;
-                    const float w = prefiltered(field, h, alpha);
+                    const float w = float(share * double(prefiltered(field, h, alpha)));
                     if (w != 0.0f) halos[c].push_back({Vec3d(h.x(), h.y(), h.z()), w, 1.0f});
                 }
             }
