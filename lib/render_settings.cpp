@@ -70,6 +70,7 @@ RenderSettings RenderSettings::preset(Quality quality)
         s.splat.tileKernelSpacing = 8;
         s.splat.lodPixels = 10.0;
         s.splat.lodError = 0.25;
+        s.splat.taper = true;
         break;
     case Quality::Default:
         break;

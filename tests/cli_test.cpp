@@ -139,7 +139,7 @@ TEST_F(Cli, VerbosePrintsThePresetResolvedWithOverrides)
     const std::string out = mDir.file("out.exr");
     const CliRun draft = runCli(mDir, "render " + mGrid + " " + out + " --res 32x32 -translate 0,0,5 --quality draft -v");
     ASSERT_EQ(draft.code, 0) << draft.err;
-    for (const char* value : {"--cutoff-radius 2 ", "--slab 4 ", "--shadow-res 2", "--tile-spacing 8 ", "--lod 10 ", "--lod-error 0.25 ", "--prefilter on "}) {
+    for (const char* value : {"--cutoff-radius 2 ", "--slab 4 ", "--shadow-res 2", "--tile-spacing 8 ", "--lod 10 ", "--lod-error 0.25 ", "--taper on ", "--prefilter on "}) {
         EXPECT_NE(draft.out.find(value), std::string::npos) << value << " in\n" << draft.out;
     }
     const CliRun over = runCli(mDir, "render " + mGrid + " " + out + " --res 32x32 -translate 0,0,5 --quality draft --lod 0 --prefilter off -v");
@@ -169,6 +169,7 @@ TEST_F(Cli, ArgumentAndOutputErrors)
     expectFailure("render " + mGrid + " " + out + " --aa bilinear", 2, "--aa");
     expectFailure("render " + mGrid + " " + out + " --lod -1", 2, "--lod");
     expectFailure("render " + mGrid + " " + out + " --lod-error 1.5", 2, "--lod-error");
+    expectFailure("render " + mGrid + " " + out + " --taper maybe", 2, "--taper");
     expectFailure("render " + mGrid + " " + out + " --quality fast", 2, "--quality");
     expectFailure("render " + mGrid + " " + out + " --shader phong", 2, "--shader");
     expectFailure("render " + mGrid + " " + out + " --samples 0", 2, "--samples");
@@ -234,7 +235,7 @@ TEST_F(Cli, HelpDocumentsEveryOptionWithItsDefault)
     for (const char* opt : {"--res", "--translate", "--rotate", "--lookat", "--up", "--camera", "--fov", "--focal",
              "--aperture", "--frame", "--near", "--far", "--name", "--absorb", "--scatter", "--light", "--gain",
              "--cutoff", "--shadowstep", "--step", "--kernel-sigma", "--lowpass", "--aa", "--cutoff-radius", "--slab",
-             "--quality", "--exp", "--renormalize", "--prefilter", "--precision", "--tile-spacing", "--refine", "--shadow-res", "--method",
+             "--quality", "--exp", "--renormalize", "--taper", "--prefilter", "--precision", "--tile-spacing", "--refine", "--shadow-res", "--method",
              "--lod", "--lod-error", "--threads", "--max-memory", "--verbose", "--emission", "--ocio-config", "--working-space", "--output-space",
              "--preview", "--display", "--view", "--exr-type", "--compression", "--aov", "--deep", "--isovalue",
              "--shader", "--samples", "--color", "--iso", "--iso-opacity"}) {

@@ -526,6 +526,48 @@ TEST(Renderer, RenormalisationRestoresTheTruncatedMass)
     s.splat.renormalize = false;
     const double off = alphaSum(renderGrid(grid, cam, s));
     EXPECT_NEAR(off / on, 1.0 - std::exp(-2.0), 2e-3);
+    // Tapered (the Gaussian less its value e at the cut-off): 1 - e - e c^2/2 kept, and
+    // restored. A voxel 4x as large: footprints of about 5 pixels, whose pixel sums are their
+    // integrals to 1e-3 (at one pixel they differ by a few percent either way).
+    auto large = makeBoxGrid(openvdb::Coord(0), openvdb::Coord(0), 1.0f, 0.4);
+    s.splat.renormalize = true;
+    const double hard = alphaSum(renderGrid(large, cam, s));
+    s.splat.taper = true;
+    const double tapered = alphaSum(renderGrid(large, cam, s));
+    s.splat.renormalize = false;
+    const double taperedOff = alphaSum(renderGrid(large, cam, s));
+    EXPECT_NEAR(tapered / hard, 1.0, 2e-3);
+    EXPECT_NEAR(taperedOff / tapered, 1.0 - 3.0 * std::exp(-2.0), 2e-3);
+}
+
+TEST(Renderer, TaperedFootprintsChangeContinuouslyAsTheCameraMoves)
+{
+    // Draft's footprints are cut at 2 sigma. Truncated, each ends in a step of exp(-2) = 13.5 %
+    // of its peak, and a pixel centre crossing a step jumps: moving the camera by 1e-4 of the
+    // frame changes some pixel by far more than the motion itself. Tapered, the footprint falls
+    // to 0 at its edge and the change is of the motion's order.
+    const GridSource cloud = makeSampleGrid(SampleGrid::Cloud, 0.05);
+    CameraSettings cam;
+    cam.width = 160;
+    cam.height = 120;
+    cam.translate = Vec3d(0.3, 0.4, 5.0);
+    cam.lookAt = Vec3d(0.0);
+    auto maxDiff = [](const Image& x, const Image& y) {
+        double m = 0.0;
+        for (std::size_t i = 0; i < x.rgba.size(); ++i) m = std::max(m, std::abs(double(x.rgba[i]) - double(y.rgba[i])));
+        return m;
+    };
+    RenderSettings s = RenderSettings::preset(Quality::Draft);
+    CameraSettings moved = cam;
+    moved.translate.x += 1e-4;
+    double change[2];
+    for (const bool taper : {false, true}) {
+        s.splat.taper = taper;
+        const Renderer renderer(s);
+        change[taper] = maxDiff(renderer.render(cloud, Camera(cam, cloud.worldCentre())), renderer.render(cloud, Camera(moved, cloud.worldCentre())));
+    }
+    std::printf("camera moved by 1e-4: largest pixel change %.2e truncated, %.2e tapered\n", change[0], change[1]);
+    EXPECT_LT(change[1], 0.25 * change[0]);
 }
 
 TEST(Renderer, QualityPresetsOrderTheirErrorAgainstTheReference)

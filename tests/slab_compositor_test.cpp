@@ -223,6 +223,20 @@ TEST(SlabCompositor, SimdEqualsScalarWithTheExpTable)
     });
 }
 
+TEST(SlabCompositor, SimdEqualsScalarWithTaperedFootprints)
+{
+    if (!haveSimd()) GTEST_SKIP() << "no SIMD backend on this CPU (Highway target " << detail::simdTarget() << ")";
+    forEachSimdTarget([&] {
+        RenderSettings tapered;
+        tapered.splat.taper = true;
+        const detail::SplatSet set = randomSplats(9, 800, 40, 30, 0.4, 3.0, 1.0, false);
+        const auto [simd, scalar] = bothBackends(set, 40, 30, PassRequest(), tapered);
+        expectFramesAgree(simd, scalar, "tapered");
+        const auto [hard, unused] = bothBackends(set, 40, 30, PassRequest());
+        EXPECT_GT(rmse(hard.beauty, scalar.beauty), 1e-4); // the taper did change the footprints
+    });
+}
+
 TEST(SlabCompositor, SimdEqualsScalarOnLitRenders)
 {
     // The light per slab sample (light map), grey and coloured, with the passes.

@@ -100,6 +100,7 @@ public:
         mApp->add_option("--exp", mExp, "footprint exp(-r/2): incremental (forward differencing), exact or table (default: incremental)");
         mApp->add_option("--prefilter", mPrefilter, "on: quasi-interpolating kernel weights (the Gaussian sum keeps the trilinear field's sharpness; negative halo kernels at its faces); off: each kernel weighs its voxel's value (default: on)");
         mApp->add_option("--renormalize", mRenormalize, "on: divide footprints by the mass kept inside --cutoff-radius; off: keep the truncated mass (default: on)");
+        mApp->add_option("--taper", mTaper, "on: footprints are the Gaussian less its value at --cutoff-radius, falling to 0 at their edge (no step to flicker as they move); off: truncated (default: off, draft on)");
         mApp->add_option("--precision", mPrecision, "world-to-camera transform and covariances in double or float (default: double)");
         mApp->add_option("--tile-spacing", mTileSpacing, "largest kernel spacing in voxels for active tiles, 1 to voxelise them (default: 4)");
         mApp->add_option("--refine", mRefine, "where voxels span N pixels or more, their kernels on a lattice N times finer: the trilinear field sampled every 1/N voxel, kernels N times narrower, N^3 as many; range [1, 4], 1 = off (default: " + std::to_string(rs.splat.refine) + ")");
@@ -338,6 +339,7 @@ private:
         if (mCutoffRadius) rs.splat.cutoffRadius = *mCutoffRadius;
         if (!mExp.empty()) rs.splat.expEvaluation = parseChoice("exp", mExp, kExpEvaluations);
         if (!mRenormalize.empty()) rs.splat.renormalize = parseChoice("renormalize", mRenormalize, kOnOff);
+        if (!mTaper.empty()) rs.splat.taper = parseChoice("taper", mTaper, kOnOff);
         if (!mPrefilter.empty()) rs.splat.prefilter = parseChoice("prefilter", mPrefilter, kOnOff);
         if (mTileSpacing) rs.splat.tileKernelSpacing = *mTileSpacing;
         if (mRefine) rs.splat.refine = *mRefine;
@@ -389,7 +391,7 @@ private:
         }
         for (const auto& [k, v] : Attributes{{"kernel-sigma", fmt(rs.splat.kernelSigma)}, {"prefilter", choiceName(rs.splat.prefilter, kOnOff)}, {"lowpass", fmt(rs.splat.lowpass)},
                  {"aa", choiceName(rs.splat.antiAliasing, kAntiAliasing)}, {"cutoff-radius", fmt(rs.splat.cutoffRadius)},
-                 {"renormalize", choiceName(rs.splat.renormalize, kOnOff)}, {"exp", choiceName(rs.splat.expEvaluation, kExpEvaluations)},
+                 {"renormalize", choiceName(rs.splat.renormalize, kOnOff)}, {"taper", choiceName(rs.splat.taper, kOnOff)}, {"exp", choiceName(rs.splat.expEvaluation, kExpEvaluations)},
                  {"precision", choiceName(rs.splat.doublePrecision, kPrecisions)}, {"slab", fmt(rs.splat.slab)},
                  {"tile-spacing", std::to_string(rs.splat.tileKernelSpacing)}, {"refine", std::to_string(rs.splat.refine)}, {"lod", fmt(rs.splat.lodPixels)}, {"lod-error", fmt(rs.splat.lodError)},
                  {"threads", std::to_string(rs.threads)}, {"simd", choiceName(rs.simd, kOnOff)}})
@@ -438,7 +440,7 @@ private:
 
     CLI::App* mApp = nullptr;
     std::string mInput, mOutput, mName, mRes, mTranslate, mRotate, mLookAt, mUp, mCamera;
-    std::string mAbsorb, mScatter, mEmission, mLight, mAa, mMethod, mQuality, mExp, mRenormalize, mPrefilter, mPrecision;
+    std::string mAbsorb, mScatter, mEmission, mLight, mAa, mMethod, mQuality, mExp, mRenormalize, mTaper, mPrefilter, mPrecision;
     std::optional<int> mTileSpacing, mRefine, mSamples;
     std::optional<double> mShadowRes;
     std::optional<double> mIsovalue, mIso, mIsoOpacity;

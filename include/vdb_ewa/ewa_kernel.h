@@ -51,6 +51,7 @@ struct ProjectionParams
     double lowpass = 1.0;        ///< V^h = lowpass * I, pixels^2
     double cutoffRadius = 3.0;   ///< in standard deviations of the filtered footprint
     bool renormalize = true;     ///< divide the peak by the mass kept inside the cut-off
+    bool taper = false;          ///< the footprint is the Gaussian less its value at the cut-off (SplatOptions::taper)
 };
 
 /// A kernel's screen-space resampling filter rho(p) = peak * exp(-0.5 d^T Q d), d = p - centre.

@@ -97,6 +97,10 @@ struct SplatOptions
     AntiAliasing antiAliasing = AntiAliasing::Floor;
     double cutoffRadius = 3.0;  ///< footprint evaluated where r = d^T Q d < cutoffRadius^2 (in sigma)
     bool renormalize = true;    ///< divide by the mass kept inside the cut-off, 1 - exp(-c^2/2)
+    /// Footprint edge: true = the Gaussian less its value at the cut-off, so that footprints fall
+    /// to 0 at their edge (no step to alias as they move: draft's cut-off of 2 sigma ends in one
+    /// of 13.5 % of the peak); false = truncated (the paper's, Sec. 7.1). Volume splats.
+    bool taper = false;
     ExpEvaluation expEvaluation = ExpEvaluation::Incremental;
     bool doublePrecision = true; ///< world -> camera transform and covariances in double (false: float)
     double slab = 2.0;          ///< image-aligned slab thickness in voxel lengths

@@ -44,6 +44,7 @@ ProjectionParams projectionParams(const Camera& camera, const SplatOptions& spla
     p.lowpass = splat.lowpass;
     p.cutoffRadius = splat.cutoffRadius;
     p.renormalize = splat.renormalize;
+    p.taper = splat.taper;
     return p;
 }
 

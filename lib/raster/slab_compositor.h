@@ -48,6 +48,7 @@ struct CompositeOptions
 {
     float cutoff = 0.0f;
     ExpEvaluation exp = ExpEvaluation::Incremental;
+    bool taper = false; ///< footprints less their value at the cut-off (SplatOptions::taper)
     const ExpTable* table = nullptr;
     SlabGrid slabs;
     PassRequest passes;

@@ -117,6 +117,7 @@ LargeArray<SurfaceSplat> projectSurfaceSplats(const SurfaceSet& set, const Camer
 {
     ProjectionParams params = projectionParams(camera, settings.splat);
     params.cutoffRadius = std::min(params.cutoffRadius, kSurfaceCutoffRadius);
+    params.taper = false; // surface splats are weight-normalised per pixel (Sec. 7.2): their edge is not tapered
     const std::size_t n = set.kernels.size();
     constexpr std::size_t kChunk = 4096;
     const std::size_t chunks = (n + kChunk - 1) / kChunk;

@@ -158,6 +158,7 @@ Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSet
     CompositeOptions options;
     options.cutoff = float(settings.cutoff);
     options.exp = settings.splat.expEvaluation;
+    options.taper = settings.splat.taper;
     options.table = &table;
     options.slabs = set.slabs;
     options.passes = passes;
