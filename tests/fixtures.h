@@ -113,6 +113,14 @@ inline double rmse(const Image& a, const Image& b, int c = -1)
     return std::sqrt(s / double(n));
 }
 
+/// Largest absolute difference of any channel of any pixel.
+inline double maxAbsDiff(const Image& a, const Image& b)
+{
+    double m = 0.0;
+    for (std::size_t i = 0; i < a.rgba.size(); ++i) m = std::max(m, std::abs(double(a.rgba[i]) - double(b.rgba[i])));
+    return m;
+}
+
 /// Path of vdb_render, or empty if it is not installed.
 inline std::string vdbRenderPath()
 {

@@ -219,12 +219,7 @@ TEST(LevelOfDetail, ImagesAreContinuousWithDistance)
     const Image a = renderGrid(grid, before, s), b = renderGrid(grid, after, s);
     s.splat.lodPixels = 0.0;
     const Image c = renderGrid(grid, before, s), d = renderGrid(grid, after, s);
-    auto maxDiff = [](const Image& x, const Image& y) {
-        double m = 0.0;
-        for (std::size_t i = 0; i < x.rgba.size(); ++i) m = std::max(m, std::abs(double(x.rgba[i]) - double(y.rgba[i])));
-        return m;
-    };
-    const double withLod = maxDiff(a, b), without = maxDiff(c, d), levels = maxDiff(a, c);
+    const double withLod = maxAbsDiff(a, b), without = maxAbsDiff(c, d), levels = maxAbsDiff(a, c);
     std::printf("1e-3 of the distance across a level: %.2e with --lod 8, %.2e without; --lod 8 changes the image by %.2e\n",
         withLod, without, levels);
     EXPECT_GT(levels, 0.01); // the level of detail does change the image

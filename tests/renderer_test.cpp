@@ -547,16 +547,7 @@ TEST(Renderer, TaperedFootprintsChangeContinuouslyAsTheCameraMoves)
     // frame changes some pixel by far more than the motion itself. Tapered, the footprint falls
     // to 0 at its edge and the change is of the motion's order.
     const GridSource cloud = makeSampleGrid(SampleGrid::Cloud, 0.05);
-    CameraSettings cam;
-    cam.width = 160;
-    cam.height = 120;
-    cam.translate = Vec3d(0.3, 0.4, 5.0);
-    cam.lookAt = Vec3d(0.0);
-    auto maxDiff = [](const Image& x, const Image& y) {
-        double m = 0.0;
-        for (std::size_t i = 0; i < x.rgba.size(); ++i) m = std::max(m, std::abs(double(x.rgba[i]) - double(y.rgba[i])));
-        return m;
-    };
+    const CameraSettings cam = lookAtCamera(Vec3d(0.3, 0.4, 5.0), Vec3d(0.0), 160, 120);
     RenderSettings s = RenderSettings::preset(Quality::Draft);
     CameraSettings moved = cam;
     moved.translate.x += 1e-4;
@@ -564,7 +555,7 @@ TEST(Renderer, TaperedFootprintsChangeContinuouslyAsTheCameraMoves)
     for (const bool taper : {false, true}) {
         s.splat.taper = taper;
         const Renderer renderer(s);
-        change[taper] = maxDiff(renderer.render(cloud, Camera(cam, cloud.worldCentre())), renderer.render(cloud, Camera(moved, cloud.worldCentre())));
+        change[taper] = maxAbsDiff(renderer.render(cloud, Camera(cam, cloud.worldCentre())), renderer.render(cloud, Camera(moved, cloud.worldCentre())));
     }
     std::printf("camera moved by 1e-4: largest pixel change %.2e truncated, %.2e tapered\n", change[0], change[1]);
     EXPECT_LT(change[1], 0.25 * change[0]);

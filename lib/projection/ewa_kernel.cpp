@@ -108,8 +108,8 @@ void finishFootprint(Sym2 cov, double scale, const ProjectionParams& params, Foo
     const double c2 = params.cutoffRadius * params.cutoffRadius;
     // Mass of the footprint inside the cut-off, as a share of the whole Gaussian's: 1 - e, or,
     // tapered (the Gaussian less e = exp(-c^2/2)), 1 - e - e c^2/2.
-    const double edge = std::exp(-0.5 * c2);
-    const double keptMass = !params.renormalize ? 1.0 : params.taper ? -std::expm1(-0.5 * c2) - 0.5 * c2 * edge : -std::expm1(-0.5 * c2);
+    const double truncated = -std::expm1(-0.5 * c2);
+    const double keptMass = !params.renormalize ? 1.0 : params.taper ? truncated - 0.5 * c2 * std::exp(-0.5 * c2) : truncated;
     const double twoPi = 6.283185307179586476925;
     fp.peak = scale / (twoPi * std::sqrt(detCov) * keptMass);
     fp.halfExtent = {std::sqrt(c2 * cov.xx), std::sqrt(c2 * cov.yy)};

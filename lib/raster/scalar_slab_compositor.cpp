@@ -48,9 +48,8 @@ void TileCompositor<C>::addRow(const Splat& s, const float* shares, const float*
         for (int i = 0; i < n; ++i) weights[i] = mTable->lookup(float(r(dx0 + double(i))));
         break;
     }
-    if (mOptions.taper) {
-        const float edge = std::exp(-0.5f * s.cutoff);
-        for (int i = 0; i < n; ++i) weights[i] = std::max(weights[i] - edge, 0.0f);
+    if (mOptions.taperEdge > 0.0f) {
+        for (int i = 0; i < n; ++i) weights[i] = std::max(weights[i] - mOptions.taperEdge, 0.0f);
     }
     // Spread the row into every slab the kernel overlaps: contiguous, vectorisable.
     forEachPlane(s, shares, moments, passSources, p0, [&](float* plane, float factor) {

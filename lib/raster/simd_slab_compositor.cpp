@@ -198,7 +198,7 @@ void TileCompositor<C>::addRow(const Splat& s, const float* shares, const float*
     const double e0 = double(mX0 + first) + 0.5 - double(s.cx) + qb * dy / qa;
     const double h = std::max((qa * qc - qb * qb) / qa * dy * dy, 0.0);
     const Floats vqa = hn::Set(d, float(qa)), vh = hn::Set(d, float(h)), minusHalf = hn::Set(d, -0.5f);
-    const Floats edge = hn::Set(d, mOptions.taper ? std::exp(-0.5f * s.cutoff) : 0.0f); // SplatOptions::taper
+    const Floats edge = hn::Set(d, mOptions.taperEdge); // SplatOptions::taper
     Floats weights[kTileSize / kLanes];
     for (int v = 0; v < vectors; ++v) {
         const int x = first + v * kLanes;

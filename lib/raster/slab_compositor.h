@@ -48,7 +48,8 @@ struct CompositeOptions
 {
     float cutoff = 0.0f;
     ExpEvaluation exp = ExpEvaluation::Incremental;
-    bool taper = false; ///< footprints less their value at the cut-off (SplatOptions::taper)
+    /// Footprints less this, their value at the cut-off, with SplatOptions::taper (0: truncated).
+    float taperEdge = 0.0f;
     const ExpTable* table = nullptr;
     SlabGrid slabs;
     PassRequest passes;

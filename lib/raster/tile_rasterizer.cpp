@@ -158,7 +158,8 @@ Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSet
     CompositeOptions options;
     options.cutoff = float(settings.cutoff);
     options.exp = settings.splat.expEvaluation;
-    options.taper = settings.splat.taper;
+    // exp(-r/2) at r = s.cutoff, in the float arithmetic the splats' cut-off is kept in.
+    if (settings.splat.taper) options.taperEdge = std::exp(-0.5f * float(settings.splat.cutoffRadius * settings.splat.cutoffRadius));
     options.table = &table;
     options.slabs = set.slabs;
     options.passes = passes;

@@ -27,6 +27,14 @@ ValueClass classify(float value, float cutoff, float& density)
     return ValueClass::Keep;
 }
 
+/// Counts @a vc into @a count: [0] below cutoff, [1] NaN, [2] clamped.
+void tally(ValueClass vc, std::uint64_t* count)
+{
+    if (vc == ValueClass::BelowCutoff) ++count[0];
+    if (vc == ValueClass::NotANumber) ++count[1];
+    if (vc == ValueClass::Clamped) ++count[2];
+}
+
 using LeafT = openvdb::FloatTree::LeafNodeType;
 static_assert(int(LeafT::DIM) == LevelOfDetail::kLeafDim, "the level of detail's blocks tile a leaf node");
 
@@ -47,10 +55,7 @@ void readLeaf(const LeafT& leaf, float cutoff, LeafValues& out, std::uint64_t* c
     for (auto it = leaf.cbeginValueOn(); it; ++it) {
         const ValueClass vc = classify(*it, cutoff, out.density[it.pos()]);
         out.active.set(it.pos());
-        if (!count) continue;
-        if (vc == ValueClass::BelowCutoff) ++count[0];
-        if (vc == ValueClass::NotANumber) ++count[1];
-        if (vc == ValueClass::Clamped) ++count[2];
+        if (count) tally(vc, count);
     }
 }
 
@@ -193,10 +198,7 @@ KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& set
                 std::size_t slot = offsets[i];
                 for (auto it = leaves[i]->cbeginValueOn(); it; ++it) {
                     float density = 0.0f;
-                    const ValueClass vc = classify(*it, cutoff, density);
-                    if (vc == ValueClass::BelowCutoff) ++count[0];
-                    if (vc == ValueClass::NotANumber) ++count[1];
-                    if (vc == ValueClass::Clamped) ++count[2];
+                    tally(classify(*it, cutoff, density), count);
                     const openvdb::Coord c = it.getCoord();
                     voxels[slot++] = {Vec3d(c.x(), c.y(), c.z()), density, 1.0f};
                 }
