@@ -100,6 +100,29 @@ detail::SplatSet randomSplats(std::uint32_t seed, int count, int width, int heig
     return set;
 }
 
+/// Append a round grey splat to @a set: centre (cx, cy), standard deviation @a sigma pixels, peak
+/// optical depth @a tau, in @a slab alone, cut off at 3 sigma inside a @a width x @a height image.
+void addRoundSplat(detail::SplatSet& set, float cx, float cy, double sigma, float tau, std::int64_t slab, int width, int height)
+{
+    detail::Splat s{};
+    s.cx = cx;
+    s.cy = cy;
+    s.qa = s.qc = float(1.0 / (sigma * sigma));
+    s.cutoff = 9.0f;
+    const double h = 3.0 * sigma;
+    s.x0 = std::max(0, int(std::ceil(cx - h - 0.5)));
+    s.x1 = std::min(width - 1, int(std::floor(cx + h - 0.5)));
+    s.y0 = std::max(0, int(std::ceil(cy - h - 0.5)));
+    s.y1 = std::min(height - 1, int(std::floor(cy + h - 0.5)));
+    for (int c = 0; c < 3; ++c) s.tau[c] = s.scatter[c] = s.emission[c] = tau;
+    s.firstSlab = slab;
+    s.slabCount = 1;
+    s.shareOffset = set.shares.size();
+    set.shares.push_back(1.0f);
+    set.shareMoments.insert(set.shareMoments.end(), {0.5f, 0.3f});
+    set.splats.push_back(s);
+}
+
 /// The largest difference between two arrays (relative to max(1, |b|), or absolute), and the
 /// count past the tolerance (non-finite values must match exactly).
 struct Agreement
@@ -284,4 +307,49 @@ TEST(SlabCompositor, SimdIsBitIdenticalAcrossThreadCounts)
         ASSERT_EQ(a.rgba.size(), b.rgba.size());
         EXPECT_EQ(std::memcmp(a.rgba.data(), b.rgba.data(), a.rgba.size() * sizeof(float)), 0);
     });
+}
+
+TEST(SlabCompositor, TerminatedPixelsTakeNoMoreFootprintSamples)
+{
+    // One 16 x 16 tile: an opaque wall over its left half in slab 0, then fog over the whole tile
+    // in slabs 2-21. Behind the wall the fog's footprint rows are cut to the live pixels, so the
+    // fog costs about half its samples and the right half is drawn as without the wall.
+    constexpr int kSize = 16;
+    detail::SplatSet wall, fog, both;
+    for (detail::SplatSet* set : {&wall, &fog, &both}) set->slabs = {0.0, 1.0};
+    for (int y = 0; y < kSize; ++y)
+        for (int x = 0; x < kSize / 2; ++x)
+            for (detail::SplatSet* set : {&wall, &both}) addRoundSplat(*set, float(x) + 0.5f, float(y) + 0.5f, 0.3, 60.0f, 0, kSize, kSize);
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u(0.0f, float(kSize));
+    for (int n = 0; n < 200; ++n) {
+        const float cx = u(rng), cy = u(rng);
+        for (detail::SplatSet* set : {&fog, &both}) addRoundSplat(*set, cx, cy, 2.5, 0.02f, 2 + n % 20, kSize, kSize);
+    }
+    CameraSettings cam;
+    cam.width = cam.height = kSize;
+    const Camera camera(cam, Vec3d(0.0, 0.0, -10.0));
+    for (const bool simd : {false, true}) {
+        if (simd && !haveSimd()) continue;
+        SCOPED_TRACE(simd ? "SIMD" : "scalar");
+        RenderSettings settings;
+        settings.simd = simd;
+        detail::RasterStats wallStats, fogStats, bothStats;
+        detail::rasterizeSplats(wall, camera, settings, PassRequest(), wallStats);
+        const Frame fogFrame = detail::rasterizeSplats(fog, camera, settings, PassRequest(), fogStats);
+        const Frame bothFrame = detail::rasterizeSplats(both, camera, settings, PassRequest(), bothStats);
+        EXPECT_EQ(bothStats.tilesOpaque, 0u); // the tile never turns opaque as a whole
+        const double fogBehindWall = double(bothStats.footprintSamples - wallStats.footprintSamples);
+        EXPECT_LT(fogBehindWall, 0.6 * double(fogStats.footprintSamples));
+        EXPECT_GT(fogBehindWall, 0.4 * double(fogStats.footprintSamples));
+        for (int y = 0; y < kSize; ++y)
+            for (int x = 0; x < kSize; ++x) {
+                const float a = bothFrame.beauty.pixel(x, y)[3];
+                if (x < kSize / 2) {
+                    EXPECT_GT(a, 0.95f) << x << ", " << y;
+                } else {
+                    for (int c = 0; c < 4; ++c) EXPECT_NEAR(bothFrame.beauty.pixel(x, y)[c], fogFrame.beauty.pixel(x, y)[c], 1e-6f) << x << ", " << y;
+                }
+            }
+    }
 }

@@ -42,6 +42,10 @@ public:
         for (int y = 0; y < h; ++y)
             for (int x = 0; x < w; ++x) mAlive[y * kTileSize + x] = 1;
         mAliveCount = w * h;
+        for (int y = 0; y < kTileSize; ++y) {
+            mRowFirst[y] = y < h ? 0 : kTileSize;
+            mRowLast[y] = y < h ? w - 1 : -1;
+        }
         std::fill(std::begin(mSurfacePending), std::end(mSurfacePending), 0);
         std::fill(std::begin(mDeepBack), std::end(mDeepBack), -std::numeric_limits<float>::infinity());
         if (options.surface) {
@@ -61,8 +65,9 @@ public:
     std::uint64_t composites() const { return mComposites; }
 
     /// Add splat @a s's footprint values exp(-r/2) (Sec. 7.1, r = d^T Q d) on tile row @a y, pixels
-    /// x0..x1 (inside its cut-off ellipse), to every slab it overlaps (forEachPlane); what
-    /// terminated pixels receive is never composited. @a k: exp(-qa), for a backend that steps
+    /// x0..x1 (inside its cut-off ellipse, cut to the row's live pixels), to every slab it
+    /// overlaps (forEachPlane); what terminated pixels inside the span receive is never
+    /// composited. @a k: exp(-qa), for a backend that steps
     /// along the row. Defined by each backend.
     void addRow(const Splat& s, const float* shares, const float* moments, const float* passSources, int y, int x0, int x1, float k);
 
@@ -92,8 +97,9 @@ public:
             // Clamped to the tile before the conversion to int (huge footprints).
             const float xFirst = std::max(xc - half, float(mX0 + lx0) - 1.0f);
             const float xLast = std::min(xc + half, float(mX0 + lx1) + 1.0f);
-            const int lxa = std::max(lx0, int(std::ceil(xFirst)) - mX0);
-            const int lxb = std::min(lx1, int(std::floor(xLast)) - mX0);
+            // Terminated pixels at either end of the row never composite again: skipped.
+            const int lxa = std::max({lx0, int(std::ceil(xFirst)) - mX0, mRowFirst[ly]});
+            const int lxb = std::min({lx1, int(std::floor(xLast)) - mX0, mRowLast[ly]});
             if (lxa > lxb) continue;
             addRow(s, shares, moments, passSources, ly, lxa, lxb, kx);
             mSamples += std::uint64_t(lxb - lxa + 1);
@@ -501,6 +507,11 @@ private:
     {
         mAlive[p] = 0;
         --mAliveCount;
+        // The row's span of live pixels shrinks from whichever end p was.
+        const int y = p / kTileSize;
+        const std::uint8_t* row = mAlive + y * kTileSize;
+        while (mRowFirst[y] <= mRowLast[y] && !row[mRowFirst[y]]) ++mRowFirst[y];
+        while (mRowLast[y] >= mRowFirst[y] && !row[mRowLast[y]]) --mRowLast[y];
     }
 
     /// Zero pixel p's accumulators of @a slab (its ring slot is reused).
@@ -544,6 +555,7 @@ private:
     float mT[C * kTilePixels];
     float mC[C * kTilePixels];
     std::uint8_t mAlive[kTilePixels];
+    int mRowFirst[kTileSize], mRowLast[kTileSize]; ///< each row's first and last live pixel (first > last: none)
     std::uint8_t mSurfacePending[kTilePixels]; ///< the pixel's surface is still to be composited
     float mDeepBack[kTilePixels];              ///< the back of the pixel's last deep sample (surfaces only)
     int mAliveCount = 0;
