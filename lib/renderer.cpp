@@ -166,13 +166,13 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
         std::ostringstream w;
         w << "--shadowstep raised from " << mSettings.shadow.step << " to " << light.shadowStep() << " and --shadow-res from "
           << mSettings.shadow.resolution << " to " << light.shadowResolution()
-          << " voxels: the light map would not fit its budget of " << lightPoints << " points";
+          << " voxels: finer shadows would need more than their share of memory (" << lightPoints << " light-map points; raise --max-memory)";
         stats.warnings.push_back(w.str());
     }
     if (refinement.lowered) {
         std::ostringstream w;
-        w << "--refine lowered from " << mSettings.splat.refine << " to " << refinement.n << ": the refined kernels would not fit their budget of "
-          << refinedWithin;
+        w << "--refine lowered from " << mSettings.splat.refine << " to " << refinement.n << ": the refined voxels would need more than their share of memory ("
+          << refinedWithin << " kernels; raise --max-memory)";
         stats.warnings.push_back(w.str());
     }
     progress.stage(35, 45);
@@ -205,16 +205,16 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     if (kernels.activeVoxels == 0 && kernels.activeTiles == 0) stats.warnings.push_back("the grid has no active values: the image is empty");
     if (kernels.notANumber) stats.warnings.push_back(countLine(kernels.notANumber, "NaN voxel values skipped"));
     if (kernels.clamped) stats.warnings.push_back(countLine(kernels.clamped, "voxel values above 1e6 (or +Inf) clamped to 1e6"));
-    if (splats.beforeNear) stats.warnings.push_back(countLine(splats.beforeNear, "kernels with their centre before the near plane skipped"));
-    if (splats.clampedNear) stats.warnings.push_back(countLine(splats.clampedNear, "kernels within 3 sigma of the eye projected as if 3 sigma away (clamped Jacobian)"));
-    if (splats.clampedGrazing) stats.warnings.push_back(countLine(splats.clampedGrazing, "kernels beyond 1.3x the frustum edge projected with the edge's Jacobian"));
+    if (splats.beforeNear) stats.warnings.push_back(countLine(splats.beforeNear, "voxels in front of the near plane left out (lower --near to see them)"));
+    if (splats.clampedNear) stats.warnings.push_back(countLine(splats.clampedNear, "voxels around the camera drawn as if a little further away (the camera is inside the volume; move it out for an exact image)"));
+    if (splats.clampedGrazing) stats.warnings.push_back(countLine(splats.clampedGrazing, "voxels far outside the frame drawn with the perspective of its edge (only the image's border can show it; widen --fov to include them)"));
     if (splats.requestedThickness > 0.0) {
         std::ostringstream w;
-        w << "slab thickness raised from " << splats.requestedThickness << " to " << splats.slabs.thickness
-          << " world units so that no kernel spans more than " << detail::kSlabSpanTarget << " slabs";
+        w << "--slab raised from " << splats.requestedThickness << " to " << splats.slabs.thickness
+          << " world units so that no voxel crosses more than " << detail::kSlabSpanTarget << " depth slabs (a strongly sheared grid transform)";
         stats.warnings.push_back(w.str());
     }
-    if (splats.clippedSpan) stats.warnings.push_back(countLine(splats.clippedSpan, "kernels spanned more than 1024 slabs and were truncated in depth (raise --slab)"));
+    if (splats.clippedSpan) stats.warnings.push_back(countLine(splats.clippedSpan, "voxels crossed more than 1024 depth slabs and were cut short (raise --slab)"));
 }
 
 Image Renderer::render(const GridSource& grid, const Camera& camera, RenderStats* statsOut, Interrupter* interrupter) const

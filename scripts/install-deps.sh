@@ -7,7 +7,7 @@ set -euo pipefail
 packages=(
   cmake g++ make pkg-config
   libopenvdb-dev libboost-iostreams-dev libopenexr-dev libimath-dev libtbb-dev libglm-dev
-  libopencolorio-dev libpng-dev
+  libopencolorio-dev libopenimageio-dev
   libcli11-dev nlohmann-json3-dev libgtest-dev
   libhwy-dev         # Highway: the SIMD rasteriser's per-target code and run-time dispatch
   libopenvdb-tools   # vdb_render: the peer the tests and benchmarks compare against

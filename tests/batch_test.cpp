@@ -47,7 +47,7 @@ bool waitFor(F done, double seconds)
 std::vector<int> percents(const std::string& out)
 {
     std::vector<int> p;
-    static const std::regex line(R"((^|\n)(\d+)% done(?=\n))");
+    static const std::regex line(R"((^|\n)(\d+)% done \((ETA \d+:\d\d, )?peak \d+ MB\)(?=\n))");
     for (auto it = std::sregex_iterator(out.begin(), out.end(), line); it != std::sregex_iterator(); ++it) {
         p.push_back(std::stoi((*it)[2]));
     }
@@ -171,6 +171,12 @@ TEST_F(Batch, SkipExistingResumesAKilledJobWithoutRedoingFinishedFrames)
     EXPECT_EQ(fs::last_write_time(mDir.file("out.0001.exr")), firstTime);
     EXPECT_EQ(slurp(mDir.file("out.0001.exr")), firstBytes);
     for (int f : {2, 3, 4}) EXPECT_GT(alphaSum(readExr(mDir.file("out.000" + std::to_string(f) + ".exr"))), 5.0) << f;
+    // Each frame's line gives its time and the peak memory; the summary counts in English.
+    EXPECT_TRUE(std::regex_search(r.out, std::regex(R"(vdb_ewa: frame 2: \S+out\.0002\.exr \(\d+\.\d\d s, peak \d+ MB\)\n)"))) << r.out;
+    EXPECT_NE(r.out.find("vdb_ewa: 3 frames written, 1 skipped (--skip-existing)"), std::string::npos) << r.out;
+    const CliRun one = runCli(mDir, "render " + mDir.file("smoke.####.vdb") + " " + mDir.file("one.####.exr") +
+        " --frames 2 --res 16x16 -translate 0,0,5 --quality draft");
+    EXPECT_NE(one.out.find("vdb_ewa: 1 frame written, 0 skipped (--skip-existing)"), std::string::npos) << one.out;
 }
 
 TEST_F(Batch, SigtermAndSigintStopCleanlyWithoutOutput)
@@ -189,7 +195,7 @@ TEST_F(Batch, SigtermAndSigintStopCleanlyWithoutOutput)
         const double latency = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         EXPECT_EQ(code, 130) << job.err();
         EXPECT_LT(latency, 1.0);
-        EXPECT_NE(job.err().find("interrupted: 0 of 1 frames written"), std::string::npos) << job.err();
+        EXPECT_NE(job.err().find("interrupted: 0 of 1 frame written"), std::string::npos) << job.err();
         EXPECT_FALSE(fs::exists(out));
         EXPECT_EQ(temporaryFiles(mDir), 0);
         EXPECT_LT(percents(job.out()).back(), 100);

@@ -3,15 +3,19 @@
 ///        file and the problem, a documented non-zero exit, and no output file.
 #include "cli_fixtures.h"
 #include "fixtures.h"
+#include "image_read.h"
 
 #include <gtest/gtest.h>
 
 #include <sys/stat.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
+#include <cstring>
 #include <fstream>
+#include <map>
 #include <random>
 #include <sstream>
 
@@ -44,6 +48,25 @@ protected:
     std::string mGrid;
 };
 
+/// Two image files with the same channels bit for bit and the same attributes, but for the
+/// render time (vdb_ewa/render-seconds).
+void expectSameFile(const std::string& a, const std::string& b)
+{
+    const ImageFile x = readImageFile(a), y = readImageFile(b);
+    ASSERT_EQ(x.spec.nchannels, y.spec.nchannels);
+    ASSERT_GT(x.pixels.size(), 100u);
+    EXPECT_EQ(std::memcmp(x.pixels.data(), y.pixels.data(), x.pixels.size() * sizeof(float)), 0) << a << " and " << b << " differ";
+    const auto attributes = [](const OIIO::ImageSpec& spec) {
+        std::map<std::string, std::string> out;
+        for (const OIIO::ParamValue& p : spec.extra_attribs) {
+            if (p.name() != "vdb_ewa/render-seconds") out[p.name().string()] = p.get_string();
+        }
+        return out;
+    };
+    EXPECT_EQ(attributes(x.spec), attributes(y.spec));
+    EXPECT_TRUE(x.spec.find_attribute("vdb_ewa/render-seconds")) << a;
+}
+
 } // namespace
 
 TEST_F(Cli, RendersAnExr)
@@ -56,6 +79,16 @@ TEST_F(Cli, RendersAnExr)
     EXPECT_EQ(img.height, 48);
     EXPECT_GT(alphaSum(img), 20.0);
     EXPECT_NE(r.out.find("timings (s): load"), std::string::npos);
+    // The header says what a lighter looks for: version, preset, host and render time.
+    const ImageFile file = readImageFile(out);
+    EXPECT_EQ(file.spec.get_string_attribute("Software"), "vdb_ewa " + std::string(versionString()));
+    EXPECT_EQ(file.spec.get_string_attribute("vdb_ewa/quality"), "default");
+    char host[256] = {};
+    ASSERT_EQ(gethostname(host, sizeof host - 1), 0);
+    EXPECT_EQ(file.spec.get_string_attribute("vdb_ewa/host"), host);
+    const double seconds = std::stod(file.spec.get_string_attribute("vdb_ewa/render-seconds", "-1"));
+    EXPECT_GT(seconds, 0.0);
+    EXPECT_LT(seconds, 60.0);
     // -v ends its timings with the process's peak memory: a process that loaded OpenVDB, OCIO
     // and a grid holds more than 5 MB, and this one far less than 5 GB.
     const std::size_t at = r.out.find("peak memory ");
@@ -65,15 +98,176 @@ TEST_F(Cli, RendersAnExr)
     EXPECT_LT(mb, 5000.0);
 }
 
-TEST_F(Cli, OutputIsByteIdenticalForOneAndTwoThreads)
+TEST_F(Cli, VdbRenderCommandLineWorksWithoutASubcommand)
 {
+    // A vdb_render command line as it is: no subcommand, one-dash options, -cpus, -compression.
+    const std::string a = mDir.file("a.exr"), b = mDir.file("b.exr");
+    const std::string options = " -res 64x48 -translate 0,0,5 -absorb 0.2,0.1,0.1 -shadowstep 1 -cpus 1 -compression rle";
+    const CliRun plain = runCli(mDir, mGrid + " " + a + options);
+    ASSERT_EQ(plain.code, 0) << plain.err;
+    ASSERT_EQ(runCli(mDir, "render " + mGrid + " " + b + options).code, 0);
+    EXPECT_GT(alphaSum(readExr(a)), 10.0);
+    expectSameFile(a, b); // the same render as with the subcommand
+    // vdb_render's -version and -help; nothing at all is one line and exit 2.
+    const CliRun version = runCli(mDir, "-version");
+    EXPECT_EQ(version.code, 0);
+    EXPECT_EQ(version.out, "vdb_ewa " + std::string(versionString()) + "\n");
+    const CliRun help = runCli(mDir, "-help");
+    EXPECT_EQ(help.code, 0);
+    for (const char* text : {"--translate", "--shadowstep", "--compression", "make-grid", "one-dash"}) EXPECT_NE(help.out.find(text), std::string::npos) << text;
+    const CliRun none = runCli(mDir, "");
+    EXPECT_EQ(none.code, 2);
+    EXPECT_EQ(none.err, "vdb_ewa: no input or output given: vdb_ewa IN.vdb OUT.exr [options] (see vdb_ewa --help)\n");
+}
+
+TEST_F(Cli, ParseErrorsAreInOurWords)
+{
+    // CLI11's own wording ("The following arguments were not expected", "Could not convert")
+    // rewritten: one line saying what is wrong and how to call vdb_ewa.
+    const std::string out = mDir.file("out.exr");
+    expectFailure(mGrid + " " + out + " --bogus 3", 2, "vdb_ewa: unknown option or one argument too many: 3 --bogus (see vdb_ewa --help)");
+    expectFailure(mGrid + " " + out + " -fov abc", 2, "vdb_ewa: --fov: 'abc' is not a valid value (see vdb_ewa --help)");
+    expectFailure(mGrid + " " + out + " -res", 2, "vdb_ewa: --res needs a value (see vdb_ewa --help)");
+    expectFailure(mGrid, 2, "vdb_ewa: no output given: vdb_ewa IN.vdb OUT.exr [options] (see vdb_ewa --help)");
+    expectFailure("make-grid", 2, "vdb_ewa: no grid kind given: vdb_ewa make-grid KIND OUT.vdb (see vdb_ewa --help)");
+}
+
+TEST_F(Cli, WritesEveryImageFormatByItsExtension)
+{
+    const std::string args = " -res 48x32 -translate 0,0,5 ";
+    const std::string exr = mDir.file("float.exr");
+    ASSERT_EQ(runCli(mDir, mGrid + " " + exr + args + "--exr-type float --output-space lin_rec709").code, 0);
+    const Image beauty = readExr(exr);
+    for (const std::string ext : {"png", "jpg", "tif", "ppm", "hdr"}) {
+        SCOPED_TRACE(ext);
+        const std::string out = mDir.file("out." + ext), preview = mDir.file("preview_" + ext + ".png");
+        const CliRun r = runCli(mDir, mGrid + " " + out + args + "--output-space lin_rec709 --preview " + preview + " -v");
+        ASSERT_EQ(r.code, 0) << r.err;
+        EXPECT_TRUE(r.err.empty()) << r.err;
+        const ImageFile image = readImageFile(out);
+        ASSERT_EQ(image.spec.width, 48);
+        ASSERT_EQ(image.spec.height, 32);
+        ASSERT_EQ(image.spec.nchannels, 3);
+        if (ext == "hdr") {
+            // Float RGB in the output space, over black: the EXR's beauty to RGBE's precision.
+            EXPECT_EQ(image.spec.format, OIIO::TypeDesc::FLOAT);
+            double worst = 0.0;
+            for (std::size_t i = 0; i < 48 * 32; ++i)
+                for (std::size_t c = 0; c < 3; ++c) {
+                    const double v = beauty.rgba[4 * i + c];
+                    worst = std::max(worst, std::abs(image.pixels[3 * i + c] - v) / std::max(v, 1e-3));
+                }
+            EXPECT_LT(worst, 0.01);
+            EXPECT_NE(r.out.find("--output-space \"Linear Rec.709 (sRGB)\""), std::string::npos) << r.out;
+            continue;
+        }
+        // 8-bit: the display transform of the beauty, as the preview (--display, --view).
+        EXPECT_EQ(image.spec.format, OIIO::TypeDesc::UINT8);
+        EXPECT_NE(r.out.find("--display sRGB --view \"ACES 1.0 - SDR Video\""), std::string::npos) << r.out;
+        EXPECT_EQ(r.out.find("--exr-type"), std::string::npos) << r.out;
+        const ImageFile reference = readImageFile(preview);
+        ASSERT_EQ(reference.pixels.size(), image.pixels.size());
+        double worst = 0.0, sum = 0.0;
+        for (std::size_t i = 0; i < image.pixels.size(); ++i) {
+            worst = std::max(worst, double(std::abs(image.pixels[i] - reference.pixels[i])));
+            sum += reference.pixels[i];
+        }
+        EXPECT_LE(worst * 255.0, ext == "jpg" ? 12.0 : 0.0);
+        EXPECT_GT(sum, 10.0); // something was drawn
+        if (ext != "ppm") {
+            EXPECT_EQ(image.spec.get_string_attribute("oiio:ColorSpace"), "sRGB");
+        }
+    }
+}
+
+TEST_F(Cli, ExrOnlyOptionsFailOrWarnOnOtherFormats)
+{
+    const std::string args = mGrid + " " + mDir.file("out.png") + " --res 16x16 -translate 0,0,5 ";
+    for (const auto& [bad, needle] : {std::pair{"--deep", "--deep: "}, {"--aov shadow", "--aov: "}}) {
+        const CliRun r = runCli(mDir, args + bad);
+        EXPECT_EQ(r.code, 2) << bad;
+        EXPECT_NE(r.err.find(needle + mDir.file("out.png") + ": "), std::string::npos) << r.err;
+        EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    }
+    EXPECT_FALSE(std::filesystem::exists(mDir.file("out.png")));
+    const CliRun bmp = runCli(mDir, mGrid + " " + mDir.file("out.bmp") + " --res 16x16");
+    EXPECT_EQ(bmp.code, 2);
+    EXPECT_NE(bmp.err.find("out.bmp: unsupported output format (expected .exr, .png, .jpg, .tif, .ppm or .hdr)"), std::string::npos) << bmp.err;
+    const CliRun display = runCli(mDir, mGrid + " " + mDir.file("out.exr") + " --res 16x16 --display sRGB");
+    EXPECT_EQ(display.code, 2);
+    EXPECT_NE(display.err.find("is scene-referred"), std::string::npos) << display.err;
+    // vdb_render's -compression with a .png: a warning, and the image.
+    const CliRun compressed = runCli(mDir, args + "-compression rle");
+    EXPECT_EQ(compressed.code, 0) << compressed.err;
+    EXPECT_NE(compressed.err.find("--compression applies to .exr files only"), std::string::npos) << compressed.err;
+    EXPECT_TRUE(std::filesystem::exists(mDir.file("out.png")));
+}
+
+TEST_F(Cli, ColourValuesAreLinearSrgbAsVdbRenderMeansThem)
+{
+    // The same coloured command line through vdb_render (converged) and vdb_ewa high, compared
+    // in linear Rec.709 (vdb_render's pixels): the values are read as linear sRGB by default.
+    const std::string colours = " -res 96x64 -translate 0,0,5 -light 0.3,0.3,0,1,0.6,0.3 -scatter 1.5,1.0,0.5 -absorb 0.1,0.2,0.3";
+    const std::string ours = mDir.file("ours.exr"), acescg = mDir.file("acescg.exr"), matrix = mDir.file("matrix.exr");
+    const std::string high = " --quality high --output-space lin_rec709 --exr-type float";
+    ASSERT_EQ(runCli(mDir, mGrid + " " + ours + colours + high).code, 0);
+    // The old reading, the values taken as ACEScg.
+    ASSERT_EQ(runCli(mDir, mGrid + " " + acescg + colours + high + " --input-space ACEScg").code, 0);
+    // The conversion by the published Rec.709 -> ACEScg matrix (Bradford, D65 -> D60), given
+    // in ACEScg: the same image.
+    const double m[3][3] = {{0.6130974, 0.3395231, 0.0473795}, {0.0701937, 0.9163539, 0.0134524}, {0.0206156, 0.1095698, 0.8698147}};
+    const auto toAcescg = [&](double r, double g, double b) {
+        std::ostringstream s;
+        s.precision(9);
+        for (int i = 0; i < 3; ++i) s << (i ? "," : "") << m[i][0] * r + m[i][1] * g + m[i][2] * b;
+        return s.str();
+    };
+    const std::string converted = " -res 96x64 -translate 0,0,5 -light 0.3,0.3,0," + toAcescg(1, 0.6, 0.3) + " -scatter " +
+                                  toAcescg(1.5, 1.0, 0.5) + " -absorb " + toAcescg(0.1, 0.2, 0.3) + " --input-space ACEScg";
+    ASSERT_EQ(runCli(mDir, mGrid + " " + matrix + converted + high).code, 0);
+    EXPECT_LT(maxAbsDiff(readExr(matrix), readExr(ours)), 1e-4);
+
+    const std::string vdbRender = vdbRenderPath();
+    if (vdbRender.empty()) GTEST_SKIP() << "vdb_render is not installed";
+    const std::string theirs = mDir.file("theirs.exr");
+    ASSERT_EQ(std::system((vdbRender + " " + mGrid + " " + theirs + colours + " -step 0.125 -shadowstep 0.375 -cpus 2").c_str()), 0);
+    const Image reference = readExr(theirs);
+    const auto psnr = [&](const std::string& path) { return -20.0 * std::log10(rmse(readExr(path), reference)); };
+    const double now = psnr(ours), before = psnr(acescg);
+    std::printf("coloured light and scattering against vdb_render: %.1f dB (values read as ACEScg: %.1f dB)\n", now, before);
+    EXPECT_GE(now, 38.0);
+    EXPECT_GT(now, before + 5.0);
+}
+
+TEST_F(Cli, GreyValuesStayGreyInEveryInputSpace)
+{
+    // vdb_render's grey defaults convert to the same grey, bit for bit: the renderer keeps its
+    // one-channel path, and default images do not change with --input-space.
+    // (-v prints the working-space values only where they differ from the given ones.)
+    const std::string a = mDir.file("a.exr"), b = mDir.file("b.exr");
+    const CliRun grey = runCli(mDir, mGrid + " " + a + " -res 48x32 -translate 0,0,5 -v");
+    ASSERT_EQ(grey.code, 0) << grey.err;
+    EXPECT_NE(grey.out.find("--input-space \"Linear Rec.709 (sRGB)\""), std::string::npos) << grey.out;
+    EXPECT_EQ(grey.out.find("model in the working space"), std::string::npos) << grey.out;
+    ASSERT_EQ(runCli(mDir, mGrid + " " + b + " -res 48x32 -translate 0,0,5 --input-space ACEScg").code, 0);
+    EXPECT_EQ(maxAbsDiff(readExr(a), readExr(b)), 0.0);
+    const CliRun coloured = runCli(mDir, mGrid + " " + b + " -res 16x16 -translate 0,0,5 -light 0,1,0,1,0,0 -v");
+    EXPECT_NE(coloured.out.find("model in the working space: --absorb 0.1,0.1,0.1 --scatter 1.5,1.5,1.5 --emission 0,0,0 --light colour 0.613"),
+        std::string::npos) << coloured.out;
+    // Outside the working space's gamut (pure ACEScg green in linear Rec.709): a warning, and 0.
+    const CliRun r = runCli(mDir, mGrid + " " + b + " -res 16x16 -translate 0,0,5 --input-space ACEScg --working-space lin_rec709 -light 0,1,0,0,1,0");
+    EXPECT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.err.find("--light colour lies outside the working space"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, OutputIsIdenticalForOneAndTwoThreads)
+{
+    // Every channel bit for bit, and every attribute but the render time.
     const std::string one = mDir.file("one.exr"), two = mDir.file("two.exr");
     const std::string args = " --res 96x64 -translate 1,0.5,4 --kernel-sigma 0.8";
     ASSERT_EQ(runCli(mDir, "render " + mGrid + " " + one + args + " --threads 1").code, 0);
     ASSERT_EQ(runCli(mDir, "render " + mGrid + " " + two + args + " --threads 2").code, 0);
-    const std::string a = slurp(one), b = slurp(two);
-    EXPECT_GT(a.size(), 1000u);
-    EXPECT_TRUE(a == b);
+    expectSameFile(one, two);
 }
 
 TEST_F(Cli, InputErrors)
@@ -181,7 +375,7 @@ TEST_F(Cli, ArgumentAndOutputErrors)
     expectFailure("render " + mGrid + " " + out + " --scatter 1e7", 2, "--scatter must be in [0, 1e6]");
     expectFailure("render " + mGrid + " " + out + " --light 0,1,0,3e38,1,1", 2, "--light colour must be in [0, 1e6]");
     expectFailure("render " + mGrid + " " + out + " --shadowstep 1e-9", 2, "--shadowstep must be finite and >= 0.001");
-    expectFailure("render " + mGrid + " " + mDir.file("out.png"), 2, "unsupported output format");
+    expectFailure("render " + mGrid + " " + mDir.file("out.gif"), 2, "unsupported output format");
     expectFailure("render " + mGrid + " " + mDir.file("no/such/dir/out.exr"), 3, "does not exist");
     // Every error is one line of at most 300 characters, whatever it quotes.
     const CliRun longName = runCli(mDir, "render " + mGrid + " " + out + " --name " + std::string(5000, 'n'));
@@ -237,7 +431,7 @@ TEST_F(Cli, HelpDocumentsEveryOptionWithItsDefault)
              "--cutoff", "--shadowstep", "--step", "--kernel-sigma", "--lowpass", "--aa", "--cutoff-radius", "--slab",
              "--quality", "--exp", "--renormalize", "--taper", "--prefilter", "--precision", "--tile-spacing", "--refine", "--shadow-res", "--method",
              "--lod", "--lod-error", "--threads", "--max-memory", "--verbose", "--emission", "--ocio-config", "--working-space", "--output-space",
-             "--preview", "--display", "--view", "--exr-type", "--compression", "--aov", "--deep", "--isovalue",
+             "--preview", "--display", "--view", "--input-space", "--exr-type", "--compression", "--aov", "--deep", "--isovalue",
              "--shader", "--samples", "--color", "--iso", "--iso-opacity"}) {
         EXPECT_NE(r.out.find(opt), std::string::npos) << opt;
     }
@@ -278,14 +472,14 @@ TEST_F(Cli, OcioConfigPrecedenceAndFallback)
     const std::string args = "render " + mGrid + " " + out + " --res 32x32 -translate 0,0,5 -v ";
     const CliRun shipped = runCli(mDir, args);
     ASSERT_EQ(shipped.code, 0) << shipped.err;
-    EXPECT_NE(shipped.out.find("--ocio-config \"vdb_ewa's shipped config\" --working-space ACEScg"), std::string::npos) << shipped.out;
+    EXPECT_NE(shipped.out.find("--ocio-config \"vdb_ewa's shipped config\" --input-space \"Linear Rec.709 (sRGB)\" --working-space ACEScg"), std::string::npos) << shipped.out;
     EXPECT_TRUE(shipped.err.empty()) << shipped.err;
 
     const std::string config = mDir.file("studio.ocio");
     std::filesystem::copy_file(std::string(VDB_EWA_SOURCE_DIR) + "/share/ocio/config.ocio", config);
     const CliRun env = runCli(mDir, args + "--working-space lin_rec709", config);
     ASSERT_EQ(env.code, 0) << env.err;
-    EXPECT_NE(env.out.find("--ocio-config " + config + " --working-space \"Linear Rec.709 (sRGB)\""), std::string::npos) << env.out;
+    EXPECT_NE(env.out.find("--ocio-config " + config + " --input-space \"Linear Rec.709 (sRGB)\" --working-space \"Linear Rec.709 (sRGB)\""), std::string::npos) << env.out;
 
     for (const std::string& broken : {mDir.file("missing.ocio"), std::string("ocio://studio-config-latest")}) {
         const CliRun r = runCli(mDir, args, broken);

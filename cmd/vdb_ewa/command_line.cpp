@@ -21,16 +21,26 @@ CommandLine::CommandLine() : mApp("vdb_ewa: EWA volume splatting of OpenVDB fog 
 
 Command& CommandLine::parse(std::vector<std::string> args)
 {
-    // vdb_render spells long options with one dash (-translate): accept that too.
+    // vdb_render spells long options with one dash (-translate, -help, -version): accept that too.
     std::set<std::string> longNames;
+    for (const CLI::App* app : {&mApp}) {
+        for (const CLI::Option* opt : app->get_options()) {
+            for (const std::string& n : opt->get_lnames()) longNames.insert(n);
+        }
+    }
     for (const auto& cmd : mCommands) {
         for (const CLI::Option* opt : cmd->subcommand()->get_options()) {
             for (const std::string& n : opt->get_lnames()) longNames.insert(n);
         }
     }
     args = normalizeSingleDashOptions(args, longNames);
+    if (args.empty()) throw CLI::RequiredError("no input or output given: vdb_ewa IN.vdb OUT.exr [options]", CLI::ExitCodes::RequiredError);
+    // vdb_render's command line, `vdb_ewa IN OUT [options]`: without a subcommand it is `render`,
+    // and `vdb_ewa --help` lists render's options, as `vdb_render -help` lists its own.
+    const bool named = std::any_of(mCommands.begin(), mCommands.end(), [&](const auto& cmd) { return cmd->subcommand()->get_name() == args.front(); });
+    if (!named && args.front() != "--version" && args.front() != "--help-all") args.insert(args.begin(), "render");
     // --job FILE: the job's settings go before the command line's, which override them.
-    if (!args.empty() && args.front() == "render") {
+    if (args.front() == "render") {
         std::vector<std::string> rest = applyJobFile({args.begin() + 1, args.end()}, *mCommands.front()->subcommand());
         rest.insert(rest.begin(), "render");
         args = std::move(rest);

@@ -7,6 +7,7 @@
 
 #include <iostream>
 #include <new>
+#include <regex>
 #include <stdexcept>
 
 namespace {
@@ -31,6 +32,26 @@ void printError(const std::exception& e)
     std::cerr << line << "\n";
 }
 
+/// CLI11's parse errors in our words: what is wrong and what to do.
+std::string inOurWords(const CLI::ParseError& e)
+{
+    const std::string what = e.what();
+    std::smatch m;
+    if (dynamic_cast<const CLI::ExtrasError*>(&e)) {
+        const std::size_t colon = what.find(": ");
+        return "unknown option or one argument too many: " + (colon == std::string::npos ? what : what.substr(colon + 2));
+    }
+    if (std::regex_match(what, m, std::regex("Could not convert: (\\S+) = (.*)"))) {
+        return std::string(m[1]) + ": '" + std::string(m[2]) + "' is not a valid value";
+    }
+    if (std::regex_match(what, m, std::regex("(\\S+): \\d+ required \\S+ missing"))) return std::string(m[1]) + " needs a value";
+    if (std::regex_match(what, m, std::regex("(input|output) is required"))) {
+        return "no " + std::string(m[1]) + " given: vdb_ewa IN.vdb OUT.exr [options]";
+    }
+    if (what == "kind is required") return "no grid kind given: vdb_ewa make-grid KIND OUT.vdb";
+    return what;
+}
+
 } // namespace
 
 int main(int argc, char* argv[])
@@ -43,7 +64,7 @@ int main(int argc, char* argv[])
     } catch (const CLI::Success& e) { // --help, --help-all, --version
         return commandLine.app().exit(e);
     } catch (const CLI::ParseError& e) {
-        printError(std::runtime_error(std::string(e.what()) + " (see vdb_ewa --help)"));
+        printError(std::runtime_error(inOurWords(e) + " (see vdb_ewa --help)"));
         return kExitBadArguments;
     } catch (const std::exception& e) { // a --job file's error
         printError(e);

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <sstream>
@@ -46,16 +47,19 @@ void OutputOptions::add(CLI::App* app)
     app->add_option("--ocio-config", mConfigPath,
         "OpenColorIO config file (default: $OCIO, else vdb_ewa's shipped ACES config); an unusable config "
         "is a warning and falls back to the next");
+    app->add_option("--input-space", mInputSpace,
+        "colour space of the colour values given on the command line and in job files (--light colour, --absorb, "
+        "--scatter, --emission): converted to the working space (default: lin_rec709, linear sRGB, what vdb_render's "
+        "values mean)");
     app->add_option("--working-space", mWorkingSpace,
-        "colour space the light, absorb, scatter and emission colours are given and rendered in (default: "
-        "the config's scene_linear role; ACEScg in the shipped config)");
-    app->add_option("--output-space", mOutputSpace, "colour space the EXR holds (default: the working space)");
+        "colour space the render is computed in (default: the config's scene_linear role; ACEScg in the shipped config)");
+    app->add_option("--output-space", mOutputSpace, "colour space of .exr and .hdr outputs (default: the working space)");
     app->add_option("--preview", mPreview, "also write an 8-bit display-referred PNG of the beauty over black");
-    app->add_option("--display", mDisplay, "display of --preview (default: the config's default display)");
-    app->add_option("--view", mView, "view of --preview (default: the display's default view)");
+    app->add_option("--display", mDisplay, "display of 8-bit outputs (.png, .jpg, .tif, .ppm) and --preview (default: the config's default display)");
+    app->add_option("--view", mView, "view of 8-bit outputs and --preview (default: the display's default view)");
     app->add_option("--exr-type", mExrType, "pixel type of the colour channels: half or float; Z is always float (default: half)");
     app->add_option("--compression", mCompression,
-        "EXR compression: " + choiceList(kCompressions) + "; --deep files take none, rle or zips (default: zip, zips for --deep)");
+        "EXR compression: " + choiceList(kCompressions) + "; other formats ignore it (a warning); --deep files take none, rle or zips (default: zip, zips for --deep)");
     app->add_option("--aov", mAov,
         "extra passes as layer.R/G/B channels, comma-separated: transmittance, shadow, emission "
         "(alpha and Z are always written; definitions in docs/output.md)");
@@ -65,12 +69,24 @@ void OutputOptions::add(CLI::App* app)
 
 void OutputOptions::prepare(const std::string& output, const std::string& preview, std::vector<std::string>& warnings)
 {
-    if (!endsWith(output, ".exr")) throw ValueError(output + ": unsupported output format (expected a .exr file)");
+    const std::optional<ImageFormat> format = imageFormatOf(output);
+    if (!format) throw ValueError(output + ": unsupported output format (expected " + imageFormatExtensions() + ")");
+    mFormat = *format;
     mExr.colorType = mExrType.empty() ? ExrPixelType::Half : parseChoice("exr-type", mExrType, kExrTypes);
     mExr.compression = !mCompression.empty() ? parseChoice("compression", mCompression, kCompressions)
                                               : mDeep ? ExrCompression::Zips : ExrCompression::Zip;
     mPasses = parseAovs(mAov);
-    if (mDeep) {
+    if (mFormat != ImageFormat::Exr) {
+        if (mDeep) throw ValueError("--deep: " + output + ": deep samples are written to .exr files only");
+        if (mPasses.transmittance || mPasses.shadow || mPasses.emission) {
+            throw ValueError("--aov: " + output + ": passes are written to .exr files only");
+        }
+        // vdb_render takes -compression whatever the output, and ignores it for .ppm.
+        for (const auto& [name, value] : {std::pair{"--compression", &mCompression}, {"--exr-type", &mExrType}}) {
+            if (!value->empty()) warnings.push_back(std::string(name) + " applies to .exr files only; " + output + " is written without it");
+        }
+        mPasses = PassRequest();
+    } else if (mDeep) {
         if (mPasses.transmittance || mPasses.shadow || mPasses.emission) {
             throw ValueError("--aov passes are flat images; they cannot be written to a --deep file");
         }
@@ -93,34 +109,83 @@ void OutputOptions::prepare(const std::string& output, const std::string& previe
         if (mConfig->isData(*space)) throw ValueError("colour space '" + *space + "' is a data space; renders need a colour space");
     }
     ColorTransform::between(*mConfig, mWorkingSpace, mOutputSpace); // fails now, not after the render
+    if (mInputSpace.empty()) {
+        // vdb_render's colour values are linear sRGB: the config's name for it, if it has one.
+        for (const char* name : {"lin_rec709", "Linear Rec.709 (sRGB)", "lin_srgb", "Utility - Linear - sRGB", "linear"}) {
+            try {
+                mInputSpace = mConfig->colorSpace(name);
+                break;
+            } catch (const ValueError&) {
+            }
+        }
+        if (mInputSpace.empty()) {
+            warnings.push_back(mConfig->origin() + " has no linear Rec.709 colour space: colour values are taken in the working space " +
+                               mWorkingSpace + " (--input-space chooses)");
+            mInputSpace = mWorkingSpace;
+        }
+    } else {
+        mInputSpace = mConfig->colorSpace(mInputSpace);
+    }
+    if (mConfig->isData(mInputSpace)) throw ValueError("--input-space '" + mInputSpace + "' is a data space; colour values need a colour space");
+    mInputToWorking = ColorTransform::between(*mConfig, mInputSpace, mWorkingSpace);
     std::string how;
     mExr.chromaticities = chromaticitiesOf(*mConfig, mOutputSpace, &how);
     if (!mExr.chromaticities) warnings.push_back("no chromaticities attribute written (" + how + ")");
 
-    if (!mPreview.empty()) {
-        if (!endsWith(preview, ".png")) throw ValueError(preview + ": --preview writes a .png file");
+    if (!mPreview.empty() && !endsWith(preview, ".png")) throw ValueError(preview + ": --preview writes a .png file");
+    if (!mPreview.empty() || isDisplayReferred(mFormat)) {
         if (mDisplay.empty()) mDisplay = mConfig->defaultDisplay();
         if (mView.empty()) mView = mConfig->defaultView(mDisplay);
-        mConfig->checkDisplayView(mDisplay, mView);
-        checkOutputWritable(preview);
+        mDisplaySpace = mConfig->displayColorSpace(mDisplay, mView);
+        if (!mPreview.empty()) checkOutputWritable(preview);
     } else if (!mDisplay.empty() || !mView.empty()) {
-        throw ValueError("--display and --view choose the --preview transform; give --preview OUT.png");
+        throw ValueError("--display and --view choose the transform of 8-bit outputs (.png, .jpg, .tif, .ppm) and --preview; " +
+                         output + " is scene-referred");
     }
     checkOutputWritable(output);
 }
 
+void OutputOptions::toWorkingSpace(RenderSettings& rs, std::vector<std::string>& warnings) const
+{
+    const auto convert = [&](const char* option, Vec3d& value) {
+        const Vec3d c = mInputToWorking->apply(value);
+        const auto near = [](double a, double b) { return std::abs(a - b) <= 1e-5 * std::max(std::abs(b), 1e-30); };
+        if (value.x == value.y && value.y == value.z) {
+            // Grey stays exactly grey: the renderer composites grey media in one channel.
+            if (near(c.x, value.x) && near(c.y, value.x) && near(c.z, value.x)) return;
+            if (near(c.x, c.y) && near(c.z, c.y)) {
+                value = Vec3d((c.x + c.y + c.z) / 3.0);
+                return;
+            }
+        }
+        value = c;
+        if (c.x < 0.0 || c.y < 0.0 || c.z < 0.0) {
+            warnings.push_back(std::string(option) + " lies outside the working space " + mWorkingSpace +
+                               ": its negative components are taken as 0 (--input-space, --working-space)");
+            value = Vec3d(std::max(c.x, 0.0), std::max(c.y, 0.0), std::max(c.z, 0.0));
+        }
+    };
+    convert("--light colour", rs.light.color);
+    convert("--absorb", rs.medium.absorb);
+    convert("--scatter", rs.medium.scatter);
+    convert("--emission", rs.medium.emission);
+}
+
 Attributes OutputOptions::resolved() const
 {
-    Attributes a{{"ocio-config", mConfig ? mConfig->origin() : std::string()}, {"working-space", mWorkingSpace},
-        {"output-space", mOutputSpace}, {"exr-type", choiceName(mExr.colorType, kExrTypes)},
-        {"compression", choiceName(mExr.compression, kCompressions)}};
-    std::string aov;
-    for (const auto& [on, name] : {std::pair{mPasses.transmittance, "transmittance"}, {mPasses.shadow, "shadow"}, {mPasses.emission, "emission"}}) {
-        if (on) aov += (aov.empty() ? "" : ",") + std::string(name);
+    Attributes a{{"ocio-config", mConfig ? mConfig->origin() : std::string()}, {"input-space", mInputSpace}, {"working-space", mWorkingSpace}};
+    if (!isDisplayReferred(mFormat)) a.emplace_back("output-space", mOutputSpace);
+    if (mFormat == ImageFormat::Exr) {
+        a.emplace_back("exr-type", choiceName(mExr.colorType, kExrTypes));
+        a.emplace_back("compression", choiceName(mExr.compression, kCompressions));
+        std::string aov;
+        for (const auto& [on, name] : {std::pair{mPasses.transmittance, "transmittance"}, {mPasses.shadow, "shadow"}, {mPasses.emission, "emission"}}) {
+            if (on) aov += (aov.empty() ? "" : ",") + std::string(name);
+        }
+        a.emplace_back("aov", aov.empty() ? "none" : aov);
+        a.emplace_back("deep", mDeep ? "on" : "off");
     }
-    a.emplace_back("aov", aov.empty() ? "none" : aov);
-    a.emplace_back("deep", mDeep ? "on" : "off");
-    if (!mPreview.empty()) {
+    if (!mPreview.empty() || isDisplayReferred(mFormat)) {
         a.emplace_back("display", mDisplay);
         a.emplace_back("view", mView);
     }
@@ -144,13 +209,20 @@ void OutputOptions::refuseInputs(const std::string& output, const std::string& p
 void OutputOptions::write(Frame& frame, const Camera& camera, const std::string& output, const std::string& preview,
     const Attributes& attributes) const
 {
-    // The preview reads the working-space beauty: keep a copy for it, and write the EXR, the
-    // main output, first.
+    // The main output first. The preview reads the working-space beauty, which the EXR and .hdr
+    // writers convert in place: keep a copy for it.
     const Image workingBeauty = preview.empty() ? Image() : frame.beauty;
-    writeExrInOutputSpace(frame, camera, output, attributes);
-    if (!preview.empty()) {
-        writePreviewPng(workingBeauty, ColorTransform::toDisplay(*mConfig, mWorkingSpace, mDisplay, mView), preview);
+    std::optional<ColorTransform> toDisplay;
+    if (!preview.empty() || isDisplayReferred(mFormat)) toDisplay = ColorTransform::toDisplay(*mConfig, mWorkingSpace, mDisplay, mView);
+    if (mFormat == ImageFormat::Exr) {
+        writeExrInOutputSpace(frame, camera, output, attributes);
+    } else if (isDisplayReferred(mFormat)) {
+        writeImage(frame.beauty, output, &*toDisplay, {mDisplaySpace, attributes});
+    } else {
+        ColorTransform::between(*mConfig, mWorkingSpace, mOutputSpace).applyPremultiplied(frame.beauty.rgba.data(), frame.beauty.rgba.size() / 4);
+        writeImage(frame.beauty, output, nullptr, {mOutputSpace, attributes});
     }
+    if (!preview.empty()) writeImage(workingBeauty, preview, &*toDisplay, {mDisplaySpace, attributes});
 }
 
 void OutputOptions::writeExrInOutputSpace(Frame& frame, const Camera& camera, const std::string& output,

@@ -1,6 +1,7 @@
 /// @file output_options.h
-/// @brief The render command's output stage: colour management (OCIO), EXR type and
-///        compression, passes, deep output and the PNG preview (docs/output.md).
+/// @brief The render command's output stage: the image format by the output's extension,
+///        colour management (OCIO), EXR type and compression, passes, deep output and the PNG
+///        preview (docs/output.md).
 #pragma once
 
 #include <vdb_ewa/vdb_ewa.h>
@@ -19,8 +20,8 @@ using Attributes = std::vector<std::pair<std::string, std::string>>;
 class OutputOptions
 {
 public:
-    /// Register --ocio-config, --working-space, --output-space, --display, --view, --preview,
-    /// --exr-type, --compression, --aov and --deep on @a app.
+    /// Register --ocio-config, --input-space, --working-space, --output-space, --display,
+    /// --view, --preview, --exr-type, --compression, --aov and --deep on @a app.
     void add(CLI::App* app);
 
     /// Everything that can fail before rendering: the config (warnings for fallbacks), the
@@ -31,6 +32,12 @@ public:
 
     /// --preview as given (it may hold a frame pattern); empty without one.
     const std::string& previewOption() const { return mPreview; }
+
+    /// Convert the colour values of @a rs (the --light colour, --absorb, --scatter, --emission)
+    /// from --input-space to the working space (after prepare). A grey value the conversion
+    /// leaves grey stays bit for bit what it was; components outside the working space's gamut
+    /// (negative) become 0, with a line in @a warnings.
+    void toWorkingSpace(RenderSettings& rs, std::vector<std::string>& warnings) const;
 
     /// The passes the EXR will hold.
     PassRequest passes() const { return mPasses; }
@@ -44,8 +51,9 @@ public:
     /// @throw ValueError naming the output and the input.
     void refuseInputs(const std::string& output, const std::string& preview, std::vector<std::string> inputs) const;
 
-    /// Convert @a frame from the working to the output space and write the EXR (flat or deep),
-    /// then the preview @a preview (empty: none). @a attributes are added to the EXR header.
+    /// Write @a frame to @a output in its format: an EXR (flat or deep) or .hdr converted from
+    /// the working to the output space, an 8-bit image through --display and --view; then the
+    /// preview @a preview (empty: none). @a attributes are added to the file's metadata.
     void write(Frame& frame, const Camera& camera, const std::string& output, const std::string& preview,
         const Attributes& attributes) const;
 
@@ -53,10 +61,13 @@ private:
     void writeExrInOutputSpace(Frame& frame, const Camera& camera, const std::string& output,
         const Attributes& attributes) const;
 
-    std::string mConfigPath, mWorkingSpace, mOutputSpace, mDisplay, mView, mPreview, mExrType, mCompression, mAov;
+    std::string mConfigPath, mInputSpace, mWorkingSpace, mOutputSpace, mDisplay, mView, mPreview, mExrType, mCompression, mAov;
     bool mDeep = false;
+    ImageFormat mFormat = ImageFormat::Exr; ///< the output's, by its extension
+    std::string mDisplaySpace;              ///< what --display and --view encode to (8-bit outputs, --preview)
 
     std::optional<ColorConfig> mConfig;
+    std::optional<ColorTransform> mInputToWorking;
     PassRequest mPasses;
     ExrOptions mExr;
 };

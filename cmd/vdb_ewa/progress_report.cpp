@@ -6,10 +6,13 @@
 #include <vdb_ewa/output_file.h>
 
 #include <semaphore.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <cerrno>
+#include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
@@ -47,9 +50,10 @@ char* appendNumber(char* out, int value)
     end = appendNumber(end, gFramesWritten.load());
     std::memcpy(end, " of ", 4);
     end = appendNumber(end + 4, gFrames.load());
-    static const char tail[] = " frames written\n";
-    std::memcpy(end, tail, sizeof tail - 1);
-    end += sizeof tail - 1;
+    static const char tail[] = " frames written\n", tailOne[] = " frame written\n";
+    const bool one = gFrames.load() == 1;
+    std::memcpy(end, one ? tailOne : tail, one ? sizeof tailOne - 1 : sizeof tail - 1);
+    end += one ? sizeof tailOne - 1 : sizeof tail - 1;
     [[maybe_unused]] const ssize_t n = ::write(STDERR_FILENO, line, std::size_t(end - line));
     ::_exit(kExitInterrupted);
 }
@@ -75,10 +79,36 @@ void watchdog()
     stopNow();
 }
 
+double nowSeconds()
+{
+    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+/// 0:07, 1:05:03.
+std::string clock(double seconds)
+{
+    const long s = std::lround(std::max(seconds, 0.0));
+    char text[32];
+    if (s >= 3600) std::snprintf(text, sizeof text, "%ld:%02ld:%02ld", s / 3600, s / 60 % 60, s % 60);
+    else std::snprintf(text, sizeof text, "%ld:%02ld", s / 60, s % 60);
+    return text;
+}
+
 } // namespace
 
+double peakMegabytes()
+{
+    rusage usage{};
+    return getrusage(RUSAGE_SELF, &usage) == 0 ? double(usage.ru_maxrss) * 1024.0 / 1e6 : 0.0;
+}
+
+std::string counted(long long count, const std::string& noun)
+{
+    return std::to_string(count) + " " + noun + (count == 1 ? "" : "s");
+}
+
 ProgressReport::ProgressReport(int frameCount, Verbosity verbosity)
-    : mFrames(frameCount > 0 ? frameCount : 1), mTerminal(isatty(STDOUT_FILENO) == 1), mVerbosity(verbosity)
+    : mFrames(frameCount > 0 ? frameCount : 1), mTerminal(isatty(STDOUT_FILENO) == 1), mVerbosity(verbosity), mStart(nowSeconds())
 {
     gFrames.store(mFrames);
     gFramesWritten.store(0);
@@ -101,19 +131,49 @@ bool ProgressReport::wasInterrupted(int percent)
 void ProgressReport::finishJob()
 {
     if (!cancelled()) show(100);
-    if (mTerminal && mVerbosity != Verbosity::Quiet && mShown >= 0) std::printf("\n");
+    if (mBarShown) std::printf("\n");
+    mBarShown = false;
     std::fflush(stdout);
+}
+
+void ProgressReport::line(const std::string& text, std::FILE* stream)
+{
+    if (mBarShown) {
+        std::printf("\r\033[K");
+        std::fflush(stdout);
+    }
+    std::fprintf(stream, "%s\n", text.c_str());
+    std::fflush(stream);
+    if (mBarShown) drawBar();
+    std::fflush(stdout);
+}
+
+std::string ProgressReport::details(int overall) const
+{
+    const double elapsed = nowSeconds() - mStart;
+    std::string out;
+    if (overall >= 1 && overall < 100 && elapsed >= 1.0) out += "ETA " + clock(elapsed * double(100 - overall) / double(overall)) + ", ";
+    char peak[48];
+    std::snprintf(peak, sizeof peak, "peak %.0f MB", peakMegabytes());
+    return out + peak;
+}
+
+void ProgressReport::drawBar() const
+{
+    const int width = 40, filled = mShown * width / 100;
+    std::printf("\r[%s%s] %3d%%  %s\033[K", std::string(std::size_t(filled), '#').c_str(), std::string(std::size_t(width - filled), ' ').c_str(),
+        mShown, details(mShown).c_str());
 }
 
 void ProgressReport::show(int overall)
 {
     if (mVerbosity == Verbosity::Quiet) return;
     if (mTerminal) {
-        if (overall == mShown) return;
+        // Redrawn at most once a percent (the ETA and peak change with it).
+        if (overall <= mShown) return;
         mShown = overall;
-        const int width = 40, filled = overall * width / 100;
-        std::printf("\r[%s%s] %3d%%", std::string(std::size_t(filled), '#').c_str(),
-            std::string(std::size_t(width - filled), ' ').c_str(), overall);
+        drawBar();
+        mBarShown = true;
         std::fflush(stdout);
         return;
     }
@@ -121,7 +181,7 @@ void ProgressReport::show(int overall)
     const int step = overall / 5 * 5;
     if (step <= mShown) return;
     mShown = step;
-    std::printf("%d%% done\n", step);
+    std::printf("%d%% done (%s)\n", step, details(step).c_str());
     std::fflush(stdout);
 }
 

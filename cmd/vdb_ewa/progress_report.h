@@ -5,6 +5,7 @@
 
 #include <vdb_ewa/interrupter.h>
 
+#include <cstdio>
 #include <string>
 
 namespace vdb_ewa::cli {
@@ -12,8 +13,10 @@ namespace vdb_ewa::cli {
 /// Verbosity levels: -q, default, -v, -vv.
 enum class Verbosity { Quiet = 0, Normal = 1, Verbose = 2, Debug = 3 };
 
-/// Reports the progress of a job of @a frameCount frames as one overall percentage: lines
-/// `NN% done` (every 5 %) when stdout is not a terminal, an updating bar when it is. Quiet
+/// Reports the progress of a job of @a frameCount frames as one overall percentage that only
+/// rises, with the time left and the peak memory: lines `NN% done (ETA 0:12, peak 230 MB)`
+/// (every 5 %) when stdout is not a terminal, an updating bar on its own line when it is. The
+/// command's other stdout lines go through line(), so they never share the bar's line. Quiet
 /// prints nothing. SIGINT and SIGTERM cancel it (see installStopHandlers).
 class ProgressReport : public Interrupter
 {
@@ -27,18 +30,32 @@ public:
     void framesWritten(int count);
     /// 100 % after the last frame (unless cancelled); ends a terminal bar's line.
     void finishJob();
+    /// Print @a text and a newline on @a stream (stdout or stderr) on a line of its own: a
+    /// terminal bar is cleared first and drawn again after it.
+    void line(const std::string& text, std::FILE* stream = stdout);
 
     bool wasInterrupted(int percent) override;
 
 private:
     void show(int overall);
+    /// ", ETA 0:12, peak 230 MB" at @a overall percent (no ETA before 1 % or in the first second).
+    std::string details(int overall) const;
+    void drawBar() const;
 
     int mFrames;
     int mFrame = 0;
     int mShown = -1;
     bool mTerminal;
+    bool mBarShown = false; ///< a terminal bar is on the current line
     Verbosity mVerbosity;
+    double mStart; ///< seconds (steady clock) when the job began
 };
+
+/// The process's peak resident memory so far (getrusage's maxrss), in MB.
+double peakMegabytes();
+
+/// "@a count @a noun" with an English plural: "1 frame", "2 frames".
+std::string counted(long long count, const std::string& noun);
 
 /// A stop signal ends the process this long after it arrived at the latest, plus the kernel's
 /// time to end the threads (up to 0.13 s measured, where a thread was unmapping a frame's

@@ -14,13 +14,14 @@
 #include <cctype>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
 #include <sstream>
 
-#include <sys/resource.h>
+#include <unistd.h>
 
 namespace vdb_ewa::cli {
 namespace {
@@ -51,10 +52,14 @@ public:
     {
         const RenderSettings rs;
         const CameraSettings cs;
-        mApp = app.add_subcommand("render", "Render a VDB fog volume to an EXR with EWA volume splatting");
+        mApp = app.add_subcommand("render", "Render a VDB volume or level set to an image with EWA splatting (the default subcommand: vdb_ewa IN OUT [options] is vdb_ewa render IN OUT [options])");
+        mApp->footer("Every option also takes vdb_render's one-dash spelling (-res, -translate). Other commands: "
+                     "vdb_ewa make-grid --help (the sample grids), vdb_ewa --version.");
         mApp->add_option("input", mInput, "input .vdb file")->required();
         mApp->add_option("output", mOutput,
-            "output .exr file: premultiplied RGBA and Z, in the output colour space (docs/output.md)")->required();
+            "output image, its format by its extension: .exr (premultiplied RGBA and Z in --output-space), .png, .jpg, "
+            ".tif or .ppm (8-bit RGB: the beauty over black through --display and --view) or .hdr (float RGB over black "
+            "in --output-space) (docs/output.md)")->required();
         mApp->add_option("--name", mName, "grid to render (default: the first scalar float or double grid)");
         // Camera (vdb_render semantics).
         mApp->add_option("--res", mRes, "image size in pixels, WxH, each in [1, 65536] and at most 2^27 pixels in all (16384x8192) (default: 1920x1080)");
@@ -165,11 +170,15 @@ public:
         CameraSettings cam;
         RenderSettings rs;
         resolve(cam, rs);
-        const Renderer renderer(rs); // validates the render settings
+        const Renderer validated(rs); // the render settings are checked before any file is read
         const std::vector<int> frames = frameList();
         std::vector<std::string> warnings;
         mOutputOptions.prepare(pathOf(mOutput, frames.front()), pathOf(mOutputOptions.previewOption(), frames.front()),
             warnings); // colour config, spaces, output paths
+        // The colour values as given (printed by -v, kept in the EXR) and in the working space.
+        RenderSettings working = rs;
+        mOutputOptions.toWorkingSpace(working, warnings);
+        const Renderer renderer(working);
         if (verbosity != Verbosity::Quiet) {
             for (const std::string& w : warnings) std::cerr << "vdb_ewa: warning: " << w << "\n";
         }
@@ -186,7 +195,7 @@ public:
             const std::string preview = pathOf(mOutputOptions.previewOption(), frames[i]);
             if (mSkipExisting && std::filesystem::exists(output) && (preview.empty() || std::filesystem::exists(preview))) {
                 ++skipped;
-                if (verbosity >= Verbosity::Verbose) std::cout << "vdb_ewa: " << output << " exists: skipped\n";
+                if (verbosity >= Verbosity::Verbose) report.line("vdb_ewa: " + output + " exists: skipped");
                 continue;
             }
             try {
@@ -196,24 +205,24 @@ public:
                 break;
             } catch (const std::exception& e) {
                 if (!isSequence()) throw;
-                std::cerr << "vdb_ewa: frame " << frames[i] << ": " << e.what() << "\n";
+                report.line("vdb_ewa: frame " + std::to_string(frames[i]) + ": " + e.what(), stderr);
                 failed.push_back(frames[i]);
                 if (failCode == kExitOk) failCode = exitCodeFor(e);
             }
         }
         report.finishJob();
         if (stopRequested() || report.cancelled()) {
-            std::cerr << "vdb_ewa: interrupted: " << written << " of " << frames.size() << " frames written\n";
+            std::cerr << "vdb_ewa: interrupted: " << written << " of " << counted(std::int64_t(frames.size()), "frame") << " written\n";
             return kExitInterrupted;
         }
         if (!failed.empty()) {
             std::ostringstream list;
             for (std::size_t i = 0; i < failed.size(); ++i) list << (i ? ", " : "") << failed[i];
-            std::cerr << "vdb_ewa: " << failed.size() << " of " << frames.size() << " frames failed: " << list.str() << "\n";
+            std::cerr << "vdb_ewa: " << failed.size() << " of " << counted(std::int64_t(frames.size()), "frame") << " failed: " << list.str() << "\n";
             return failCode;
         }
         if (isSequence() && verbosity != Verbosity::Quiet) {
-            std::cout << "vdb_ewa: " << written << " frames written, " << skipped << " skipped (--skip-existing)\n";
+            std::cout << "vdb_ewa: " << counted(written, "frame") << " written, " << skipped << " skipped (--skip-existing)\n";
         }
         return kExitOk;
     }
@@ -225,6 +234,12 @@ private:
     }
 
     bool isSequence() const { return !mFrames.empty(); }
+
+    static std::string hostName()
+    {
+        char name[256] = {};
+        return gethostname(name, sizeof name - 1) == 0 ? std::string(name) : std::string("unknown");
+    }
 
     /// --frames, checked against the paths' frame patterns; {0} (unused) without --frames.
     std::vector<int> frameList() const
@@ -268,16 +283,22 @@ private:
                       << " the image's up (--up, --translate or --lookat frame it)\n";
         }
         const std::vector<Attributes> options = resolvedOptions(grid, camera, rs);
-        if (verbosity >= Verbosity::Verbose && (first || verbosity >= Verbosity::Debug)) printSettings(grid, input, options);
+        if (verbosity >= Verbosity::Verbose && (first || verbosity >= Verbosity::Debug)) {
+            report.line(settingsText(grid, input, options));
+            const std::string working = workingColoursText(rs, renderer.settings());
+            if (!working.empty()) report.line(working);
+        }
 
         RenderStats stats;
         Frame frame = renderer.renderFrame(grid, camera, mOutputOptions.passes(), &stats, &report);
         if (verbosity != Verbosity::Quiet) {
-            for (const std::string& w : stats.warnings) std::cerr << "vdb_ewa: warning: " << input << ": " << w << "\n";
+            for (const std::string& w : stats.warnings) report.line("vdb_ewa: warning: " + input + ": " + w, stderr);
         }
         const auto t1 = std::chrono::steady_clock::now();
+        // What a lighter looks for in a file: the version, preset, host and render time.
         Attributes attributes{{"software", std::string("vdb_ewa ") + versionString()}, {"vdb_ewa/input", input},
-            {"vdb_ewa/grid", grid.name()}};
+            {"vdb_ewa/grid", grid.name()}, {"vdb_ewa/quality", mQuality.empty() ? "default" : mQuality}, {"vdb_ewa/host", hostName()},
+            {"vdb_ewa/render-seconds", fmt(std::round(seconds(t0) * 1000.0) / 1000.0)}};
         if (isSequence()) attributes.emplace_back("vdb_ewa/frame", std::to_string(frameNumber));
         for (const Attributes& group : options)
             for (const auto& [key, value] : group) {
@@ -289,10 +310,12 @@ private:
         } catch (const IoError& e) {
             throw std::runtime_error(e.what()); // a failed write is a render failure (exit 4), not bad input
         }
-        if (verbosity >= Verbosity::Verbose) printStats(stats, loadSeconds, seconds(t1));
+        if (verbosity >= Verbosity::Verbose) report.line(statsText(stats, loadSeconds, seconds(t1)));
         if (isSequence() && verbosity >= Verbosity::Normal) {
-            std::cout << "vdb_ewa: frame " << frameNumber << ": " << output << " (" << std::fixed << std::setprecision(2)
-                      << seconds(t0) << " s)\n" << std::defaultfloat;
+            std::ostringstream line;
+            line << "vdb_ewa: frame " << frameNumber << ": " << output << " (" << std::fixed << std::setprecision(2) << seconds(t0)
+                 << " s, peak " << std::setprecision(0) << peakMegabytes() << " MB)";
+            report.line(line.str());
         }
     }
 
@@ -399,32 +422,41 @@ private:
         return {cameraGroup, model, method, mOutputOptions.resolved()};
     }
 
-    static void printSettings(const GridSource& grid, const std::string& input, const std::vector<Attributes>& groups)
+    /// The colour values the renderer uses, where --input-space changed them (-v); empty where
+    /// it did not.
+    static std::string workingColoursText(const RenderSettings& given, const RenderSettings& working)
     {
-        std::cout << "vdb_ewa: grid '" << grid.name() << "' (" << grid.storedType() << ") from " << input << ": "
-                  << grid.activeVoxelCount() << " active voxels, " << grid.activeTileCount() << " active tiles, "
-                  << (grid.isLinear() ? "affine" : "non-linear") << " transform\n";
+        const auto same = [](const Vec3d& a, const Vec3d& b) { return a.x == b.x && a.y == b.y && a.z == b.z; };
+        if (same(given.medium.absorb, working.medium.absorb) && same(given.medium.scatter, working.medium.scatter) &&
+            same(given.medium.emission, working.medium.emission) && same(given.light.color, working.light.color))
+            return "";
+        return "vdb_ewa: model in the working space: --absorb " + fmt3(working.medium.absorb) + " --scatter " + fmt3(working.medium.scatter) +
+               " --emission " + fmt3(working.medium.emission) + " --light colour " + fmt3(working.light.color);
+    }
+
+    /// -v's settings of a frame: the grid, then one line per group of options.
+    static std::string settingsText(const GridSource& grid, const std::string& input, const std::vector<Attributes>& groups)
+    {
+        std::ostringstream out;
+        out << "vdb_ewa: grid '" << grid.name() << "' (" << grid.storedType() << ") from " << input << ": "
+            << counted(std::int64_t(grid.activeVoxelCount()), "active voxel") << ", " << counted(std::int64_t(grid.activeTileCount()), "active tile")
+            << ", " << (grid.isLinear() ? "affine" : "non-linear") << " transform";
         const char* titles[] = {"camera", "model", "splat", "output"};
         for (std::size_t g = 0; g < groups.size(); ++g) {
-            std::cout << "vdb_ewa: " << titles[g];
+            out << "\nvdb_ewa: " << titles[g];
             for (const auto& [key, value] : groups[g]) {
                 const bool spaces = value.find(' ') != std::string::npos;
-                std::cout << " --" << key << " " << (spaces ? "\"" + value + "\"" : value);
+                out << " --" << key << " " << (spaces ? "\"" + value + "\"" : value);
             }
-            std::cout << "\n";
         }
+        return out.str();
     }
 
-    /// The process's peak resident memory so far (getrusage's maxrss, KiB on Linux), in MB.
-    static double peakMegabytes()
+    /// -v's counts and stage timings of a frame (two lines).
+    static std::string statsText(const RenderStats& s, double loadSeconds, double writeSeconds)
     {
-        rusage usage{};
-        return getrusage(RUSAGE_SELF, &usage) == 0 ? double(usage.ru_maxrss) * 1024.0 / 1e6 : 0.0;
-    }
-
-    static void printStats(const RenderStats& s, double loadSeconds, double writeSeconds)
-    {
-        std::cout << "vdb_ewa: " << s.activeVoxels << " active voxels and " << s.activeTiles << " active tiles read; "
+        std::ostringstream out;
+        out << "vdb_ewa: " << s.activeVoxels << " active voxels and " << counted(s.activeTiles, "active tile") << " read; "
                   << s.kernels << " kernels (" << s.voxelsMerged << " voxels merged into " << s.mergedKernels
                   << " by --lod, " << (s.surfaceLattice > 1 ? "one surface kernel a " + std::to_string(s.surfaceLattice) + "^3 block by --lod, " : "")
                   << s.haloKernels << " halo kernels by --prefilter, " << s.refinedVoxels << " voxels sampled by --refine), " << s.kernelsSkipped << " values skipped (below --cutoff or NaN), "
@@ -435,7 +467,8 @@ private:
                   << std::fixed << std::setprecision(3) << "vdb_ewa: timings (s): load " << loadSeconds << ", kernels "
                   << s.kernelSeconds << ", shadows " << s.shadowSeconds << ", project " << s.projectSeconds
                   << ", rasterise " << s.rasterSeconds << ", write " << writeSeconds << "; peak memory "
-                  << std::setprecision(0) << peakMegabytes() << " MB\n";
+                  << std::setprecision(0) << peakMegabytes() << " MB";
+        return out.str();
     }
 
     CLI::App* mApp = nullptr;

@@ -45,6 +45,9 @@ public:
     std::vector<std::string> colorSpaces() const;
     std::string defaultDisplay() const;
     std::string defaultView(const std::string& display) const;
+    /// The colour space a display and view encode to (e.g. "sRGB - Display"); empty if the
+    /// view names none. @throw ValueError as checkDisplayView.
+    std::string displayColorSpace(const std::string& display, const std::string& view) const;
     /// @throw ValueError naming the display (or view) and listing the valid ones if unknown.
     void checkDisplayView(const std::string& display, const std::string& view) const;
 

@@ -13,7 +13,7 @@
 #include "image.h"
 #include "make_grid.h"
 #include "output_file.h"
-#include "preview_output.h"
+#include "image_output.h"
 #include "render_settings.h"
 #include "interrupter.h"
 #include "renderer.h"

@@ -170,6 +170,13 @@ std::string ColorConfig::defaultView(const std::string& display) const
     return mImpl->config->getDefaultView(display.c_str());
 }
 
+std::string ColorConfig::displayColorSpace(const std::string& display, const std::string& view) const
+{
+    checkDisplayView(display, view);
+    const char* space = mImpl->config->getDisplayViewColorSpaceName(display.c_str(), view.c_str());
+    return space ? space : "";
+}
+
 void ColorConfig::checkDisplayView(const std::string& display, const std::string& view) const
 {
     const auto& c = *mImpl->config;
