@@ -171,16 +171,9 @@ inline void logTransmittances(const LightMap::Lattice& map, Floats depth, int ch
         for (int c = 0; c < channels; ++c) logT[c] = grey;
         return;
     }
-    // vdb_render's early stop of the shadow ray as a floor on |T|^2, relative to the brightest
-    // channel (no underflow at any depth).
-    for (int c = 0; c < 3; ++c) logT[c] = hn::IfThenElseZero(positive, hn::Mul(hn::Set(d, -map.extinction[c]), depth));
-    const Floats brightest = hn::Max(hn::Max(logT[0], logT[1]), logT[2]);
-    Floats sum = zero;
-    for (int c = 0; c < 3; ++c) sum = hn::Add(sum, hn::Exp(d, hn::Mul(hn::Set(d, 2.0f), hn::Sub(logT[c], brightest))));
-    const Floats logT2 = hn::MulAdd(hn::Set(d, 2.0f), brightest, hn::Log(d, sum));
-    const Floats lift = hn::IfThenElseZero(hn::And(positive, hn::Lt(logT2, hn::Set(d, map.logCutoff))),
-        hn::Mul(hn::Set(d, 0.5f), hn::Sub(hn::Set(d, map.logCutoff), logT2)));
-    for (int c = 0; c < 3; ++c) logT[c] = hn::Add(logT[c], lift);
+    // vdb_render's shadow ray stops at the stop depth and keeps the light it had there.
+    const Floats kept = hn::IfThenElseZero(positive, hn::Min(depth, hn::Set(d, map.stopDepth)));
+    for (int c = 0; c < 3; ++c) logT[c] = hn::Mul(hn::Set(d, -map.extinction[c]), kept);
 }
 
 template <int C>

@@ -35,11 +35,36 @@ double ExponentialSum::operator()(double x) const
     return f;
 }
 
+double shadowStopDepth(const float* extinction, double cutoff)
+{
+    // f(D) = sum_c exp(-2 sigma_c D) falls from 3 to the number of channels without
+    // extinction: it crosses the cutoff once, or never.
+    double never = 0.0;
+    for (int c = 0; c < 3; ++c) never += extinction[c] > 0.0f ? 0.0 : 1.0;
+    if (!(cutoff > never)) return std::numeric_limits<double>::infinity();
+    if (cutoff >= 3.0) return 0.0;
+    // Newton from D = 0: f is convex and decreasing, so every step stays short of the root.
+    double depth = 0.0;
+    for (int n = 0; n < 100; ++n) {
+        double f = -cutoff, slope = 0.0;
+        for (int c = 0; c < 3; ++c) {
+            const double e = std::exp(-2.0 * double(extinction[c]) * depth);
+            f += e;
+            slope -= 2.0 * double(extinction[c]) * e;
+        }
+        const double step = -f / slope;
+        if (!(step > 1e-15 * std::max(depth, 1e-300))) break;
+        depth += step;
+    }
+    return depth;
+}
+
 LightMap::LightMap(const GridSource::Impl& grid, const RenderSettings& settings, Progress* progress, double pointBudget)
-    : mLogCutoff(std::log(float(settings.cutoff))), mLogGreyFloor(0.5f * std::log(float(settings.cutoff) / 3.0f))
+    : mLogGreyFloor(0.5f * std::log(float(settings.cutoff) / 3.0f))
 {
     const OpticalModel model(settings);
     for (int c = 0; c < 3; ++c) mExtinction[c] = float(model.extinction(c));
+    mStopDepth = float(shadowStopDepth(mExtinction, settings.cutoff));
     mGrey = mExtinction[0] == mExtinction[1] && mExtinction[0] == mExtinction[2];
     mUnlit = model.unlit();
     mShadowStep = settings.shadow.step;
@@ -197,7 +222,7 @@ LightMap::Lattice LightMap::lattice() const
         l.depth = mDepth.empty() ? nullptr : mDepth.data();
     }
     std::copy(std::begin(mExtinction), std::end(mExtinction), l.extinction);
-    l.logCutoff = mLogCutoff;
+    l.stopDepth = mStopDepth;
     l.logGreyFloor = mLogGreyFloor;
     l.grey = mGrey;
     return l;
@@ -212,19 +237,10 @@ std::array<float, 3> LightMap::logTransmittanceOfDepth(float depth) const
         return logT;
     }
     if (!(depth > 0.0f)) return logT;
-    for (std::size_t c = 0; c < 3; ++c) logT[c] = -mExtinction[c] * depth;
-    // vdb_render stops a shadow ray once |T|^2 < cutoff: the transmittance it keeps is about
-    // that threshold (every channel scaled alike, so the light keeps its colour), never
-    // darker. ln |T|^2 in the log domain, relative to the brightest channel: no underflow at
-    // any depth (summed in float, |T|^2 underflowed past a light optical depth of 35 and the
-    // light turned grey).
-    const float brightest = std::max({logT[0], logT[1], logT[2]});
-    float sum = 0.0f; // in [1, 3]
-    for (std::size_t c = 0; c < 3; ++c) sum += std::exp(2.0f * (logT[c] - brightest));
-    const float logT2 = 2.0f * brightest + std::log(sum);
-    if (logT2 < mLogCutoff) {
-        for (std::size_t c = 0; c < 3; ++c) logT[c] += 0.5f * (mLogCutoff - logT2);
-    }
+    // vdb_render stops a shadow ray where |T|^2 falls below the cutoff and keeps the
+    // transmittance it had there: every deeper point sees the light of the stop depth.
+    const float kept = std::min(depth, mStopDepth);
+    for (std::size_t c = 0; c < 3; ++c) logT[c] = -mExtinction[c] * kept;
     return logT;
 }
 

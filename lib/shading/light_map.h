@@ -41,6 +41,11 @@ struct ExponentialSum
 /// high holds 1.7e8 points.
 constexpr double kLightMapPointBudget = 5e8;
 
+/// The unit-extinction optical depth D at which vdb_render stops a shadow ray: where
+/// |T|^2 = sum_c exp(-2 extinction_c D) falls to @a cutoff (infinity where it never does, 0
+/// where it starts below). The light it keeps there lights every deeper point.
+double shadowStopDepth(const float* extinction, double cutoff);
+
 class LightMap
 {
 public:
@@ -93,7 +98,7 @@ public:
         const std::int32_t* offset = nullptr; ///< its first stored sample in depth
         const float* depth = nullptr;         ///< null: no ray holds density (every depth 0)
         float extinction[3] = {0.0f, 0.0f, 0.0f};
-        float logCutoff = 0.0f, logGreyFloor = 0.0f;
+        float stopDepth = 0.0f, logGreyFloor = 0.0f;
         bool grey = true;
     };
     Lattice lattice() const;
@@ -128,8 +133,8 @@ private:
     std::vector<std::int32_t> mRayKLo, mRayCount, mRayOffset;
     LargeArray<float> mDepth;
     float mExtinction[3];
-    float mLogCutoff;    ///< ln cutoff: vdb_render's |T|^2 floor
-    float mLogGreyFloor; ///< ln sqrt(cutoff / 3): a grey medium's floor
+    float mStopDepth;    ///< shadowStopDepth: where vdb_render's shadow ray stops (unit-extinction depth)
+    float mLogGreyFloor; ///< ln sqrt(cutoff / 3): a grey medium's floor (-extinction x mStopDepth)
     bool mGrey = true;   ///< the same extinction in R, G and B
     bool mUnlit;
 };
