@@ -260,6 +260,55 @@ TEST_F(Cli, GreyValuesStayGreyInEveryInputSpace)
     EXPECT_NE(r.err.find("--light colour lies outside the working space"), std::string::npos) << r.err;
 }
 
+TEST_F(Cli, CameraFromAFileRendersTheSameImage)
+{
+    namespace fs = std::filesystem;
+    // Our own EXR: the exact camera record, the same image and header bit for bit.
+    const std::string a = mDir.file("a.exr"), b = mDir.file("b.exr");
+    ASSERT_EQ(runCli(mDir, mGrid + " " + a + " -res 64x48 -translate 1,0.5,4 -fov 37").code, 0);
+    const CliRun reused = runCli(mDir, mGrid + " " + b + " --camera-file " + a);
+    ASSERT_EQ(reused.code, 0) << reused.err;
+    expectSameFile(a, b);
+    // Another renderer's EXR: only OpenEXR's worldToCamera, screen window and display window.
+    const Camera camera = [&] {
+        CameraSettings s;
+        s.width = 64;
+        s.height = 48;
+        s.translate = Vec3d(1.0, 0.5, 4.0);
+        s.rotate = Vec3d(-5.0, 12.0, 3.0);
+        return Camera(s, Vec3d(0.0));
+    }();
+    ExrOptions foreign;
+    foreign.camera = &camera;
+    Frame blank;
+    blank.beauty = Image(64, 48);
+    writeExr(blank, mDir.file("foreign.exr"), foreign);
+    const std::string c = mDir.file("c.exr"), d = mDir.file("d.exr");
+    ASSERT_EQ(runCli(mDir, mGrid + " " + c + " -res 64x48 -translate 1,0.5,4 -rotate -5,12,3").code, 0);
+    ASSERT_EQ(runCli(mDir, mGrid + " " + d + " --camera-file " + mDir.file("foreign.exr")).code, 0);
+    const double error = rmse(readExr(c), readExr(d));
+    std::printf("camera from worldToCamera (float): RMSE %.2e\n", error);
+    EXPECT_LT(error, 1e-4); // float matrices
+    // A JSON file of camera options, overridden from the command line.
+    std::ofstream(mDir.file("cam.json")) << R"({"res": "64x48", "translate": [1, 0.5, 4], "fov": 37, "near": 0.01})";
+    const std::string e = mDir.file("e.exr"), f = mDir.file("f.exr");
+    ASSERT_EQ(runCli(mDir, mGrid + " " + e + " --camera-file " + mDir.file("cam.json") + " -res 32x24").code, 0);
+    ASSERT_EQ(runCli(mDir, mGrid + " " + f + " -res 32x24 -translate 1,0.5,4 -fov 37 -near 0.01").code, 0);
+    EXPECT_EQ(maxAbsDiff(readExr(e), readExr(f)), 0.0);
+    // Bad files: one line naming the file, and nothing written.
+    std::ofstream(mDir.file("bad.json")) << R"({"res": "64x48", "zoom": 2})";
+    const CliRun missing = runCli(mDir, mGrid + " " + mDir.file("g.exr") + " --camera-file " + mDir.file("none.exr"));
+    EXPECT_EQ(missing.code, 3);
+    EXPECT_NE(missing.err.find("none.exr: no such camera file"), std::string::npos) << missing.err;
+    const CliRun badKey = runCli(mDir, mGrid + " " + mDir.file("g.exr") + " --camera-file " + mDir.file("bad.json"));
+    EXPECT_EQ(badKey.code, 2);
+    EXPECT_NE(badKey.err.find("bad.json: 'zoom' is not a camera key"), std::string::npos) << badKey.err;
+    const CliRun noCamera = runCli(mDir, mGrid + " " + mDir.file("g.exr") + " --camera-file " + mGrid);
+    EXPECT_NE(noCamera.code, 0);
+    EXPECT_EQ(std::count(noCamera.err.begin(), noCamera.err.end(), '\n'), 1) << noCamera.err;
+    EXPECT_FALSE(fs::exists(mDir.file("g.exr")));
+}
+
 TEST_F(Cli, OutputIsIdenticalForOneAndTwoThreads)
 {
     // Every channel bit for bit, and every attribute but the render time.
@@ -431,7 +480,7 @@ TEST_F(Cli, HelpDocumentsEveryOptionWithItsDefault)
              "--cutoff", "--shadowstep", "--step", "--kernel-sigma", "--lowpass", "--aa", "--cutoff-radius", "--slab",
              "--quality", "--exp", "--renormalize", "--taper", "--prefilter", "--precision", "--tile-spacing", "--refine", "--shadow-res", "--method",
              "--lod", "--lod-error", "--threads", "--max-memory", "--verbose", "--emission", "--ocio-config", "--working-space", "--output-space",
-             "--preview", "--display", "--view", "--input-space", "--exr-type", "--compression", "--aov", "--deep", "--isovalue",
+             "--preview", "--display", "--view", "--input-space", "--camera-file", "--exr-type", "--compression", "--aov", "--deep", "--isovalue",
              "--shader", "--samples", "--color", "--iso", "--iso-opacity"}) {
         EXPECT_NE(r.out.find(opt), std::string::npos) << opt;
     }

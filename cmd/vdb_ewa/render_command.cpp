@@ -1,5 +1,6 @@
 /// @file render_command.cpp
 /// @brief `vdb_ewa render IN.vdb OUT.exr [options]`: vdb_render's options, GNU spelling.
+#include "camera_file_option.h"
 #include "commands.h"
 #include "exit_codes.h"
 #include "frame_sequence.h"
@@ -62,6 +63,10 @@ public:
             "in --output-space) (docs/output.md)")->required();
         mApp->add_option("--name", mName, "grid to render (default: the first scalar float or double grid)");
         // Camera (vdb_render semantics).
+        mApp->add_option("--camera-file", mCameraFile,
+            "take the camera from a file: an .exr rendered by vdb_ewa (the same camera exactly) or by another renderer "
+            "(its worldToCamera), or a .json of camera options or a worldToCamera matrix (docs/output.md); the camera "
+            "options given here override its values");
         mApp->add_option("--res", mRes, "image size in pixels, WxH, each in [1, 65536] and at most 2^27 pixels in all (16384x8192) (default: 1920x1080)");
         mApp->add_option("-t,--translate", mTranslate, "camera position X,Y,Z in world units (default: 0,0,0)");
         mApp->add_option("-r,--rotate", mRotate,
@@ -235,6 +240,26 @@ private:
 
     bool isSequence() const { return !mFrames.empty(); }
 
+    /// @a camera's settings with its orientation named (for the exact record): the default
+    /// target made an explicit --lookat, looking down -z made --rotate 0,0,0, and a replaced
+    /// --up made the axis Camera used.
+    static CameraSettings explicitCamera(const Camera& camera, const Vec3d& defaultTarget)
+    {
+        CameraSettings s = camera.settings();
+        if (s.rotate || s.lookAt) return s;
+        if (camera.looksDownZByDefault()) {
+            s.rotate = Vec3d(0.0);
+            return s;
+        }
+        s.lookAt = defaultTarget;
+        if (camera.upReplacedByDefault()) {
+            const Mat3d& r = camera.cameraFromWorld(); // rows: right, down, forward
+            const Vec3d back = -Vec3d(r[0][2], r[1][2], r[2][2]);
+            s.up = std::abs(back.z) < 0.9 ? Vec3d(0, 0, back.y > 0.0 ? 1.0 : -1.0) : Vec3d(1, 0, 0);
+        }
+        return s;
+    }
+
     static std::string hostName()
     {
         char name[256] = {};
@@ -300,6 +325,7 @@ private:
             {"vdb_ewa/grid", grid.name()}, {"vdb_ewa/quality", mQuality.empty() ? "default" : mQuality}, {"vdb_ewa/host", hostName()},
             {"vdb_ewa/render-seconds", fmt(std::round(seconds(t0) * 1000.0) / 1000.0)}};
         if (isSequence()) attributes.emplace_back("vdb_ewa/frame", std::to_string(frameNumber));
+        attributes.emplace_back("vdb_ewa/camera-record", cameraRecord(explicitCamera(camera, grid.worldCentre())));
         for (const Attributes& group : options)
             for (const auto& [key, value] : group) {
                 // The thread count never changes the image; leaving it out keeps files byte-identical.
@@ -322,6 +348,12 @@ private:
     void resolve(CameraSettings& cam, RenderSettings& rs) const
     {
         if (!mQuality.empty()) rs = RenderSettings::preset(parseChoice("quality", mQuality, kQualities));
+        if (!mCameraFile.empty()) {
+            cam = readCameraFile(mCameraFile);
+            // A rotation or a target given here replaces the file's, whichever it had.
+            if (!mRotate.empty()) cam.lookAt.reset();
+            if (!mLookAt.empty()) cam.rotate.reset();
+        }
         if (!mRes.empty()) parseResolution(mRes, cam.width, cam.height);
         if (!mTranslate.empty()) cam.translate = parseVec3("translate", mTranslate, true);
         if (!mRotate.empty()) cam.rotate = parseVec3("rotate", mRotate, true);
@@ -472,7 +504,7 @@ private:
     }
 
     CLI::App* mApp = nullptr;
-    std::string mInput, mOutput, mName, mRes, mTranslate, mRotate, mLookAt, mUp, mCamera;
+    std::string mInput, mOutput, mCameraFile, mName, mRes, mTranslate, mRotate, mLookAt, mUp, mCamera;
     std::string mAbsorb, mScatter, mEmission, mLight, mAa, mMethod, mQuality, mExp, mRenormalize, mTaper, mPrefilter, mPrecision;
     std::optional<int> mTileSpacing, mRefine, mSamples;
     std::optional<double> mShadowRes;

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "camera.h"
+#include "camera_file.h"
 #include "color_management.h"
 #include "error.h"
 #include "ewa_kernel.h"
