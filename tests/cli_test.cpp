@@ -309,6 +309,32 @@ TEST_F(Cli, CameraFromAFileRendersTheSameImage)
     EXPECT_FALSE(fs::exists(mDir.file("g.exr")));
 }
 
+TEST_F(Cli, CamerasPerFrameFromKeyframesAndFromASequencesFiles)
+{
+    namespace fs = std::filesystem;
+    for (int f = 1; f <= 3; ++f) fs::copy_file(mGrid, mDir.file("seq.000" + std::to_string(f) + ".vdb"));
+    const std::string in = mDir.file("seq.####.vdb"), res = " -res 48x32";
+    // Keyframes at 1 and 3: frame 2 lies half-way, as its direct command line.
+    std::ofstream(mDir.file("keys.json")) << R"({"keys": [
+        {"at": 1, "translate": [0, 0, 5], "lookat": [0, 0, 0], "fov": 30},
+        {"at": 3, "translate": [1, 0, 5], "lookat": [0, 0, 0], "fov": 40}]})";
+    const CliRun keyed = runCli(mDir, in + " " + mDir.file("out.####.exr") + res + " --frames 1-3 --camera-file " + mDir.file("keys.json"));
+    ASSERT_EQ(keyed.code, 0) << keyed.err;
+    const std::string direct = mDir.file("direct.exr");
+    ASSERT_EQ(runCli(mDir, mGrid + " " + direct + res + " -translate 0.5,0,5 -lookat 0,0,0 -fov 35").code, 0);
+    EXPECT_EQ(maxAbsDiff(readExr(mDir.file("out.0002.exr")), readExr(direct)), 0.0);
+    EXPECT_GT(maxAbsDiff(readExr(mDir.file("out.0001.exr")), readExr(mDir.file("out.0003.exr"))), 0.01) << "the camera moved";
+    // A sequence's own EXRs as per-frame camera files: the same frames again.
+    const CliRun again = runCli(mDir, in + " " + mDir.file("redo.####.exr") + " --frames 1-3 --camera-file " + mDir.file("out.####.exr"));
+    ASSERT_EQ(again.code, 0) << again.err;
+    for (const char* f : {"0001", "0002", "0003"}) expectSameFile(mDir.file(std::string("out.") + f + ".exr"), mDir.file(std::string("redo.") + f + ".exr"));
+    // Keyframes that do not rise, or mix rotate and lookat: one line naming the file.
+    std::ofstream(mDir.file("bad.json")) << R"({"keys": [{"at": 2, "rotate": [0, 0, 0]}, {"at": 1, "rotate": [0, 10, 0]}]})";
+    const CliRun bad = runCli(mDir, in + " " + mDir.file("bad.####.exr") + res + " --frames 1-3 --camera-file " + mDir.file("bad.json"));
+    EXPECT_EQ(bad.code, 2);
+    EXPECT_NE(bad.err.find("bad.json: keys: frames must rise"), std::string::npos) << bad.err;
+}
+
 TEST_F(Cli, OutputIsIdenticalForOneAndTwoThreads)
 {
     // Every channel bit for bit, and every attribute but the render time.

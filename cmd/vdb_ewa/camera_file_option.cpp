@@ -12,6 +12,8 @@
 #include <filesystem>
 #include <fstream>
 #include <set>
+#include <utility>
+#include <vector>
 
 namespace vdb_ewa::cli {
 namespace {
@@ -87,9 +89,49 @@ CameraSettings fromJson(const nlohmann::json& j, const std::string& path)
     return s;
 }
 
+/// Keyframes {"at": frame, camera keys...}, interpolated linearly at @a frame: position,
+/// rotation angles or target and up, field of view (or orthographic frame), aperture, near and
+/// far. Resolution and projection are the first key's.
+CameraSettings interpolated(const nlohmann::json& keys, double frame, const std::string& path)
+{
+    if (!keys.is_array() || keys.empty()) throw ValueError(path + ": keys: expected a list of keyframes");
+    std::vector<std::pair<double, CameraSettings>> frames;
+    for (const nlohmann::json& key : keys) {
+        if (!key.is_object() || !key.contains("at") || !key["at"].is_number()) throw ValueError(path + ": keys: each keyframe needs \"at\": its frame");
+        nlohmann::json camera = key;
+        camera.erase("at");
+        frames.emplace_back(key["at"].get<double>(), fromJson(camera, path));
+        const CameraSettings& first = frames.front().second;
+        const CameraSettings& added = frames.back().second;
+        if (frames.size() > 1 && (frames.back().first <= frames[frames.size() - 2].first)) throw ValueError(path + ": keys: frames must rise");
+        if (added.rotate.has_value() != first.rotate.has_value() || added.lookAt.has_value() != first.lookAt.has_value()) {
+            throw ValueError(path + ": keys: every keyframe must give rotate, or every keyframe lookat");
+        }
+    }
+    if (frame <= frames.front().first) return frames.front().second;
+    if (frame >= frames.back().first) return frames.back().second;
+    std::size_t k = 1;
+    while (frames[k].first < frame) ++k;
+    if (frames[k].first == frame) return frames[k].second; // a keyframe as given
+    const CameraSettings &a = frames[k - 1].second, &b = frames[k].second;
+    const double t = (frame - frames[k - 1].first) / (frames[k].first - frames[k - 1].first);
+    const auto mix = [t](auto x, auto y) { return x + (y - x) * t; };
+    CameraSettings s = a;
+    s.translate = mix(a.translate, b.translate);
+    if (a.rotate) s.rotate = mix(*a.rotate, *b.rotate);
+    if (a.lookAt) s.lookAt = mix(*a.lookAt, *b.lookAt);
+    s.up = mix(a.up, b.up);
+    s.aperture = mix(a.aperture, b.aperture);
+    s.setFieldOfView(mix(a.fieldOfView(), b.fieldOfView()));
+    s.frame = mix(a.frame, b.frame);
+    s.near = mix(a.near, b.near);
+    s.far = mix(a.far, b.far);
+    return s;
+}
+
 } // namespace
 
-CameraSettings readCameraFile(const std::string& path)
+CameraSettings readCameraFile(const std::string& path, int frame)
 {
     std::error_code error;
     const auto status = std::filesystem::status(path, error);
@@ -106,6 +148,10 @@ CameraSettings readCameraFile(const std::string& path)
         throw IoError(path + ": not a JSON camera file (" + std::string(e.what()).substr(0, 160) + ")");
     }
     if (!j.is_object()) throw ValueError(path + ": a camera file holds one JSON object of key: value");
+    if (j.contains("keys")) {
+        if (j.size() != 1) throw ValueError(path + ": a file of keyframes holds \"keys\" alone");
+        return interpolated(j["keys"], double(frame), path);
+    }
     return fromJson(j, path);
 }
 

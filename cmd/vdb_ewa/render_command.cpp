@@ -204,7 +204,7 @@ public:
                 continue;
             }
             try {
-                renderOneFrame(renderer, cam, rs, frames[i], output, report, verbosity, i == 0);
+                renderOneFrame(renderer, mCameraFile.empty() ? cam : cameraFor(frames[i]), rs, frames[i], output, report, verbosity, i == 0);
                 report.framesWritten(++written);
             } catch (const Cancelled&) {
                 break;
@@ -258,6 +258,37 @@ private:
             s.up = std::abs(back.z) < 0.9 ? Vec3d(0, 0, back.y > 0.0 ? 1.0 : -1.0) : Vec3d(1, 0, 0);
         }
         return s;
+    }
+
+    /// The camera of frame @a frame: --camera-file's (a frame pattern picks the frame's file,
+    /// keyframes are interpolated at it), the camera options given here overriding it.
+    CameraSettings cameraFor(int frame) const
+    {
+        CameraSettings cam;
+        if (!mCameraFile.empty()) {
+            cam = readCameraFile(pathOf(mCameraFile, frame), frame);
+            // A rotation or a target given here replaces the file's, whichever it had.
+            if (!mRotate.empty()) cam.lookAt.reset();
+            if (!mLookAt.empty()) cam.rotate.reset();
+        }
+        if (!mRes.empty()) parseResolution(mRes, cam.width, cam.height);
+        if (!mTranslate.empty()) cam.translate = parseVec3("translate", mTranslate, true);
+        if (!mRotate.empty()) cam.rotate = parseVec3("rotate", mRotate, true);
+        if (!mLookAt.empty()) cam.lookAt = parseVec3("lookat", mLookAt, true);
+        if (!mUp.empty()) cam.up = parseVec3("up", mUp, true);
+        if (!mCamera.empty()) {
+            if (mCamera.rfind("persp", 0) == 0) cam.projection = Projection::Perspective;
+            else if (mCamera.rfind("ortho", 0) == 0) cam.projection = Projection::Orthographic;
+            else throw ValueError("--camera: expected perspective or orthographic, got '" + mCamera + "'");
+        }
+        if (mFov && mFocal) throw ValueError("specify --focal or --fov, but not both");
+        if (mAperture) cam.aperture = *mAperture;
+        if (mFocal) cam.focal = *mFocal;
+        if (mFov) cam.setFieldOfView(*mFov);
+        if (mFrame) cam.frame = *mFrame;
+        if (mNear) cam.near = *mNear;
+        if (mFar) cam.far = *mFar;
+        return cam;
     }
 
     static std::string hostName()
@@ -348,30 +379,7 @@ private:
     void resolve(CameraSettings& cam, RenderSettings& rs) const
     {
         if (!mQuality.empty()) rs = RenderSettings::preset(parseChoice("quality", mQuality, kQualities));
-        if (!mCameraFile.empty()) {
-            cam = readCameraFile(mCameraFile);
-            // A rotation or a target given here replaces the file's, whichever it had.
-            if (!mRotate.empty()) cam.lookAt.reset();
-            if (!mLookAt.empty()) cam.rotate.reset();
-        }
-        if (!mRes.empty()) parseResolution(mRes, cam.width, cam.height);
-        if (!mTranslate.empty()) cam.translate = parseVec3("translate", mTranslate, true);
-        if (!mRotate.empty()) cam.rotate = parseVec3("rotate", mRotate, true);
-        if (!mLookAt.empty()) cam.lookAt = parseVec3("lookat", mLookAt, true);
-        if (!mUp.empty()) cam.up = parseVec3("up", mUp, true);
-        if (!mCamera.empty()) {
-            if (mCamera.rfind("persp", 0) == 0) cam.projection = Projection::Perspective;
-            else if (mCamera.rfind("ortho", 0) == 0) cam.projection = Projection::Orthographic;
-            else throw ValueError("--camera: expected perspective or orthographic, got '" + mCamera + "'");
-        }
-        if (mFov && mFocal) throw ValueError("specify --focal or --fov, but not both");
-        if (mAperture) cam.aperture = *mAperture;
-        if (mFocal) cam.focal = *mFocal;
-        if (mFov) cam.setFieldOfView(*mFov);
-        if (mFrame) cam.frame = *mFrame;
-        if (mNear) cam.near = *mNear;
-        if (mFar) cam.far = *mFar;
-
+        cam = cameraFor(frameList().front());
         if (!mAbsorb.empty()) rs.medium.absorb = parseVec3("absorb", mAbsorb, true);
         if (!mScatter.empty()) rs.medium.scatter = parseVec3("scatter", mScatter, true);
         if (!mEmission.empty()) rs.medium.emission = parseVec3("emission", mEmission, true);
