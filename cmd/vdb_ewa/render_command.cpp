@@ -331,12 +331,12 @@ private:
         const double loadSeconds = seconds(t0);
         const Camera camera(cam, grid.worldCentre());
         if (camera.looksDownZByDefault() && verbosity != Verbosity::Quiet) {
-            std::cerr << "vdb_ewa: warning: " << input << ": the eye is at the grid's centre, the default target: looking down -z"
-                      << " (--translate or --lookat frame it)\n";
+            report.line("vdb_ewa: warning: " + input + ": the eye is at the grid's centre, the default target: looking down -z"
+                        " (--translate or --lookat frame it)", stderr);
         }
         if (camera.upReplacedByDefault() && verbosity != Verbosity::Quiet) {
-            std::cerr << "vdb_ewa: warning: " << input << ": the grid's centre lies along --up from the eye: another world axis is"
-                      << " the image's up (--up, --translate or --lookat frame it)\n";
+            report.line("vdb_ewa: warning: " + input + ": the grid's centre lies along --up from the eye: another world axis is"
+                        " the image's up (--up, --translate or --lookat frame it)", stderr);
         }
         const std::vector<Attributes> options = resolvedOptions(grid, camera, rs);
         if (verbosity >= Verbosity::Verbose && (first || verbosity >= Verbosity::Debug)) {
@@ -359,7 +359,8 @@ private:
         attributes.emplace_back("vdb_ewa/camera-record", cameraRecord(explicitCamera(camera, grid.worldCentre())));
         for (const Attributes& group : options)
             for (const auto& [key, value] : group) {
-                // The thread count never changes the image; leaving it out keeps files byte-identical.
+                // The thread count never changes the image; leaving it out keeps the headers of
+                // two thread counts the same (but for the render time).
                 if (key != "threads") attributes.emplace_back("vdb_ewa/" + key, value);
             }
         try {
