@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <map>
@@ -333,6 +334,31 @@ TEST_F(Cli, CamerasPerFrameFromKeyframesAndFromASequencesFiles)
     const CliRun bad = runCli(mDir, in + " " + mDir.file("bad.####.exr") + res + " --frames 1-3 --camera-file " + mDir.file("bad.json"));
     EXPECT_EQ(bad.code, 2);
     EXPECT_NE(bad.err.find("bad.json: keys: frames must rise"), std::string::npos) << bad.err;
+}
+
+TEST_F(Cli, ProgressBarOnATerminalNeverSharesALine)
+{
+    // On a terminal (script(1) gives the CLI a pseudo-terminal) the bar is redrawn in place,
+    // and every other line clears it first ("\r\033[K"): no "vdb_ewa:" line ever continues
+    // the bar's line.
+    if (!std::filesystem::exists("/usr/bin/script")) GTEST_SKIP() << "script(1) is not installed";
+    const std::string command = "/usr/bin/script -qec '" + std::string(VDB_EWA_CLI_PATH) + " " + mGrid + " " + mDir.file("tty.exr") +
+                                " -res 64x48 -translate 0,0,5 -v' /dev/null";
+    std::string out;
+    if (FILE* pipe = popen(command.c_str(), "r")) {
+        char buffer[4096];
+        for (std::size_t n; (n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0;) out.append(buffer, n);
+        EXPECT_EQ(pclose(pipe), 0) << out;
+    }
+    ASSERT_NE(out.find("\r[####"), std::string::npos) << "no bar was drawn: " << out;
+    EXPECT_NE(out.find("] 100%  peak "), std::string::npos) << out;
+    int lines = 0;
+    for (std::size_t at = out.find("vdb_ewa:"); at != std::string::npos; at = out.find("vdb_ewa:", at + 1), ++lines) {
+        // After a newline, or after the clear of the bar's line (the bar itself ends "MB\x1b[K").
+        const bool ownLine = at == 0 || out[at - 1] == '\n' || (at >= 4 && out.compare(at - 4, 4, "\r\x1b[K") == 0);
+        EXPECT_TRUE(ownLine) << "a line glued to the bar: ..." << out.substr(at > 60 ? at - 60 : 0, 80);
+    }
+    EXPECT_GE(lines, 6); // the settings (5 lines) and the timings
 }
 
 TEST_F(Cli, OutputIsIdenticalForOneAndTwoThreads)
