@@ -30,6 +30,7 @@ void RenderSettings::validate() const
     }
     if (!coefficient3(light.color)) fail("--light colour must be in [0, 1e6]");
     if (!coefficient3(medium.emission)) fail("--emission must be in [0, 1e6] per voxel length");
+    if (!coefficient3(ambient)) fail("--ambient must be in [0, 1e6]");
     for (int c = 0; c < 3; ++c) {
         if (medium.emission[c] > 0.0 && !(medium.absorb[c] + medium.scatter[c] > 0.0)) {
             fail("--emission needs --absorb + --scatter > 0 in every channel that emits (the slab update divides by the optical depth)");

@@ -474,6 +474,7 @@ TEST_F(Cli, ArgumentAndOutputErrors)
     // Coefficients past 1e6 made Inf pixels; a shadow step of 1e-9 a light map past any memory.
     expectFailure("render " + mGrid + " " + out + " --emission 1e308", 2, "--emission must be in [0, 1e6]");
     expectFailure("render " + mGrid + " " + out + " --scatter 1e7", 2, "--scatter must be in [0, 1e6]");
+    expectFailure("render " + mGrid + " " + out + " --ambient 0,-1,0", 2, "--ambient must be in [0, 1e6]");
     expectFailure("render " + mGrid + " " + out + " --light 0,1,0,3e38,1,1", 2, "--light colour must be in [0, 1e6]");
     expectFailure("render " + mGrid + " " + out + " --shadowstep 1e-9", 2, "--shadowstep must be finite and >= 0.001");
     expectFailure("render " + mGrid + " " + mDir.file("out.gif"), 2, "unsupported output format");
@@ -528,7 +529,7 @@ TEST_F(Cli, HelpDocumentsEveryOptionWithItsDefault)
     const CliRun r = runCli(mDir, "render --help");
     EXPECT_EQ(r.code, 0);
     for (const char* opt : {"--res", "--translate", "--rotate", "--lookat", "--up", "--camera", "--fov", "--focal",
-             "--aperture", "--frame", "--near", "--far", "--name", "--absorb", "--scatter", "--light", "--gain",
+             "--aperture", "--frame", "--near", "--far", "--name", "--absorb", "--scatter", "--light", "--ambient", "--gain",
              "--cutoff", "--shadowstep", "--step", "--kernel-sigma", "--lowpass", "--aa", "--cutoff-radius", "--slab",
              "--quality", "--exp", "--renormalize", "--taper", "--prefilter", "--precision", "--tile-spacing", "--refine", "--shadow-res", "--method",
              "--lod", "--lod-error", "--threads", "--max-memory", "--verbose", "--emission", "--ocio-config", "--working-space", "--output-space",

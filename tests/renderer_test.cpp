@@ -91,6 +91,55 @@ TEST(Renderer, UniformSlabSingleScatteringMatchesTheClosedForm)
     }
 }
 
+TEST(Renderer, AmbientLightOfAUniformSlabMatchesTheClosedForm)
+{
+    // An unshadowed ambient light A, scattered with albedo s / (a + s) per unit optical depth,
+    // coloured: C_c = A_c s_c / (a_c + s_c) (1 - exp(-tau_c)), the directional light off.
+    const double rho = 0.5, h = 0.1;
+    const int depth = 12;
+    RenderSettings s;
+    s.medium.absorb = Vec3d(0.05, 0.1, 0.2);
+    s.medium.scatter = Vec3d(0.2, 0.15, 0.1);
+    s.light.color = Vec3d(0.0);
+    s.ambient = Vec3d(1.0, 0.5, 2.0);
+    s.cutoff = 0.0;
+    s.step = 0.25;
+    for (const Method method : {Method::Splat, Method::RayMarch}) {
+        s.method = method;
+        const Image img = renderGrid(slab(depth, float(rho), h), orthoDownZ(-0.05, -0.05, 10.0, 1.0, 16), s);
+        for (int c = 0; c < 3; ++c) {
+            const double sigma = s.medium.absorb[c] + s.medium.scatter[c];
+            const double expected = s.ambient[c] * s.medium.scatter[c] / sigma * (1.0 - std::exp(-sigma * rho * depth));
+            for (int j = 0; j < 16; ++j)
+                for (int i = 0; i < 16; ++i) ASSERT_NEAR(img.pixel(i, j)[c], expected, 0.01 * expected) << i << "," << j << " c " << c << " method " << int(method);
+        }
+    }
+}
+
+TEST(Renderer, AmbientAndDirectionalLightAdd)
+{
+    // The compositing is linear in its sources: light and ambient together are the sum of each
+    // alone (the cloud, splatted, to float rounding).
+    const GridSource cloud = makeSampleGrid(SampleGrid::Cloud, 0.05);
+    const Camera camera = cloudCamera(cloud, 64, 48);
+    RenderSettings both;
+    both.light.color = Vec3d(0.9, 0.6, 0.3);
+    both.ambient = Vec3d(0.1, 0.2, 0.4);
+    RenderSettings light = both, ambient = both;
+    light.ambient = Vec3d(0.0);
+    ambient.light.color = Vec3d(0.0);
+    const Image sum = Renderer(both).render(cloud, camera), a = Renderer(light).render(cloud, camera), b = Renderer(ambient).render(cloud, camera);
+    double worst = 0.0;
+    for (std::size_t i = 0; i < sum.rgba.size(); ++i) {
+        if (i % 4 == 3) continue;
+        worst = std::max(worst, std::abs(double(sum.rgba[i]) - double(a.rgba[i]) - double(b.rgba[i])));
+    }
+    EXPECT_LT(worst, 1e-5);
+    double ambientBlue = 0.0;
+    for (std::size_t i = 2; i < b.rgba.size(); i += 4) ambientBlue += b.rgba[i];
+    EXPECT_GT(ambientBlue, 1.0) << "the ambient light lit something";
+}
+
 TEST(Renderer, ColorGridTintsTheScatteredLightPerVoxel)
 {
     // The slab of the closed-form test with a colour grid: red for x < 0, (0.2, 0.5, 1) for

@@ -48,8 +48,8 @@ void OutputOptions::add(CLI::App* app)
         "OpenColorIO config file (default: $OCIO, else vdb_ewa's shipped ACES config); an unusable config "
         "is a warning and falls back to the next");
     app->add_option("--input-space", mInputSpace,
-        "colour space of the colour values given on the command line and in job files (--light colour, --absorb, "
-        "--scatter, --emission): converted to the working space (default: lin_rec709, linear sRGB, what vdb_render's "
+        "colour space of the colour values given on the command line and in job files (--light colour, --ambient, "
+        "--absorb, --scatter, --emission): converted to the working space (default: lin_rec709, linear sRGB, what vdb_render's "
         "values mean)");
     app->add_option("--working-space", mWorkingSpace,
         "colour space the render is computed in (default: the config's scene_linear role; ACEScg in the shipped config)");
@@ -169,6 +169,7 @@ void OutputOptions::toWorkingSpace(RenderSettings& rs, std::vector<std::string>&
     convert("--absorb", rs.medium.absorb);
     convert("--scatter", rs.medium.scatter);
     convert("--emission", rs.medium.emission);
+    convert("--ambient", rs.ambient);
 }
 
 Attributes OutputOptions::resolved() const

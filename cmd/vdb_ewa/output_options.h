@@ -33,7 +33,7 @@ public:
     /// --preview as given (it may hold a frame pattern); empty without one.
     const std::string& previewOption() const { return mPreview; }
 
-    /// Convert the colour values of @a rs (the --light colour, --absorb, --scatter, --emission)
+    /// Convert the colour values of @a rs (the --light colour, --ambient, --absorb, --scatter, --emission)
     /// from --input-space to the working space (after prepare). A grey value the conversion
     /// leaves grey stays bit for bit what it was; components outside the working space's gamut
     /// (negative) become 0, with a line in @a warnings.

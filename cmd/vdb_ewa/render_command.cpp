@@ -90,6 +90,9 @@ public:
         mApp->add_option("--emission", mEmission,
             "self-emission R,G,B per unit density per voxel length, each in [0, 1e6], added to the scattered light (default: " +
                 fmt3(rs.medium.emission) + ")");
+        mApp->add_option("--ambient", mAmbient,
+            "constant ambient (sky) light R,G,B, never shadowed, scattered like --light: a fill for fog volumes; each in "
+            "[0, 1e6], in --input-space (default: 0,0,0)");
         mApp->add_option("--gain", mGain, "shadow-ray extinction falls as 1/(1 + gain * distance in voxels) (default: " + fmt(rs.shadow.gain) + ")");
         mApp->add_option("--cutoff", mCutoff,
             "density cutoff, and rays stop where |transmittance RGB|^2 < cutoff (default: " + fmt(rs.cutoff) + ")");
@@ -384,6 +387,7 @@ private:
         if (!mAbsorb.empty()) rs.medium.absorb = parseVec3("absorb", mAbsorb, true);
         if (!mScatter.empty()) rs.medium.scatter = parseVec3("scatter", mScatter, true);
         if (!mEmission.empty()) rs.medium.emission = parseVec3("emission", mEmission, true);
+        if (!mAmbient.empty()) rs.ambient = parseVec3("ambient", mAmbient, true);
         if (!mLight.empty()) {
             const std::vector<double> v = parseNumbers("light", mLight);
             if (v.size() != 3 && v.size() != 6) throw ValueError("--light: expected X,Y,Z or X,Y,Z,R,G,B, got '" + mLight + "'");
@@ -438,7 +442,7 @@ private:
                  {"frame", fmt(c.frame)}, {"near", fmt(c.near)}, {"far", fmt(c.far)}})
             cameraGroup.emplace_back(k, v);
         Attributes model{{"absorb", fmt3(rs.medium.absorb)}, {"scatter", fmt3(rs.medium.scatter)}, {"emission", fmt3(rs.medium.emission)},
-            {"light", fmt3(rs.light.direction) + "," + fmt3(rs.light.color)}, {"gain", fmt(rs.shadow.gain)}, {"cutoff", fmt(rs.cutoff)},
+            {"light", fmt3(rs.light.direction) + "," + fmt3(rs.light.color)}, {"ambient", fmt3(rs.ambient)}, {"gain", fmt(rs.shadow.gain)}, {"cutoff", fmt(rs.cutoff)},
             {"shadowstep", fmt(rs.shadow.step)}, {"shadow-res", fmt(rs.shadow.resolution)}};
         if (grid.hasColorGrid()) model.emplace_back("color", mColor);
         Attributes method{{"method", choiceName(rs.method, kMethods)}};
@@ -469,10 +473,12 @@ private:
     {
         const auto same = [](const Vec3d& a, const Vec3d& b) { return a.x == b.x && a.y == b.y && a.z == b.z; };
         if (same(given.medium.absorb, working.medium.absorb) && same(given.medium.scatter, working.medium.scatter) &&
-            same(given.medium.emission, working.medium.emission) && same(given.light.color, working.light.color))
+            same(given.medium.emission, working.medium.emission) && same(given.light.color, working.light.color) &&
+            same(given.ambient, working.ambient))
             return "";
         return "vdb_ewa: model in the working space: --absorb " + fmt3(working.medium.absorb) + " --scatter " + fmt3(working.medium.scatter) +
-               " --emission " + fmt3(working.medium.emission) + " --light colour " + fmt3(working.light.color);
+               " --emission " + fmt3(working.medium.emission) + " --light colour " + fmt3(working.light.color) + " --ambient " +
+               fmt3(working.ambient);
     }
 
     /// -v's settings of a frame: the grid, then one line per group of options.
@@ -514,7 +520,7 @@ private:
 
     CLI::App* mApp = nullptr;
     std::string mInput, mOutput, mCameraFile, mName, mRes, mTranslate, mRotate, mLookAt, mUp, mCamera;
-    std::string mAbsorb, mScatter, mEmission, mLight, mAa, mMethod, mQuality, mExp, mRenormalize, mTaper, mPrefilter, mPrecision;
+    std::string mAbsorb, mScatter, mEmission, mAmbient, mLight, mAa, mMethod, mQuality, mExp, mRenormalize, mTaper, mPrefilter, mPrecision;
     std::optional<int> mTileSpacing, mRefine, mSamples;
     std::optional<double> mShadowRes;
     std::optional<double> mIsovalue, mIso, mIsoOpacity;

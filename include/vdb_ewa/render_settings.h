@@ -141,6 +141,10 @@ struct VDB_EWA_API RenderSettings
     Method method = Method::Splat;
     Medium medium;              ///< optical model
     Light light;                ///< the directional light
+    /// Constant ambient (sky) light, RGB radiance from every direction and never shadowed: each
+    /// unit of scattering scatters it as it would the light (a fill for fog volumes; level sets
+    /// and --iso surfaces ignore it). 0: none.
+    Vec3d ambient{0.0, 0.0, 0.0};
     ShadowOptions shadow;       ///< the light's transmittance
     SplatOptions splat;         ///< EWA splatting knobs
     SurfaceOptions surface;     ///< level sets and fog iso-surfaces

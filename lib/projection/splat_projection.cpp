@@ -146,14 +146,15 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels, c
                 // per voxel length), times the footprint peak (Eq. 32, 33): the peak optical
                 // depth in voxel lengths of unit density.
                 const double weight = double(k.density) * volume * s * s * s / ell * fp.peak;
-                // Source terms: the self-emission (optical depth x emission per unit optical
-                // depth) and the scattering weight, lit by the compositor per slab sample.
+                // Source terms: the self-emission and the ambient light scattered (optical
+                // depth x their radiance per unit optical depth, never shadowed) and the
+                // scattering weight, lit by the compositor per slab sample.
                 float* pass = passSources.data() + i * std::size_t(passCount) * 3;
                 for (int c = 0; c < 3; ++c) {
                     const double tau = model.opticalDepth(c, weight, 1.0);
                     sp.tau[c] = float(tau);
                     const double color = colors.empty() ? 1.0 : double(colors[i][c]);
-                    sp.emission[c] = float(tau * model.emitted(c));
+                    sp.emission[c] = float(tau * (model.emitted(c) + model.ambient(c, color)));
                     sp.scatter[c] = float(tau * color);
                     if (layout.shadow >= 0) pass[3 * layout.shadow + c] = 0.0f; // lit per slab sample
                     if (layout.emission >= 0) pass[3 * layout.emission + c] = float(tau * model.emitted(c));

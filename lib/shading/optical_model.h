@@ -3,8 +3,8 @@
 ///        reference's ray samples) asks it for optical depth and source radiance, so they cannot
 ///        disagree by construction. vdb_render's model (OpenVDB tools/RayTracer.h,
 ///        VolumeRender): extinction (absorb + scatter) x density per voxel length, single
-///        scattering of one directional light attenuated by the shadow transmittance, plus
-///        self-emission (docs/equations.md#optical-model).
+///        scattering of one directional light attenuated by the shadow transmittance, plus an
+///        unshadowed ambient light and self-emission (docs/equations.md#optical-model).
 #pragma once
 
 #include <vdb_ewa/render_settings.h>
@@ -21,6 +21,7 @@ public:
             mExtinction[c] = settings.medium.extinction()[c];
             mAlbedo[c] = mExtinction[c] > 0.0 ? settings.light.color[c] * settings.medium.scatter[c] / mExtinction[c] : 0.0;
             mEmitted[c] = mExtinction[c] > 0.0 ? settings.medium.emission[c] / mExtinction[c] : 0.0;
+            mAmbient[c] = mExtinction[c] > 0.0 ? settings.ambient[c] * settings.medium.scatter[c] / mExtinction[c] : 0.0;
         }
     }
 
@@ -34,11 +35,16 @@ public:
     }
 
     /// Source radiance per unit optical depth (the c of Eq. 7 and 10): the light's colour x
-    /// scattering albedo x material colour x @a lightTransmittance, plus emission / extinction.
+    /// scattering albedo x material colour x @a lightTransmittance, plus the ambient light
+    /// scattered (ambient()), plus emission / extinction.
     double source(int c, double lightTransmittance, double materialColor) const
     {
-        return mAlbedo[c] * materialColor * lightTransmittance + mEmitted[c];
+        return mAlbedo[c] * materialColor * lightTransmittance + ambient(c, materialColor) + mEmitted[c];
     }
+
+    /// The ambient light scattered per unit optical depth: ambient x scattering albedo x
+    /// material colour. Never shadowed, so the splatter carries it with the emission.
+    double ambient(int c, double materialColor) const { return mAmbient[c] * materialColor; }
 
     /// The scattering part of source() alone: light colour x albedo x colour x transmittance.
     double scattered(int c, double lightTransmittance, double materialColor) const
@@ -53,7 +59,7 @@ public:
     bool unlit() const { return mAlbedo[0] == 0.0 && mAlbedo[1] == 0.0 && mAlbedo[2] == 0.0; }
 
 private:
-    double mExtinction[3], mAlbedo[3], mEmitted[3];
+    double mExtinction[3], mAlbedo[3], mEmitted[3], mAmbient[3];
 };
 
 } // namespace detail
