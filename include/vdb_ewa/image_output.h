@@ -33,7 +33,8 @@ struct ImageFileOptions
     /// beginning with "sRGB" is tagged "sRGB", OpenImageIO's own, so that PNG gets its sRGB
     /// chunk and JPEG and TIFF their Exif colour space. Empty: untagged.
     std::string colorSpace;
-    /// String metadata, kept where the format holds it (PNG text chunks, TIFF and JPEG tags).
+    /// String metadata, kept where the format holds it (PNG text chunks; JPEG, TIFF, PPM and
+    /// RGBE drop it).
     std::vector<std::pair<std::string, std::string>> attributes;
 };
 
