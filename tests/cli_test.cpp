@@ -429,6 +429,25 @@ TEST_F(Cli, ColorGridTintsAFogVolume)
     expectFailure("render " + file + " " + out + " --color density", 3, "density");
 }
 
+TEST_F(Cli, DensityGridPicksAGridOfAPyroCache)
+{
+    // A file of several grids: --density-grid (the same option as --name) picks one.
+    const std::string file = mDir.file("pyro.vdb"), picked = mDir.file("picked.exr"), named = mDir.file("named.exr");
+    auto density = makeBoxGrid(openvdb::Coord(-8), openvdb::Coord(7), 0.5f, 0.1);
+    density->setName("density");
+    auto heat = makeBoxGrid(openvdb::Coord(-2), openvdb::Coord(1), 3.0f, 0.1);
+    heat->setName("heat");
+    openvdb::io::File(file).write({heat, density});
+    const CliRun r = runCli(mDir, file + " " + picked + " -res 32x32 -translate 0,0,4 --density-grid density -v");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("vdb_ewa: grid 'density'"), std::string::npos) << r.out;
+    ASSERT_EQ(runCli(mDir, file + " " + named + " -res 32x32 -translate 0,0,4 -name density").code, 0);
+    EXPECT_EQ(maxAbsDiff(readExr(picked), readExr(named)), 0.0);
+    const CliRun heatRun = runCli(mDir, file + " " + named + " -res 32x32 -translate 0,0,4 --density-grid heat -v");
+    EXPECT_NE(heatRun.out.find("vdb_ewa: grid 'heat'"), std::string::npos) << heatRun.out;
+    EXPECT_GT(maxAbsDiff(readExr(picked), readExr(named)), 0.1) << "another grid, another image";
+}
+
 TEST_F(Cli, VerbosePrintsThePresetResolvedWithOverrides)
 {
     const std::string out = mDir.file("out.exr");
@@ -529,7 +548,7 @@ TEST_F(Cli, HelpDocumentsEveryOptionWithItsDefault)
     const CliRun r = runCli(mDir, "render --help");
     EXPECT_EQ(r.code, 0);
     for (const char* opt : {"--res", "--translate", "--rotate", "--lookat", "--up", "--camera", "--fov", "--focal",
-             "--aperture", "--frame", "--near", "--far", "--name", "--absorb", "--scatter", "--light", "--ambient", "--gain",
+             "--aperture", "--frame", "--near", "--far", "--name", "--density-grid", "--absorb", "--scatter", "--light", "--ambient", "--gain",
              "--cutoff", "--shadowstep", "--step", "--kernel-sigma", "--lowpass", "--aa", "--cutoff-radius", "--slab",
              "--quality", "--exp", "--renormalize", "--taper", "--prefilter", "--precision", "--tile-spacing", "--refine", "--shadow-res", "--method",
              "--lod", "--lod-error", "--threads", "--max-memory", "--verbose", "--emission", "--ocio-config", "--working-space", "--output-space",

@@ -61,7 +61,9 @@ public:
             "output image, its format by its extension: .exr (premultiplied RGBA and Z in --output-space), .png, .jpg, "
             ".tif or .ppm (8-bit RGB: the beauty over black through --display and --view) or .hdr (float RGB over black "
             "in --output-space) (docs/output.md)")->required();
-        mApp->add_option("--name", mName, "grid to render (default: the first scalar float or double grid)");
+        mApp->add_option("--name,--density-grid", mName,
+            "grid to render, as the density of a fog volume or a level set; --density-grid is the same option under the "
+            "name a pyro cache's user looks for (default: the first scalar float or double grid, as vdb_render)");
         // Camera (vdb_render semantics).
         mApp->add_option("--camera-file", mCameraFile,
             "take the camera from a file: an .exr rendered by vdb_ewa (the same camera exactly) or by another renderer "
