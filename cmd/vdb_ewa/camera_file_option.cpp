@@ -1,6 +1,7 @@
 /// @file camera_file_option.cpp
 #include "camera_file_option.h"
 
+#include "job_file.h"
 #include "option_values.h"
 
 #include <vdb_ewa/camera_file.h>
@@ -10,7 +11,6 @@
 
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <set>
 #include <utility>
 #include <vector>
@@ -139,15 +139,7 @@ CameraSettings readCameraFile(const std::string& path, int frame)
     if (!std::filesystem::is_regular_file(status)) throw IoError(path + ": not a regular file, so not a camera file");
     const std::string ext = std::filesystem::path(path).extension().string();
     if (ext == ".exr" || ext == ".EXR") return readExrCamera(path);
-    std::ifstream in(path);
-    if (!in) throw IoError(path + ": cannot open the camera file");
-    nlohmann::json j;
-    try {
-        j = nlohmann::json::parse(in);
-    } catch (const nlohmann::json::exception& e) {
-        throw IoError(path + ": not a JSON camera file (" + std::string(e.what()).substr(0, 160) + ")");
-    }
-    if (!j.is_object()) throw ValueError(path + ": a camera file holds one JSON object of key: value");
+    const nlohmann::json j = readJsonObjectFile(path, "camera", "key: value");
     if (j.contains("keys")) {
         if (j.size() != 1) throw ValueError(path + ": a file of keyframes holds \"keys\" alone");
         return interpolated(j["keys"], double(frame), path);

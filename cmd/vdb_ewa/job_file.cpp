@@ -36,26 +36,30 @@ std::string word(const nlohmann::json& v, const std::string& where)
 
 } // namespace
 
-std::vector<std::string> jobArguments(const std::string& path, const std::vector<std::string>& knownOptions,
-    const std::vector<std::string>& flags, const std::vector<std::string>& givenOnCommandLine, bool positionalsGiven)
+nlohmann::json readJsonObjectFile(const std::string& path, const std::string& kind, const std::string& entries)
 {
-    // A directory or a FIFO is not a job file: refused before it is opened (a FIFO with no
-    // writer would block the open).
     std::error_code error;
     const auto status = std::filesystem::status(path, error);
     if (std::filesystem::exists(status) && !std::filesystem::is_regular_file(status)) {
-        throw IoError(path + ": not a regular file, so not a job file");
+        throw IoError(path + ": not a regular file, so not a " + kind + " file");
     }
     std::ifstream in(path);
-    if (!in) throw IoError(path + ": cannot open the job file");
-    nlohmann::json job;
+    if (!in) throw IoError(path + ": cannot open the " + kind + " file");
+    nlohmann::json object;
     try {
-        job = nlohmann::json::parse(in);
+        object = nlohmann::json::parse(in);
     } catch (const nlohmann::json::exception& e) {
         // Parse errors and numbers out of range (1e999): one line, the library's words clipped.
-        throw IoError(path + ": not a JSON job file (" + std::string(e.what()).substr(0, 160) + ")");
+        throw IoError(path + ": not a JSON " + kind + " file (" + std::string(e.what()).substr(0, 160) + ")");
     }
-    if (!job.is_object()) throw ValueError(path + ": a job file holds one JSON object of option: value");
+    if (!object.is_object()) throw ValueError(path + ": a " + kind + " file holds one JSON object of " + entries);
+    return object;
+}
+
+std::vector<std::string> jobArguments(const std::string& path, const std::vector<std::string>& knownOptions,
+    const std::vector<std::string>& flags, const std::vector<std::string>& givenOnCommandLine, bool positionalsGiven)
+{
+    const nlohmann::json job = readJsonObjectFile(path, "job", "option: value");
 
     std::vector<std::string> args, positionals(2);
     for (const auto& [key, value] : job.items()) {

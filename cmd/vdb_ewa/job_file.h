@@ -4,6 +4,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json_fwd.hpp>
 
 #include <string>
 #include <vector>
@@ -21,6 +22,12 @@ namespace vdb_ewa::cli {
 ///        file and the key.
 std::vector<std::string> jobArguments(const std::string& path, const std::vector<std::string>& knownOptions,
     const std::vector<std::string>& flags, const std::vector<std::string>& givenOnCommandLine, bool positionalsGiven);
+
+/// The JSON object in the regular file @a path (a directory or a FIFO is refused before it is
+/// opened: a FIFO with no writer would block the open). @a kind names the file in errors ("job",
+/// "camera"), @a entries what its object holds ("option: value").
+/// @throw IoError (not a regular file, unreadable, not JSON) or ValueError (not an object).
+nlohmann::json readJsonObjectFile(const std::string& path, const std::string& kind, const std::string& entries);
 
 /// If @a args (the render subcommand's arguments, after the subcommand's name) hold
 /// `--job FILE` (or `--job=FILE`), return them with the job's settings inserted before them
