@@ -4,6 +4,7 @@
 #include <vdb_ewa/error.h>
 
 #include <cmath>
+#include <string>
 
 namespace vdb_ewa {
 namespace {
@@ -25,10 +26,13 @@ void RenderSettings::validate() const
     auto fail = [](const std::string& what) { throw ValueError(what); };
     if (!coefficient3(medium.absorb)) fail("--absorb must be in [0, 1e6] per voxel length");
     if (!coefficient3(medium.scatter)) fail("--scatter must be in [0, 1e6] per voxel length");
-    if (!finite3(light.direction) || (light.direction.x == 0.0 && light.direction.y == 0.0 && light.direction.z == 0.0)) {
-        fail("--light direction must be a finite non-zero vector");
+    if (lights.size() > kMaxLights) fail("at most " + std::to_string(kMaxLights) + " --light options (each takes a light map)");
+    for (const Light& light : lights) {
+        if (!finite3(light.direction) || (light.direction.x == 0.0 && light.direction.y == 0.0 && light.direction.z == 0.0)) {
+            fail("--light direction must be a finite non-zero vector");
+        }
+        if (!coefficient3(light.color)) fail("--light colour must be in [0, 1e6]");
     }
-    if (!coefficient3(light.color)) fail("--light colour must be in [0, 1e6]");
     if (!coefficient3(medium.emission)) fail("--emission must be in [0, 1e6] per voxel length");
     if (!coefficient3(ambient)) fail("--ambient must be in [0, 1e6]");
     for (int c = 0; c < 3; ++c) {

@@ -54,16 +54,16 @@ std::string countLine(std::uint64_t n, const std::string& what)
 
 /// A fog volume's --iso surface rasterised on its own with disc coverage (the level sets'
 /// method: docs/equations.md#surface-coverage), for the slab compositor to composite at its
-/// depth; lit as the volume is: the light's colour x the material colour x the cosine x the
-/// light's transmittance from the light map at the kernel. shadow: that transmittance alone
-/// (the shadow pass). Both times --iso-opacity.
+/// depth; lit as the volume is: per light, its colour x the material colour x the cosine x its
+/// transmittance from its light map at the kernel, summed. shadow: the lights' transmittances
+/// summed (the shadow pass). Both times --iso-opacity.
 struct IsoSurface
 {
     detail::SurfaceLayer layer, shadow;
 };
 
 IsoSurface isoSurface(const RenderSettings& settings, const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes,
-    const detail::LightMap& light, detail::Progress& progress, const detail::MemoryBudget& budget)
+    const std::vector<detail::LightMap>& lights, detail::Progress& progress, const detail::MemoryBudget& budget)
 {
     budget.check(double(grid.activeVoxels), "active voxels (surface kernels)", detail::kBytesPerKernel);
     // Two layers of 5 floats a pixel (colour, coverage, depth) and the depth along each ray.
@@ -74,14 +74,18 @@ IsoSurface isoSurface(const RenderSettings& settings, const GridSource::Impl& gr
     request.outwardDecreasing = true; // the outside is where the density falls
     request.reach = detail::kReachForFog;
     const detail::SurfaceSet surfaces = detail::extractSurfaceKernels(grid, request, &progress);
-    const Vec3d toLight = settings.light.unitDirection();
     std::vector<detail::Rgb> lit(surfaces.kernels.size(), detail::Rgb{0.0f, 0.0f, 0.0f}), shadow = lit;
     for (std::size_t i = 0; i < lit.size(); ++i) {
         const detail::SurfaceKernel& k = surfaces.kernels[i];
         if (!(k.area > 0.0)) continue; // not drawn
-        shadow[i] = light.transmittance(light.coordinates(k.pWorld));
-        const double lambert = std::max(0.0, glm::dot(k.normal, toLight));
-        for (int c = 0; c < 3; ++c) lit[i][std::size_t(c)] = float(settings.light.color[c] * k.albedo[c] * lambert * double(shadow[i][std::size_t(c)]));
+        for (std::size_t l = 0; l < lights.size(); ++l) {
+            const detail::Rgb t = lights[l].transmittance(lights[l].coordinates(k.pWorld));
+            const double lambert = std::max(0.0, glm::dot(k.normal, settings.lights[l].unitDirection()));
+            for (std::size_t c = 0; c < 3; ++c) {
+                shadow[i][c] += t[c];
+                lit[i][c] += float(settings.lights[l].color[int(c)] * k.albedo[int(c)] * lambert * double(t[c]));
+            }
+        }
     }
     detail::SurfaceStats stats;
     IsoSurface out;
@@ -158,16 +162,22 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     if (alpha > 0.0) stats.haloKernels = detail::quasiInterpolate(g, alpha, kernels, &sampled);
     stats.kernelSeconds = timer.lap();
     progress.stage(10, 35);
-    // The light map takes at most a quarter of the budget (4 bytes a lattice point).
-    const double lightPoints = std::min(detail::kLightMapPointBudget, budget.itemsWithin(0.25, 4.0));
-    const detail::LightMap light(g, mSettings, &progress, lightPoints);
+    // The light maps take at most a quarter of the budget (4 bytes a lattice point), shared
+    // between the lights.
+    const double lightCount = double(std::max<std::size_t>(mSettings.lights.size(), 1));
+    const double lightPoints = std::min(detail::kLightMapPointBudget, budget.itemsWithin(0.25, 4.0)) / lightCount;
+    std::vector<detail::LightMap> lights;
+    lights.reserve(mSettings.lights.size());
+    for (std::size_t l = 0; l < mSettings.lights.size(); ++l) lights.emplace_back(g, mSettings, l, &progress, lightPoints);
     stats.shadowSeconds = timer.lap();
-    if (light.shadowStep() != mSettings.shadow.step || light.shadowResolution() != mSettings.shadow.resolution) {
+    for (const detail::LightMap& light : lights) {
+        if (light.shadowStep() == mSettings.shadow.step && light.shadowResolution() == mSettings.shadow.resolution) continue;
         std::ostringstream w;
         w << "--shadowstep raised from " << mSettings.shadow.step << " to " << light.shadowStep() << " and --shadow-res from "
           << mSettings.shadow.resolution << " to " << light.shadowResolution()
-          << " voxels: finer shadows would need more than their share of memory (" << lightPoints << " light-map points; raise --max-memory)";
+          << " voxels: finer shadows would need more than their share of memory (" << lightPoints << " light-map points a light; raise --max-memory)";
         stats.warnings.push_back(w.str());
+        break;
     }
     if (refinement.lowered) {
         std::ostringstream w;
@@ -179,11 +189,11 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     const std::vector<detail::Rgb> colors = detail::kernelColors(g, kernels);
     detail::SplatSet splats = detail::projectSplats(g, kernels, colors, camera, mSettings, passes, &progress);
     std::optional<IsoSurface> iso;
-    if (!std::isnan(mSettings.surface.iso)) iso = isoSurface(mSettings, g, camera, passes, light, progress, budget);
+    if (!std::isnan(mSettings.surface.iso)) iso = isoSurface(mSettings, g, camera, passes, lights, progress, budget);
     stats.projectSeconds = timer.lap();
     progress.stage(45, 100);
     detail::RasterStats raster;
-    frame = detail::rasterizeSplats(splats, camera, mSettings, passes, raster, &light, !colors.empty(), &progress, &budget,
+    frame = detail::rasterizeSplats(splats, camera, mSettings, passes, raster, lights, !colors.empty(), &progress, &budget,
         iso ? &iso->layer : nullptr, iso && passes.shadow ? &iso->shadow : nullptr);
     stats.rasterSeconds = timer.lap();
 

@@ -66,7 +66,7 @@ TEST(Convergence, ReferenceLightsALinearRampAsItsNumericalIntegral)
     auto grid = makeFogGrid(openvdb::Coord(0, -20, 0), openvdb::Coord(N - 1, 19, D - 1),
         [&](const openvdb::Coord& ijk) { return float(g * (ijk.x() + 1)); }, h);
     RenderSettings s = scatteringSlabSettings(sigma);
-    s.light.direction = Vec3d(1, 0, 0);
+    s.lights[0].direction = Vec3d(1, 0, 0);
     s.shadow.step = 0.025;
     s.method = Method::RayMarch;
     s.step = 0.05;

@@ -239,11 +239,11 @@ TEST(Extremes, LightDirectionOfAnyLength)
     cam.translate = Vec3d(1.0, 0.5, 4.0);
     const Camera camera(cam, cloud.worldCentre());
     RenderSettings s;
-    s.light.direction = Vec3d(0.3, 0.3, 0.0);
+    s.lights[0].direction = Vec3d(0.3, 0.3, 0.0);
     const Image unit = Renderer(s).render(cloud, camera);
     expectSane(unit);
     for (const double scale : {1e-300, 1e300}) {
-        s.light.direction = Vec3d(0.3, 0.3, 0.0) * scale;
+        s.lights[0].direction = Vec3d(0.3, 0.3, 0.0) * scale;
         const Image img = Renderer(s).render(cloud, camera);
         EXPECT_EQ(img.rgba, unit.rgba) << "light direction x " << scale;
     }

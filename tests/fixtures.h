@@ -204,8 +204,8 @@ inline RenderSettings scatteringSlabSettings(double sigma)
     RenderSettings s;
     s.medium.absorb = Vec3d(0.0);
     s.medium.scatter = Vec3d(sigma);
-    s.light.direction = Vec3d(0, 0, 1);
-    s.light.color = Vec3d(1.0);
+    s.lights[0].direction = Vec3d(0, 0, 1);
+    s.lights[0].color = Vec3d(1.0);
     s.shadow.gain = 0.0;
     s.cutoff = 0.0;
     s.shadow.step = 0.1;

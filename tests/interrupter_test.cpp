@@ -144,13 +144,14 @@ TEST(Progress, EveryStageAdvancesExactlyTheUnitsItDeclares)
     const GridSource::Impl& fog = cloud.impl();
     const detail::KernelSet kernels = detail::extractKernels(fog, settings, nullptr, &progress);
     expectComplete("kernel extraction (one per leaf node)", fog.grid->tree().leafCount());
-    const detail::LightMap light(fog, settings, &progress);
+    std::vector<detail::LightMap> lights;
+    lights.emplace_back(fog, settings, 0, &progress);
     EXPECT_GT(progress.units(), 1u);
     expectComplete("light map (one per row of shadow rays)", progress.units());
     const detail::SplatSet splats = detail::projectSplats(fog, kernels, {}, cloudView, settings, {}, &progress);
     expectComplete("splat projection (one per kernel)", kernels.kernels.size());
     detail::RasterStats raster;
-    detail::rasterizeSplats(splats, cloudView, settings, {}, raster, &light, false, &progress);
+    detail::rasterizeSplats(splats, cloudView, settings, {}, raster, lights, false, &progress);
     EXPECT_GT(progress.units(), 1u);
     expectComplete("slab compositing (one per screen tile)", progress.units());
 

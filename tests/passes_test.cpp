@@ -121,7 +121,7 @@ TEST(Passes, ShadowPassIsTheBeautyOfAWhiteAlbedoOneMedium)
     const Camera camera = cloudCamera(cloud, 96, 64);
     RenderSettings s; // absorb 0, white light 1: the beauty is the composited shadow term
     s.medium.absorb = Vec3d(0.0);
-    s.light.color = Vec3d(1.0);
+    s.lights[0].color = Vec3d(1.0);
     const Frame f = Renderer(s).renderFrame(cloud, camera, allFlatPasses());
     double sum = 0.0;
     for (std::size_t i = 0; i < f.shadow.size(); ++i) {
@@ -136,7 +136,7 @@ TEST(Passes, EmissionAloneMatchesTheAnalyticSlabAndAddsToTheLight)
     // Light off: C = (eta / sigma_t)(1 - exp(-sigma_t L)), L = 40 voxels, sigma_t = 0.05.
     const GridSource slab = slabGrid();
     RenderSettings dark = absorberSettings(0.05);
-    dark.light.color = Vec3d(0.0);
+    dark.lights[0].color = Vec3d(0.0);
     dark.medium.emission = Vec3d(0.02, 0.01, 0.0);
     const Frame f = Renderer(dark).renderFrame(slab, slabCamera(), allFlatPasses());
     for (std::size_t i = 0; i < 64; ++i)
@@ -161,7 +161,7 @@ TEST(Passes, EmissionAloneMatchesTheAnalyticSlabAndAddsToTheLight)
     EXPECT_GT(emitted, 1.0);
     // The reference integrator carries the same emission term (light off: emission alone).
     RenderSettings glow = both;
-    glow.light.color = Vec3d(0.0);
+    glow.lights[0].color = Vec3d(0.0);
     RenderSettings ref = glow;
     ref.method = Method::RayMarch;
     ref.step = 0.5;
@@ -178,7 +178,7 @@ TEST(Passes, PassesLeaveTheBeautyBitIdentical)
     const Camera camera = cloudCamera(cloud, 96, 64);
     for (const Vec3d& light : {Vec3d(0.7), Vec3d(1.0, 0.5, 0.2)}) { // grey and three-channel paths
         RenderSettings s;
-        s.light.color = light;
+        s.lights[0].color = light;
         const Image plain = Renderer(s).render(cloud, camera);
         PassRequest all = allFlatPasses();
         all.deep = true;
@@ -236,8 +236,8 @@ TEST(Passes, IsoSurfaceIsInEveryPass)
     RenderSettings s;
     s.surface.iso = 0.25;
     s.medium.absorb = Vec3d(0.0); // albedo 1, white light from the camera: the shadow pass is the beauty
-    s.light.color = Vec3d(1.0);
-    s.light.direction = Vec3d(0.0, 0.0, 1.0);
+    s.lights[0].color = Vec3d(1.0);
+    s.lights[0].direction = Vec3d(0.0, 0.0, 1.0);
     PassRequest all = allFlatPasses();
     all.deep = true;
     const Frame f = Renderer(s).renderFrame(ball, camera, all);

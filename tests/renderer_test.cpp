@@ -100,7 +100,7 @@ TEST(Renderer, AmbientLightOfAUniformSlabMatchesTheClosedForm)
     RenderSettings s;
     s.medium.absorb = Vec3d(0.05, 0.1, 0.2);
     s.medium.scatter = Vec3d(0.2, 0.15, 0.1);
-    s.light.color = Vec3d(0.0);
+    s.lights[0].color = Vec3d(0.0);
     s.ambient = Vec3d(1.0, 0.5, 2.0);
     s.cutoff = 0.0;
     s.step = 0.25;
@@ -123,11 +123,11 @@ TEST(Renderer, AmbientAndDirectionalLightAdd)
     const GridSource cloud = makeSampleGrid(SampleGrid::Cloud, 0.05);
     const Camera camera = cloudCamera(cloud, 64, 48);
     RenderSettings both;
-    both.light.color = Vec3d(0.9, 0.6, 0.3);
+    both.lights[0].color = Vec3d(0.9, 0.6, 0.3);
     both.ambient = Vec3d(0.1, 0.2, 0.4);
     RenderSettings light = both, ambient = both;
     light.ambient = Vec3d(0.0);
-    ambient.light.color = Vec3d(0.0);
+    ambient.lights[0].color = Vec3d(0.0);
     const Image sum = Renderer(both).render(cloud, camera), a = Renderer(light).render(cloud, camera), b = Renderer(ambient).render(cloud, camera);
     double worst = 0.0;
     for (std::size_t i = 0; i < sum.rgba.size(); ++i) {
@@ -138,6 +138,53 @@ TEST(Renderer, AmbientAndDirectionalLightAdd)
     double ambientBlue = 0.0;
     for (std::size_t i = 2; i < b.rgba.size(); i += 4) ambientBlue += b.rgba[i];
     EXPECT_GT(ambientBlue, 1.0) << "the ambient light lit something";
+}
+
+TEST(Renderer, TwoLightsEqualTheSumOfOneLightEach)
+{
+    // Each light has its own shadows (a light map each for the splatter, shadow rays for the
+    // reference), and the scattered light is linear in the lights: a key and a coloured rim
+    // light together are the two renders with one light each, summed (to float rounding), for
+    // both rasteriser backends, the reference, and the --iso surface.
+    const GridSource cloud = makeSampleGrid(SampleGrid::Cloud, 0.05);
+    const Camera camera = cloudCamera(cloud, 64, 48);
+    const Light key{Vec3d(0.3, 0.8, 0.2), Vec3d(0.9, 0.8, 0.7)}, rim{Vec3d(-0.7, 0.1, -0.6), Vec3d(0.2, 0.4, 1.1)};
+    struct Case
+    {
+        const char* name;
+        Method method;
+        bool simd;
+        double iso;
+    };
+    const double off = std::numeric_limits<double>::quiet_NaN();
+    for (const Case& c : {Case{"splat simd", Method::Splat, true, off}, Case{"splat scalar", Method::Splat, false, off},
+             Case{"raymarch", Method::RayMarch, true, off}, Case{"splat with --iso", Method::Splat, true, 0.5}}) {
+        RenderSettings both;
+        both.method = c.method;
+        both.simd = c.simd;
+        both.surface.iso = c.iso;
+        both.step = 0.5;
+        both.medium.absorb = Vec3d(0.1, 0.15, 0.2); // not grey: three channels
+        both.lights = {key, rim};
+        RenderSettings first = both, second = both;
+        first.lights = {key};
+        second.lights = {rim};
+        const Image sum = Renderer(both).render(cloud, camera), a = Renderer(first).render(cloud, camera),
+                    b = Renderer(second).render(cloud, camera);
+        double worst = 0.0, peak = 0.0, rimOnly = 0.0;
+        for (std::size_t i = 0; i < sum.rgba.size(); ++i) {
+            if (i % 4 == 3) {
+                EXPECT_EQ(sum.rgba[i], a.rgba[i]) << c.name << ": alpha does not depend on the lights";
+                continue;
+            }
+            worst = std::max(worst, std::abs(double(sum.rgba[i]) - double(a.rgba[i]) - double(b.rgba[i])));
+            peak = std::max(peak, double(sum.rgba[i]));
+            rimOnly += b.rgba[i];
+        }
+        EXPECT_LT(worst, 1e-5) << c.name;
+        EXPECT_GT(rimOnly, 1.0) << c.name << ": the second light lit something";
+        EXPECT_GT(peak, 0.05) << c.name;
+    }
 }
 
 TEST(Renderer, ColorGridTintsTheScatteredLightPerVoxel)
@@ -314,11 +361,11 @@ TEST(Renderer, GreyFastPathEqualsTheThreeChannelPath)
     const GridSource cloud = makeSampleGrid(SampleGrid::Cloud, 0.05);
     const Camera camera = cloudCamera(cloud, 120, 90);
     RenderSettings colour;
-    colour.light.color = Vec3d(0.9, 0.5, 0.2);
+    colour.lights[0].color = Vec3d(0.9, 0.5, 0.2);
     const Image c = Renderer(colour).render(cloud, camera);
     for (int ch = 0; ch < 3; ++ch) {
         RenderSettings grey;
-        grey.light.color = Vec3d(colour.light.color[ch]);
+        grey.lights[0].color = Vec3d(colour.lights[0].color[ch]);
         const Image g = Renderer(grey).render(cloud, camera);
         std::size_t same = 0, n = 0;
         for (std::size_t i = 0; i < g.rgba.size(); i += 4, ++n) {
@@ -636,7 +683,7 @@ TEST(Renderer, LightMapStopsWhereVdbRendersShadowRayStops)
     RenderSettings s;
     s.medium.absorb = Vec3d(0.0);
     s.medium.scatter = Vec3d(1.6, 1.1, 0.6);
-    s.light.direction = Vec3d(1.0, 0.0, 0.0);
+    s.lights[0].direction = Vec3d(1.0, 0.0, 0.0);
     s.shadow.gain = 0.0;
     const detail::LightMap light(box.impl(), s);
     const auto t2At = [&](double depth) {
@@ -675,7 +722,7 @@ TEST(Renderer, LightMapKeepsToItsBudget)
     RenderSettings s;
     s.shadow.step = 0.01;
     s.shadow.resolution = 0.25;
-    const detail::LightMap coarsened(cloud.impl(), s, nullptr, 1e6);
+    const detail::LightMap coarsened(cloud.impl(), s, 0, nullptr, 1e6);
     EXPECT_GT(coarsened.shadowStep(), 2.0 * s.shadow.step);
     EXPECT_NEAR(coarsened.shadowStep() / s.shadow.step, coarsened.shadowResolution() / s.shadow.resolution, 1e-9);
     EXPECT_LE(coarsened.latticePoints(), 1e6);
@@ -683,7 +730,7 @@ TEST(Renderer, LightMapKeepsToItsBudget)
     RenderSettings raised = s;
     raised.shadow.step = coarsened.shadowStep();
     raised.shadow.resolution = coarsened.shadowResolution();
-    const detail::LightMap direct(cloud.impl(), raised, nullptr, 1e6);
+    const detail::LightMap direct(cloud.impl(), raised, 0, nullptr, 1e6);
     EXPECT_EQ(direct.shadowStep(), raised.shadow.step);
     int lit = 0;
     for (double x = -0.8; x <= 0.8; x += 0.1)

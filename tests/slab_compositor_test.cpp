@@ -272,7 +272,7 @@ TEST(SlabCompositor, SimdEqualsScalarOnLitRenders)
         for (const bool coloured : {false, true}) {
             RenderSettings on;
             if (coloured) {
-                on.light.color = Vec3d(0.9, 0.5, 0.2);
+                on.lights[0].color = Vec3d(0.9, 0.5, 0.2);
                 on.medium.scatter = Vec3d(1.5, 1.0, 0.5);
             }
             RenderSettings off = on;
@@ -299,7 +299,7 @@ TEST(SlabCompositor, SimdIsBitIdenticalAcrossThreadCounts)
         RenderSettings one, two;
         one.threads = 1;
         two.threads = 2;
-        one.light.color = two.light.color = Vec3d(0.9, 0.5, 0.2);
+        one.lights[0].color = two.lights[0].color = Vec3d(0.9, 0.5, 0.2);
         RenderStats stats;
         const Image a = Renderer(one).render(cloud, camera, &stats);
         const Image b = Renderer(two).render(cloud, camera);

@@ -268,8 +268,8 @@ TEST(Surface, CheckerSheetWithVolumeKernelsFiltersButBlursTheTexture)
     // a grazing angle: near the camera the surface kernels keep more contrast.
     const Camera camera = CheckerPlane::camera();
     RenderSettings volume;
-    volume.light.direction = Vec3d(0, 1, 0);
-    volume.light.color = Vec3d(1.0);
+    volume.lights[0].direction = Vec3d(0, 1, 0);
+    volume.lights[0].color = Vec3d(1.0);
     volume.medium.absorb = Vec3d(0.0);
     volume.medium.scatter = Vec3d(1.0);
     volume.shadow.step = 0.25;
@@ -359,8 +359,8 @@ TEST(Surface, IsoSurfaceInsideAFogVolumeIsOccludingAndTinted)
     s.medium.absorb = Vec3d(0.3, 0.1, 0.02); // the plate's tint (scatter 0: a pure absorber)
     s.medium.scatter = Vec3d(0.0);
     s.medium.emission = Vec3d(0.5, 0.5, 0.5); // makes the blob (and the ball's inside) glow
-    s.light.direction = Vec3d(1.0, 0.0, 0.0);
-    s.light.color = Vec3d(1.0);
+    s.lights[0].direction = Vec3d(1.0, 0.0, 0.0);
+    s.lights[0].color = Vec3d(1.0);
     s.cutoff = 0.0;
     s.surface.iso = 0.5;
     const int x = 60, y = 45; // surface point (0.5, 0, 0.87): lit at 60 degrees

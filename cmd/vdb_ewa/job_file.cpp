@@ -79,13 +79,18 @@ std::vector<std::string> jobArguments(const std::string& path, const std::vector
         }
         if (value.is_array()) {
             if (value.empty()) throw ValueError(where + ": empty list");
-            std::string joined;
-            for (const auto& element : value) {
-                if (element.is_array() || element.is_object()) throw ValueError(where + ": expected a flat list");
-                joined += (joined.empty() ? "" : ",") + word(element, where);
+            // A list of lists repeats the option, once per inner list ("light": [[...], [...]]).
+            const bool repeated = value.front().is_array();
+            for (const auto& item : repeated ? value : nlohmann::json::array({value})) {
+                if (!item.is_array() || item.empty()) throw ValueError(where + ": expected a list of numbers or a list of such lists");
+                std::string joined;
+                for (const auto& element : item) {
+                    if (element.is_array() || element.is_object()) throw ValueError(where + ": expected a list of numbers or a list of such lists");
+                    joined += (joined.empty() ? "" : ",") + word(element, where);
+                }
+                args.push_back("--" + key);
+                args.push_back(joined);
             }
-            args.push_back("--" + key);
-            args.push_back(joined);
             continue;
         }
         if (value.is_object() || value.is_null()) throw ValueError(where + ": expected a string, number, true/false or list");

@@ -16,8 +16,9 @@ namespace vdb_ewa::cli {
 /// positionals when @a positionalsGiven. @a knownOptions: the long option names the render
 /// command accepts (without dashes); @a flags: those that take no value.
 /// Values: strings as they are, numbers, true/false for flags and on/off switches, arrays of
-/// numbers joined with commas (`"translate": [0, 0, 5]`), arrays of strings repeated or
-/// joined (`"aov": ["shadow", "emission"]`).
+/// numbers joined with commas (`"translate": [0, 0, 5]`), arrays of strings joined
+/// (`"aov": ["shadow", "emission"]`), arrays of arrays repeat the option once per inner array
+/// (`"light": [[1, 1, 0], [-1, 0.5, 0, 0.2, 0.3, 0.6]]`).
 /// @throw IoError (unreadable, not JSON) or ValueError (unknown key, wrong value) naming the
 ///        file and the key.
 std::vector<std::string> jobArguments(const std::string& path, const std::vector<std::string>& knownOptions,

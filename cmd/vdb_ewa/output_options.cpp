@@ -165,7 +165,7 @@ void OutputOptions::toWorkingSpace(RenderSettings& rs, std::vector<std::string>&
             value = Vec3d(std::max(c.x, 0.0), std::max(c.y, 0.0), std::max(c.z, 0.0));
         }
     };
-    convert("--light colour", rs.light.color);
+    for (Light& light : rs.lights) convert("--light colour", light.color);
     convert("--absorb", rs.medium.absorb);
     convert("--scatter", rs.medium.scatter);
     convert("--emission", rs.medium.emission);

@@ -86,9 +86,11 @@ public:
         // Optical model (vdb_render's dense-volume model).
         mApp->add_option("--absorb", mAbsorb, "absorption R,G,B per unit density per voxel length, each in [0, 1e6] (default: " + fmt3(rs.medium.absorb) + ")");
         mApp->add_option("--scatter", mScatter, "scattering R,G,B per unit density per voxel length, each in [0, 1e6] (default: " + fmt3(rs.medium.scatter) + ")");
-        mApp->add_option("--light", mLight,
-            "direction towards the light X,Y,Z (any non-zero length)[,R,G,B] with optional colour, each in [0, 1e6] (default: " + fmt3(rs.light.direction) + "," +
-                fmt3(rs.light.color) + ")");
+        mApp->add_option("--light", mLights,
+                "directional light: direction towards it X,Y,Z (any non-zero length)[,R,G,B] with optional colour, each in [0, 1e6]; "
+                "repeat for more lights (at most " + std::to_string(kMaxLights) + "), each with its own shadows; their light adds (default: one, " +
+                    fmt3(rs.lights.front().direction) + "," + fmt3(rs.lights.front().color) + ")")
+            ->allow_extra_args(false);
         mApp->add_option("--emission", mEmission,
             "self-emission R,G,B per unit density per voxel length, each in [0, 1e6], added to the scattered light (default: " +
                 fmt3(rs.medium.emission) + ")");
@@ -390,11 +392,17 @@ private:
         if (!mScatter.empty()) rs.medium.scatter = parseVec3("scatter", mScatter, true);
         if (!mEmission.empty()) rs.medium.emission = parseVec3("emission", mEmission, true);
         if (!mAmbient.empty()) rs.ambient = parseVec3("ambient", mAmbient, true);
-        if (!mLight.empty()) {
-            const std::vector<double> v = parseNumbers("light", mLight);
-            if (v.size() != 3 && v.size() != 6) throw ValueError("--light: expected X,Y,Z or X,Y,Z,R,G,B, got '" + mLight + "'");
-            rs.light.direction = Vec3d(v[0], v[1], v[2]);
-            if (v.size() == 6) rs.light.color = Vec3d(v[3], v[4], v[5]);
+        if (!mLights.empty()) {
+            const Light defaults;
+            rs.lights.clear();
+            for (const std::string& text : mLights) {
+                const std::vector<double> v = parseNumbers("light", text);
+                if (v.size() != 3 && v.size() != 6) throw ValueError("--light: expected X,Y,Z or X,Y,Z,R,G,B, got '" + text + "'");
+                Light light = defaults;
+                light.direction = Vec3d(v[0], v[1], v[2]);
+                if (v.size() == 6) light.color = Vec3d(v[3], v[4], v[5]);
+                rs.lights.push_back(light);
+            }
         }
         if (mGain) rs.shadow.gain = *mGain;
         if (mCutoff) rs.cutoff = *mCutoff;
@@ -444,7 +452,7 @@ private:
                  {"frame", fmt(c.frame)}, {"near", fmt(c.near)}, {"far", fmt(c.far)}})
             cameraGroup.emplace_back(k, v);
         Attributes model{{"absorb", fmt3(rs.medium.absorb)}, {"scatter", fmt3(rs.medium.scatter)}, {"emission", fmt3(rs.medium.emission)},
-            {"light", fmt3(rs.light.direction) + "," + fmt3(rs.light.color)}, {"ambient", fmt3(rs.ambient)}, {"gain", fmt(rs.shadow.gain)}, {"cutoff", fmt(rs.cutoff)},
+            {"light", lightsText(rs.lights)}, {"ambient", fmt3(rs.ambient)}, {"gain", fmt(rs.shadow.gain)}, {"cutoff", fmt(rs.cutoff)},
             {"shadowstep", fmt(rs.shadow.step)}, {"shadow-res", fmt(rs.shadow.resolution)}};
         if (grid.hasColorGrid()) model.emplace_back("color", mColor);
         Attributes method{{"method", choiceName(rs.method, kMethods)}};
@@ -469,17 +477,27 @@ private:
         return {cameraGroup, model, method, mOutputOptions.resolved()};
     }
 
+    /// The lights as --light takes them, X,Y,Z,R,G,B each, separated by @a separator ("none"
+    /// without).
+    static std::string lightsText(const std::vector<Light>& lights, const std::string& separator = "; ")
+    {
+        std::string out;
+        for (const Light& l : lights) out += (out.empty() ? "" : separator) + fmt3(l.direction) + "," + fmt3(l.color);
+        return out.empty() ? "none" : out;
+    }
+
     /// The colour values the renderer uses, where --input-space changed them (-v); empty where
     /// it did not.
     static std::string workingColoursText(const RenderSettings& given, const RenderSettings& working)
     {
         const auto same = [](const Vec3d& a, const Vec3d& b) { return a.x == b.x && a.y == b.y && a.z == b.z; };
+        bool lightsSame = true;
+        for (std::size_t l = 0; l < given.lights.size(); ++l) lightsSame = lightsSame && same(given.lights[l].color, working.lights[l].color);
         if (same(given.medium.absorb, working.medium.absorb) && same(given.medium.scatter, working.medium.scatter) &&
-            same(given.medium.emission, working.medium.emission) && same(given.light.color, working.light.color) &&
-            same(given.ambient, working.ambient))
+            same(given.medium.emission, working.medium.emission) && lightsSame && same(given.ambient, working.ambient))
             return "";
         return "vdb_ewa: model in the working space: --absorb " + fmt3(working.medium.absorb) + " --scatter " + fmt3(working.medium.scatter) +
-               " --emission " + fmt3(working.medium.emission) + " --light colour " + fmt3(working.light.color) + " --ambient " +
+               " --emission " + fmt3(working.medium.emission) + " --light " + lightsText(working.lights, " --light ") + " --ambient " +
                fmt3(working.ambient);
     }
 
@@ -494,6 +512,13 @@ private:
         for (std::size_t g = 0; g < groups.size(); ++g) {
             out << "\nvdb_ewa: " << titles[g];
             for (const auto& [key, value] : groups[g]) {
+                if (key == "light") { // one --light per light (lightsText)
+                    for (std::size_t at = 0, end; at != std::string::npos; at = end == std::string::npos ? end : end + 2) {
+                        end = value.find("; ", at);
+                        out << " --light " << value.substr(at, end == std::string::npos ? end : end - at);
+                    }
+                    continue;
+                }
                 const bool spaces = value.find(' ') != std::string::npos;
                 out << " --" << key << " " << (spaces ? "\"" + value + "\"" : value);
             }
@@ -522,7 +547,8 @@ private:
 
     CLI::App* mApp = nullptr;
     std::string mInput, mOutput, mCameraFile, mName, mRes, mTranslate, mRotate, mLookAt, mUp, mCamera;
-    std::string mAbsorb, mScatter, mEmission, mAmbient, mLight, mAa, mMethod, mQuality, mExp, mRenormalize, mTaper, mPrefilter, mPrecision;
+    std::vector<std::string> mLights;
+    std::string mAbsorb, mScatter, mEmission, mAmbient, mAa, mMethod, mQuality, mExp, mRenormalize, mTaper, mPrefilter, mPrecision;
     std::optional<int> mTileSpacing, mRefine, mSamples;
     std::optional<double> mShadowRes;
     std::optional<double> mIsovalue, mIso, mIsoOpacity;

@@ -2,12 +2,13 @@
 /// @brief Plain settings of the optical model and of the EWA splatter, with defaults.
 /// @note The optical model and its defaults are vdb_render's (OpenVDB tools/RayTracer.h,
 ///       VolumeRender): extinction (absorb + scatter) x density per voxel length, single
-///       scattering of one directional light with shadow transmittance.
+///       scattering of directional lights with shadow transmittance (vdb_render has one).
 #pragma once
 
 #include "types.h"
 
 #include <limits>
+#include <vector>
 
 namespace vdb_ewa {
 
@@ -76,7 +77,10 @@ struct Light
     }
 };
 
-/// The light's transmittance: shadow rays / light map.
+/// Most directional lights a render takes (RenderSettings::lights): each has a light map.
+constexpr std::size_t kMaxLights = 64;
+
+/// The lights' transmittance: shadow rays / light map.
 struct ShadowOptions
 {
     double step = 0.5;                ///< shadow-ray step in voxels (vdb_render's default is 3)
@@ -140,12 +144,14 @@ struct VDB_EWA_API RenderSettings
 {
     Method method = Method::Splat;
     Medium medium;              ///< optical model
-    Light light;                ///< the directional light
+    /// Directional lights, each with its own shadow transmittance (a light map each): their
+    /// scattered light adds. vdb_render's one light by default; empty: none.
+    std::vector<Light> lights = std::vector<Light>(1);
     /// Constant ambient (sky) light, RGB radiance from every direction and never shadowed: each
     /// unit of scattering scatters it as it would the light (a fill for fog volumes; level sets
     /// and --iso surfaces ignore it). 0: none.
     Vec3d ambient{0.0, 0.0, 0.0};
-    ShadowOptions shadow;       ///< the light's transmittance
+    ShadowOptions shadow;       ///< the lights' transmittance
     SplatOptions splat;         ///< EWA splatting knobs
     SurfaceOptions surface;     ///< level sets and fog iso-surfaces
 

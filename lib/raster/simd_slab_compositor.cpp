@@ -240,7 +240,7 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
         hn::Store(t2, d, t2After);
         // 2. Per lane: pixels with a surface to composite, or whose ray stops inside the slab,
         // take flushPixel's path; the others are composited below, lit per slab sample.
-        alignas(64) float composite[kLanes], lit[C][kLanes], emission[C][kLanes], tBefore[C][kLanes], meanBefore[kLanes];
+        alignas(64) float composite[kLanes], lit[C][kLanes], litColoured[C][kLanes], emission[C][kLanes], tBefore[C][kLanes], meanBefore[kLanes];
         alignas(64) float lighted[kLanes];
         bool anyLighted = false;
         for (int i = 0; i < kLanes; ++i) {
@@ -256,59 +256,73 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
                     for (int c = 0; c < C; ++c) tBefore[c][i] = mT[c * kTilePixels + q];
                     meanBefore[i] = meanT(q);
                 }
-                if (mOptions.light && mass[i] > 0.0f) {
+                if (!mOptions.lights.empty() && mass[i] > 0.0f) {
                     lighted[i] = 1.0f;
                     anyLighted = true;
                 }
             }
         }
         // 3. The light on those lanes' layers (lightSlab: the slab's mass with the mean and
-        // variance of its position, lit at its front and back from the light map, lightAt).
+        // variance of its position, lit at its front and back from each light's map, lightAt),
+        // times the scattering weight (the lights summed: lit per unit colour, the source with
+        // each light's colour), then the exact front-to-back update (compositeSlab).
         const auto lightedLanes = hn::Ne(hn::Load(d, lighted), zero);
-        Floats front[C], logRatio[C];
-        for (int c = 0; c < C; ++c) front[c] = logRatio[c] = zero;
+        Floats u0 = zero, u1 = zero;
         if (anyLighted) {
             const std::size_t m = slot(slab) * kTilePixels + std::size_t(p);
             const Floats massLanes = hn::Load(d, mass);
             const Floats mean = hn::Min(hn::Max(hn::Div(hn::LoadU(d, &mMoment[m]), massLanes), zero), one);
             const Floats spread = hn::Sub(hn::Div(hn::LoadU(d, &mMoment2[m]), massLanes), hn::Mul(mean, mean));
             const Floats half = hn::Sqrt(hn::Mul(hn::Set(d, 3.0f), hn::Max(spread, zero)));
-            const Floats u0 = hn::IfThenElseZero(lightedLanes, hn::Max(hn::Sub(mean, half), zero));
-            const Floats u1 = hn::IfThenElseZero(lightedLanes, hn::Min(hn::Add(mean, half), one));
-            const LightMap::Lattice map = mOptions.light->lattice();
+            u0 = hn::IfThenElseZero(lightedLanes, hn::Max(hn::Sub(mean, half), zero));
+            u1 = hn::IfThenElseZero(lightedLanes, hn::Min(hn::Add(mean, half), one));
+        }
+        Floats source[C], litSum[C], colouredSum[C];
+        for (int c = 0; c < C; ++c) {
+            const std::size_t i = base + std::size_t(c) * kTilePixels + std::size_t(p);
+            Floats emitted = zero, em = zero;
+            if (!mEmission.empty()) {
+                // Halo kernels (--prefilter) weigh negative: a slab's sums stay >= 0.
+                em = hn::Max(hn::LoadU(d, &mEmission[i]), zero);
+                emitted = hn::IfThenElse(hn::Gt(hn::LoadU(d, &mTau[i]), hn::Set(d, 1e-7f)), hn::Mul(hn::Div(em, hn::LoadU(d, &mTau[i])), hn::Load(d, absorbed[c])), em);
+            }
+            hn::Store(em, d, emission[c]);
+            source[c] = emitted;
+            litSum[c] = colouredSum[c] = zero;
+        }
+        for (std::size_t light = 0; anyLighted && light < mOptions.lights.size(); ++light) {
+            const LightMap::Lattice map = mOptions.lights[light].map->lattice();
             const double z = mOptions.slabs.start(slab), thickness = mOptions.slabs.thickness;
+            const LightRays& rays = mRays[light];
             Floats log0[3], log1[3];
-            logTransmittances(map, densityDepths(map, mapPoints(map, mRayBase, mRayDir, p, u0, z, thickness)), C, log0);
-            logTransmittances(map, densityDepths(map, mapPoints(map, mRayBase, mRayDir, p, u1, z, thickness)), C, log1);
+            logTransmittances(map, densityDepths(map, mapPoints(map, rays.base, rays.dir, p, u0, z, thickness)), C, log0);
+            logTransmittances(map, densityDepths(map, mapPoints(map, rays.base, rays.dir, p, u1, z, thickness)), C, log1);
             const Floats floor = hn::Set(d, kLogLightFloor); // as lightLogRatio
             for (int c = 0; c < C; ++c) {
-                front[c] = hn::Exp(d, log0[c]);
-                logRatio[c] = hn::Sub(hn::Max(log0[c], floor), hn::Max(log1[c], floor));
+                const std::size_t i = base + std::size_t(c) * kTilePixels + std::size_t(p);
+                const Floats front = hn::Exp(d, log0[c]);
+                const Floats logRatio = hn::Sub(hn::Max(log0[c], floor), hn::Max(log1[c], floor));
+                const Floats tau = hn::LoadU(d, &mTau[i]);
+                const Floats weight = hn::Max(hn::LoadU(d, mScatter.empty() ? &mTau[i] : &mScatter[i]), zero);
+                const Floats l = hn::IfThenElseZero(lightedLanes, hn::Mul(weight, lightIntegral(tau, front, logRatio)));
+                const Floats scale = hn::Set(d, mOptions.lights[light].scale[c]);
+                litSum[c] = hn::Add(litSum[c], l);
+                colouredSum[c] = hn::MulAdd(scale, l, colouredSum[c]);
+                source[c] = hn::MulAdd(scale, l, source[c]);
             }
         }
-        // 4. The scattering weight x the light across the slab (lightSlab), and the exact
-        // front-to-back update (compositeSlab) of those lanes.
         const auto chosen = hn::Ne(hn::Load(d, composite), zero);
         Floats t2Now = zero;
         for (int c = 0; c < C; ++c) {
             const std::size_t i = base + std::size_t(c) * kTilePixels + std::size_t(p);
             const Floats tau = hn::LoadU(d, &mTau[i]), a = hn::Load(d, absorbed[c]);
-            const Floats weight = hn::Max(hn::LoadU(d, mScatter.empty() ? &mTau[i] : &mScatter[i]), zero);
-            const Floats l = hn::IfThenElseZero(lightedLanes, hn::Mul(weight, lightIntegral(tau, front[c], logRatio[c])));
-            hn::Store(l, d, lit[c]);
-            Floats emitted = zero, em = zero;
-            if (!mEmission.empty()) {
-                // Halo kernels (--prefilter) weigh negative: a slab's sums stay >= 0.
-                em = hn::Max(hn::LoadU(d, &mEmission[i]), zero);
-                emitted = hn::IfThenElse(hn::Gt(tau, hn::Set(d, 1e-7f)), hn::Mul(hn::Div(em, tau), a), em);
-            }
-            hn::Store(em, d, emission[c]);
-            const Floats source = hn::MulAdd(hn::Set(d, mLightScale[c]), l, emitted);
+            hn::Store(litSum[c], d, lit[c]);
+            hn::Store(colouredSum[c], d, litColoured[c]);
             const auto update = hn::And(chosen, hn::Gt(tau, zero));
             float* colour = &mC[c * kTilePixels + p];
             float* transmittance = &mT[c * kTilePixels + p];
             const Floats t = hn::LoadU(d, transmittance);
-            hn::StoreU(hn::IfThenElse(update, hn::MulAdd(t, source, hn::LoadU(d, colour)), hn::LoadU(d, colour)), d, colour);
+            hn::StoreU(hn::IfThenElse(update, hn::MulAdd(t, source[c], hn::LoadU(d, colour)), hn::LoadU(d, colour)), d, colour);
             const Floats tNew = hn::IfThenElse(update, hn::Mul(t, hn::Sub(one, a)), t);
             hn::StoreU(tNew, d, transmittance);
             t2Now = hn::MulAdd(tNew, tNew, t2Now);
@@ -321,13 +335,14 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
         for (int i = 0; i < kLanes; ++i) {
             if (composite[i] == 0.0f) continue;
             if (passes) {
-                float e[C], l[C];
+                float e[C], l[C], coloured[C];
                 for (int c = 0; c < C; ++c) {
                     mTBefore[c] = tBefore[c][i];
                     e[c] = emission[c][i];
                     l[c] = lit[c][i];
+                    coloured[c] = litColoured[c][i];
                 }
-                flushPasses(slab, p + i, meanBefore[i], e, l);
+                flushPasses(slab, p + i, meanBefore[i], e, l, coloured);
             }
             if (t2Lanes[i] * float(3 / C) < mCutoff) terminate(p + i);
         }

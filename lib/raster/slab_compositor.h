@@ -43,6 +43,14 @@ private:
     float mValues[kSize + 1];
 };
 
+/// A light as the compositor shades with it: its light map, and its colour x scattering
+/// albedo per channel (OpticalModel::lightScale), per unit scattering weight.
+struct CompositeLight
+{
+    const LightMap* map = nullptr;
+    float scale[3] = {0.0f, 0.0f, 0.0f};
+};
+
 /// What every tile compositor of a frame shares.
 struct CompositeOptions
 {
@@ -54,17 +62,17 @@ struct CompositeOptions
     SlabGrid slabs;
     PassRequest passes;
     PassLayout layout; ///< where the shadow and emission passes' source terms are (SplatSet::passSources)
-    /// Shading per slab sample (docs/numerics.md#shading-per-slab-sample): the light's
-    /// transmittance at each (pixel, slab) from the light map lights the splats' scattering
-    /// weights; null when nothing scatters.
-    const LightMap* light = nullptr;
+    /// Shading per slab sample (docs/numerics.md#shading-per-slab-sample): each light's
+    /// transmittance at each (pixel, slab) from its light map lights the splats' scattering
+    /// weights; empty when nothing scatters.
+    std::vector<CompositeLight> lights;
     const OpticalModel* model = nullptr;
     const Camera* camera = nullptr;
     bool tinted = false; ///< scattering weights differ from optical depths (material colours)
     bool emissive = true; ///< some splat has a pre-shaded source term (Splat::emission)
     /// An opaque or semi-opaque surface composited at its depth (fog --iso surfaces): its layer,
     /// the slab coordinate of each pixel's surface (frame order, NaN where none) and, for the
-    /// shadow pass, the light's transmittance at the surface as a layer. Null: none.
+    /// shadow pass, the lights' transmittance at the surface as a layer. Null: none.
     const SurfaceLayer* surface = nullptr;
     const float* surfaceAt = nullptr;
     const SurfaceLayer* surfaceShadow = nullptr;

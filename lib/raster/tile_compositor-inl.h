@@ -30,11 +30,11 @@ public:
           mPassEmission(std::size_t(ringSize) * std::size_t(mPassCount) * C * kTilePixels, 0.0f),
           mPassC(std::size_t(mPassCount) * C * kTilePixels, 0.0f),
           mScatter(options.tinted ? std::size_t(ringSize) * C * kTilePixels : 0, 0.0f),
-          mMoment(options.light ? std::size_t(ringSize) * kTilePixels : 0, 0.0f),
-          mMoment2(options.light ? std::size_t(ringSize) * kTilePixels : 0, 0.0f),
+          mMoment(options.lights.empty() ? 0 : std::size_t(ringSize) * kTilePixels, 0.0f),
+          mMoment2(options.lights.empty() ? 0 : std::size_t(ringSize) * kTilePixels, 0.0f),
+          mRays(options.lights.size()),
           mDirty(std::size_t(ringSize))
     {
-        for (int c = 0; c < C; ++c) mLightScale[c] = float(options.model->scattered(c, 1.0, 1.0));
         std::fill(std::begin(mT), std::end(mT), 1.0f);
         std::fill(std::begin(mC), std::end(mC), 0.0f);
         std::fill(std::begin(mZ), std::end(mZ), std::numeric_limits<float>::infinity());
@@ -221,8 +221,9 @@ private:
 
     /// The passes' share of a slab at pixel p: Z crossing, deep sample, extra sources.
     /// @a emission: the slab's pre-shaded emission per channel; @a lit: the scattering weight x
-    /// the light integrated across the slab per channel (the shadow pass's source).
-    void flushPasses(std::int64_t slab, int p, float meanBefore, const float* emission, const float* lit)
+    /// the light integrated across the slab per channel, summed over the lights (the shadow
+    /// pass's source); @a lighted: the same with each light's colour (lightSlab).
+    void flushPasses(std::int64_t slab, int p, float meanBefore, const float* emission, const float* lit, const float* lighted)
     {
         const std::size_t base = slot(slab) * C * kTilePixels + std::size_t(p);
         if (mOptions.passes.depth && meanBefore > 0.5f && std::isinf(mZ[p])) {
@@ -246,7 +247,7 @@ private:
                 colour[c] = 0.0f;
                 t[c] = 1.0f;
                 const float tau = mTau[base + c * kTilePixels];
-                compositeSlab(tau, slabAbsorbed(tau), emission[c], mLightScale[c] * lit[c], colour[c], t[c]);
+                compositeSlab(tau, slabAbsorbed(tau), emission[c], lighted[c], colour[c], t[c]);
                 empty = empty && !(mTau[base + c * kTilePixels] > 0.0f);
             }
             if (!empty) {
@@ -348,23 +349,26 @@ private:
         return float(std::min(u, 1.0));
     }
 
-    /// The light on pixel p's ray across the layer from fraction @a u0 to @a u1 of @a slab's
+    /// Light @a l on pixel p's ray across the layer from fraction @a u0 to @a u1 of @a slab's
     /// thickness, for the C channels carried: its transmittance at the front, and ln(front /
     /// back) (slabLightIntegral).
-    void lightAt(int p, std::int64_t slab, float u0, float u1, std::array<float, 3>& front, std::array<float, 3>& logRatio) const
+    void lightAt(std::size_t l, int p, std::int64_t slab, float u0, float u1, std::array<float, 3>& front,
+        std::array<float, 3>& logRatio) const
     {
         const double z = mOptions.slabs.start(slab);
         const double z0 = z + double(u0) * mOptions.slabs.thickness, z1 = z + double(u1) * mOptions.slabs.thickness;
         float d0, d1;
-        const Vec3d base(mRayBase[0][p], mRayBase[1][p], mRayBase[2][p]), dir(mRayDir[0][p], mRayDir[1][p], mRayDir[2][p]);
-        mOptions.light->densityDepths(base + z0 * dir, base + z1 * dir, d0, d1);
+        const LightRays& r = mRays[l];
+        const Vec3d base(r.base[0][p], r.base[1][p], r.base[2][p]), dir(r.dir[0][p], r.dir[1][p], r.dir[2][p]);
+        const LightMap& map = *mOptions.lights[l].map;
+        map.densityDepths(base + z0 * dir, base + z1 * dir, d0, d1);
         if (C == 1) {
-            const float log0 = mOptions.light->greyLogTransmittanceOfDepth(d0);
+            const float log0 = map.greyLogTransmittanceOfDepth(d0);
             front[0] = std::exp(log0);
-            logRatio[0] = lightLogRatio(log0, mOptions.light->greyLogTransmittanceOfDepth(d1));
+            logRatio[0] = lightLogRatio(log0, map.greyLogTransmittanceOfDepth(d1));
         } else {
-            const std::array<float, 3> log0 = mOptions.light->logTransmittanceOfDepth(d0);
-            const std::array<float, 3> log1 = mOptions.light->logTransmittanceOfDepth(d1);
+            const std::array<float, 3> log0 = map.logTransmittanceOfDepth(d0);
+            const std::array<float, 3> log1 = map.logTransmittanceOfDepth(d1);
             for (std::size_t c = 0; c < 3; ++c) {
                 front[c] = std::exp(log0[c]);
                 logRatio[c] = lightLogRatio(log0[c], log1[c]);
@@ -397,18 +401,19 @@ private:
             meanBefore = meanT(p);
         }
         // emission: the splats' pre-shaded sources; lit: the scattering weight x the
-        // light integrated across the slab (slabLightIntegral), per unit light colour.
-        float emission[C], lit[C];
+        // light integrated across the slab (slabLightIntegral), per unit light colour, summed
+        // over the lights; lighted: the same, each light with its colour.
+        float emission[C], lit[C], lighted[C];
         for (int c = 0; c < C; ++c) {
             const std::size_t i = base + c * kTilePixels + std::size_t(p);
             // Halo kernels (--prefilter) weigh negative: a slab's sums stay >= 0.
             emission[c] = mEmission.empty() ? 0.0f : std::max(mEmission[i], 0.0f);
-            lit[c] = 0.0f;
+            lit[c] = lighted[c] = 0.0f;
         }
         const float mass = slabMass(base, p);
         float absorbed[C]; // 1 - exp(-tau), once per channel for light, termination, composite
         for (int c = 0; c < C; ++c) absorbed[c] = slabAbsorbed(mTau[base + c * kTilePixels + std::size_t(p)]);
-        if (mOptions.light && mass > 0.0f) lightSlab(slab, p, mass, lit);
+        if (!mOptions.lights.empty() && mass > 0.0f) lightSlab(slab, p, mass, lit, lighted);
         // vdb_render's ray termination: |T|^2 < cutoff (early termination, Sec. 5).
         // A ray stops where it crosses the threshold, so only the slab's part in
         // front of the crossing is composited: every stopped pixel keeps vdb_render's
@@ -431,7 +436,9 @@ private:
                 // The light kept its value across the slab, (1 - exp(-tau)) / tau of it
                 // integrated (slabLightIntegral = slabLightTransmittance x that): the
                 // front part keeps the same light with its own (1 - exp(-u tau)) / (u tau).
-                lit[c] = before > 0.0f ? lit[c] * (absorbed[c] / before) : 0.0f;
+                const float kept = before > 0.0f ? absorbed[c] / before : 0.0f;
+                lit[c] *= kept;
+                lighted[c] *= kept;
                 for (int k = 0; k < mPassCount; ++k) mPassEmission[passIndex(slab, k, c) + std::size_t(p)] *= u;
             }
         }
@@ -439,10 +446,10 @@ private:
         for (int c = 0; c < C; ++c) {
             const std::size_t i = base + c * kTilePixels + std::size_t(p);
             float& t = mT[c * kTilePixels + p];
-            compositeSlab(mTau[i], absorbed[c], emission[c], mLightScale[c] * lit[c], mC[c * kTilePixels + p], t);
+            compositeSlab(mTau[i], absorbed[c], emission[c], lighted[c], mC[c * kTilePixels + p], t);
             t2 += t * t;
         }
-        if (passes) flushPasses(slab, p, meanBefore, emission, lit);
+        if (passes) flushPasses(slab, p, meanBefore, emission, lit, lighted);
         ++mComposites;
         if (u < 1.0f || t2 * float(3 / C) < mCutoff) terminate(p);
     }
@@ -464,20 +471,26 @@ private:
 
     /// Shading per slab sample (docs/numerics.md#shading-per-slab-sample): the slab's @a mass
     /// (> 0) at pixel p, as a uniform layer with the mean and variance of its position, lit by
-    /// the light's transmittance at the layer's front and back and integrated with the slab's
-    /// own attenuation: @a lit, the scattering weight x slabLightIntegral per channel.
-    void lightSlab(std::int64_t slab, int p, float mass, float* lit) const
+    /// each light's transmittance at the layer's front and back and integrated with the slab's
+    /// own attenuation: @a lit, the scattering weight x slabLightIntegral per channel summed
+    /// over the lights; @a lighted, each term times its light's scale (CompositeLight).
+    void lightSlab(std::int64_t slab, int p, float mass, float* lit, float* lighted) const
     {
         const std::size_t base = slot(slab) * C * kTilePixels;
         const std::size_t m = slot(slab) * kTilePixels + std::size_t(p);
         const float mean = std::clamp(mMoment[m] / mass, 0.0f, 1.0f);
         const float half = std::sqrt(3.0f * std::max(mMoment2[m] / mass - mean * mean, 0.0f));
-        std::array<float, 3> front, logRatio;
-        lightAt(p, slab, std::max(mean - half, 0.0f), std::min(mean + half, 1.0f), front, logRatio);
-        for (int c = 0; c < C; ++c) {
-            const std::size_t i = base + c * kTilePixels + std::size_t(p);
-            lit[c] = std::max(mScatter.empty() ? mTau[i] : mScatter[i], 0.0f) *
-                     slabLightIntegral(mTau[i], front[std::size_t(c)], logRatio[std::size_t(c)]);
+        const float u0 = std::max(mean - half, 0.0f), u1 = std::min(mean + half, 1.0f);
+        for (std::size_t l = 0; l < mOptions.lights.size(); ++l) {
+            std::array<float, 3> front, logRatio;
+            lightAt(l, p, slab, u0, u1, front, logRatio);
+            for (int c = 0; c < C; ++c) {
+                const std::size_t i = base + c * kTilePixels + std::size_t(p);
+                const float term = std::max(mScatter.empty() ? mTau[i] : mScatter[i], 0.0f) *
+                                   slabLightIntegral(mTau[i], front[std::size_t(c)], logRatio[std::size_t(c)]);
+                lit[c] += term;
+                lighted[c] += mOptions.lights[l].scale[c] * term;
+            }
         }
     }
 
@@ -487,17 +500,20 @@ private:
     void traceRays()
     {
         mRaysTraced = true;
-        if (!mOptions.light) return;
+        if (mOptions.lights.empty()) return;
         const Camera& camera = *mOptions.camera;
         for (int ly = 0; ly < mH; ++ly)
             for (int lx = 0; lx < mW; ++lx) {
                 Vec3d origin, dir;
                 camera.worldRay(mX0 + lx + 0.5, mY0 + ly + 0.5, origin, dir);
                 const Vec3d base = camera.projection() == Projection::Perspective ? camera.eye() : origin - camera.near() * dir;
-                const Vec3d q = mOptions.light->coordinates(base), v = mOptions.light->direction(dir);
-                for (int k = 0; k < 3; ++k) {
-                    mRayBase[k][ly * kTileSize + lx] = q[k];
-                    mRayDir[k][ly * kTileSize + lx] = v[k];
+                for (std::size_t l = 0; l < mRays.size(); ++l) {
+                    const LightMap& map = *mOptions.lights[l].map;
+                    const Vec3d q = map.coordinates(base), v = map.direction(dir);
+                    for (int k = 0; k < 3; ++k) {
+                        mRays[l].base[k][ly * kTileSize + lx] = q[k];
+                        mRays[l].dir[k][ly * kTileSize + lx] = v[k];
+                    }
                 }
             }
     }
@@ -543,12 +559,16 @@ private:
     /// [slot][pixel] optical depth x position in the slab (0 front, 1 back), and x its square
     /// (lit frames only): where the slab's mass lies, for shading.
     std::vector<float> mMoment, mMoment2;
-    /// Pixel rays in light-map coordinates, base + z dir (z: the slab coordinate), x, y, z apart.
-    double mRayBase[3][kTilePixels], mRayDir[3][kTilePixels];
+    /// Pixel rays in one light's map coordinates, base + z dir (z: the slab coordinate), x, y,
+    /// z apart.
+    struct LightRays
+    {
+        double base[3][kTilePixels], dir[3][kTilePixels];
+    };
+    std::vector<LightRays> mRays; ///< per light of CompositeOptions::lights
     bool mRaysTraced = false; ///< traceRays ran
     float mZ[kTilePixels];              ///< Z pass along the ray, +inf until alpha reaches 0.5
     float mTBefore[C];
-    float mLightScale[C]; ///< the light's colour x scattering coefficient per unit scattering weight
     std::vector<std::pair<std::uint16_t, DeepSample>> mDeep;
     std::vector<Dirty> mDirty;
     std::vector<std::int64_t> mPending; ///< slabs holding contributions, not yet composited

@@ -17,13 +17,15 @@ namespace vdb_ewa {
 namespace detail {
 namespace {
 
-/// Splats whose optical depth and source terms are the same in R, G and B, lit by a grey light.
-bool allGrey(const SplatSet& set, const OpticalModel& model)
+/// Splats whose optical depth and source terms are the same in R, G and B, lit by grey lights.
+bool allGrey(const SplatSet& set, const CompositeOptions& options, const OpticalModel& model)
 {
     const auto grey = [](const float* v) { return v[0] == v[1] && v[0] == v[2]; };
-    const float light[3] = {float(model.scattered(0, 1.0, 1.0)), float(model.scattered(1, 1.0, 1.0)), float(model.scattered(2, 1.0, 1.0))};
     const float ext[3] = {float(model.extinction(0)), float(model.extinction(1)), float(model.extinction(2))};
-    if (!grey(light) || !grey(ext)) return false;
+    if (!grey(ext)) return false;
+    for (const CompositeLight& light : options.lights) {
+        if (!grey(light.scale)) return false;
+    }
     for (std::size_t i = 0; i < set.splats.size(); ++i) {
         const Splat& s = set.splats[i];
         if (!grey(s.tau) || !grey(s.emission) || !grey(s.scatter)) return false;
@@ -140,7 +142,7 @@ DeepImage assembleDeep(std::vector<TileDeep>& tiles, const TileBins& bins, int w
 } // namespace
 
 Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSettings& settings,
-    const PassRequest& passes, RasterStats& stats, const LightMap* light, bool tinted, Progress* progress,
+    const PassRequest& passes, RasterStats& stats, const std::vector<LightMap>& lights, bool tinted, Progress* progress,
     const MemoryBudget* budget, const SurfaceLayer* surface, const SurfaceLayer* surfaceShadow)
 {
     const OpticalModel model(settings);
@@ -164,10 +166,16 @@ Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSet
     options.slabs = set.slabs;
     options.passes = passes;
     options.layout = PassLayout(passes);
-    options.light = model.unlit() ? nullptr : light;
+    for (std::size_t l = 0; l < lights.size(); ++l) {
+        if (model.dark(l)) continue;
+        CompositeLight light;
+        light.map = &lights[l];
+        for (int c = 0; c < 3; ++c) light.scale[c] = float(model.lightScale(l, c));
+        options.lights.push_back(light);
+    }
     options.model = &model;
     options.camera = &camera;
-    options.tinted = tinted && options.light;
+    options.tinted = tinted && !options.lights.empty();
     options.emissive = std::any_of(set.splats.begin(), set.splats.end(),
         [](const Splat& s) { return s.emission[0] != 0.0f || s.emission[1] != 0.0f || s.emission[2] != 0.0f; });
     const std::vector<float> depthScale = (passes.depth || passes.deep || surface) ? depthScales(camera) : std::vector<float>{};
@@ -190,7 +198,7 @@ Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSet
         }
         return true;
     };
-    const int channels = allGrey(set, model) && grey(surface) && grey(surfaceShadow) ? 1 : 3;
+    const int channels = allGrey(set, options, model) && grey(surface) && grey(surfaceShadow) ? 1 : 3;
     std::unique_ptr<SlabCompositor> backend = settings.simd ? simdSlabCompositor(channels) : nullptr;
     stats.backend = backend ? simdTarget() : "scalar";
     if (!backend) backend = scalarSlabCompositor(channels);

@@ -36,7 +36,7 @@ struct RasterStats
 /// surfaces: before the first slab whose middle lies behind it), with its coverage as
 /// opacity; @a surfaceShadow: the light's transmittance at it, for the shadow pass.
 Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSettings& settings,
-    const PassRequest& passes, RasterStats& stats, const LightMap* light = nullptr, bool tinted = false,
+    const PassRequest& passes, RasterStats& stats, const std::vector<LightMap>& lights = {}, bool tinted = false,
     Progress* progress = nullptr, const MemoryBudget* budget = nullptr, const SurfaceLayer* surface = nullptr,
     const SurfaceLayer* surfaceShadow = nullptr);
 

@@ -68,7 +68,7 @@ ReferenceVolume buildVolume(const GridSource::Impl& grid, const RenderSettings& 
         openvdb::Vec3s source;
         for (int c = 0; c < 3; ++c) {
             const double color = colors.empty() ? 1.0 : double(colors[i][c]);
-            source[c] = float(k.density * model.source(c, shadows[i][c], color));
+            source[c] = float(k.density * model.source(c, shadows.data() + i * settings.lights.size(), color));
         }
         eAcc.setValueOn(ijk, source);
     }
@@ -146,15 +146,18 @@ private:
     KernelSum mSum;
 };
 
-/// The field's sampler: trilinear density, and the source from a shadow ray marched from the
-/// sample itself and the material colour there. One per thread.
+/// The field's sampler: trilinear density, and the source from a shadow ray towards each light
+/// marched from the sample itself and the material colour there. One per thread.
 class TrilinearSampler
 {
 public:
     TrilinearSampler(const GridSource::Impl& grid, const RenderSettings& settings)
-        : mGrid(grid), mAccessor(grid.field->getConstAccessor()), mShadows(grid, settings), mColor(grid),
-          mModel(settings), mCutoff(settings.cutoff), mLit(!mModel.unlit()), mTinted(bool(grid.color))
+        : mGrid(grid), mAccessor(grid.field->getConstAccessor()), mColor(grid), mModel(settings), mCutoff(settings.cutoff),
+          mTinted(bool(grid.color)), mShadow(settings.lights.size(), Rgb{1.0f, 1.0f, 1.0f})
     {
+        for (std::size_t l = 0; l < settings.lights.size(); ++l) {
+            if (!mModel.dark(l)) mShadows.emplace_back(l, ShadowMarcher(grid, settings, l));
+        }
     }
     bool sample(const Vec3d& pIndex, double& density, double source[3])
     {
@@ -162,20 +165,21 @@ public:
         openvdb::tools::BoxSampler::sample(mAccessor, openvdb::Vec3d(pIndex.x, pIndex.y, pIndex.z), d);
         density = d;
         if (!(density >= mCutoff) || !(density > 0.0)) return false; // vdb_render skips samples below its cutoff
-        const Rgb shadow = mLit ? mShadows.march(pIndex) : Rgb{1.0f, 1.0f, 1.0f};
+        for (auto& [l, marcher] : mShadows) mShadow[l] = marcher.march(pIndex);
         const Vec3d color = mTinted ? mColor.at(mGrid.indexToWorld(pIndex)) : Vec3d(1.0);
-        for (int c = 0; c < 3; ++c) source[c] = mModel.source(c, shadow[c], color[c]);
+        for (int c = 0; c < 3; ++c) source[c] = mModel.source(c, mShadow.data(), color[c]);
         return true;
     }
 
 private:
     const GridSource::Impl& mGrid;
     openvdb::FloatGrid::ConstAccessor mAccessor;
-    ShadowMarcher mShadows;
+    std::vector<std::pair<std::size_t, ShadowMarcher>> mShadows; ///< the lights that are not dark
     MaterialColor mColor;
     OpticalModel mModel;
     double mCutoff;
-    bool mLit, mTinted;
+    bool mTinted;
+    std::vector<Rgb> mShadow; ///< per light: its transmittance at the sample (1 if dark)
 };
 
 void checkMarchable(const GridSource::Impl& grid, const PassRequest& passes, const char* method)

@@ -59,14 +59,14 @@ double shadowStopDepth(const float* extinction, double cutoff)
     return depth;
 }
 
-LightMap::LightMap(const GridSource::Impl& grid, const RenderSettings& settings, Progress* progress, double pointBudget)
+LightMap::LightMap(const GridSource::Impl& grid, const RenderSettings& settings, std::size_t light, Progress* progress, double pointBudget)
     : mLogGreyFloor(0.5f * std::log(float(settings.cutoff) / 3.0f))
 {
     const OpticalModel model(settings);
     for (int c = 0; c < 3; ++c) mExtinction[c] = float(model.extinction(c));
     mStopDepth = float(shadowStopDepth(mExtinction, settings.cutoff));
     mGrey = mExtinction[0] == mExtinction[1] && mExtinction[0] == mExtinction[2];
-    mUnlit = model.unlit();
+    mUnlit = model.dark(light);
     mShadowStep = settings.shadow.step;
     mShadowResolution = settings.shadow.resolution;
     const openvdb::CoordBBox box = grid.field->evalActiveVoxelBoundingBox();
@@ -77,7 +77,7 @@ LightMap::LightMap(const GridSource::Impl& grid, const RenderSettings& settings,
     // lengths in voxel lengths, as vdb_render's steps).
     const double ell = grid.voxelLength;
     double h = settings.shadow.resolution, step = settings.shadow.step;
-    const Vec3d l = settings.light.unitDirection();
+    const Vec3d l = settings.lights[light].unitDirection();
     const Vec3d e1 = glm::normalize(glm::cross(l, std::abs(l.x) < 0.6 ? Vec3d(1, 0, 0) : Vec3d(0, 1, 0)));
     const Vec3d e2 = glm::cross(l, e1);
     Vec3d lo, hi;

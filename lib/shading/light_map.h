@@ -1,5 +1,5 @@
 /// @file light_map.h
-/// @brief The light's transmittance anywhere in the volume: a deep shadow map for the
+/// @brief A light's transmittance anywhere in the volume: a deep shadow map for one
 ///        directional light (Lokovic and Veach 2000). Shadow rays are marched once, from a
 ///        lattice of points spaced --shadow-res voxel lengths apart across the light, through
 ///        the whole volume, keeping the optical depth at every --shadowstep along each ray.
@@ -49,9 +49,9 @@ double shadowStopDepth(const float* extinction, double cutoff);
 class LightMap
 {
 public:
-    /// March the lattice rays through @a grid's field. @a progress: one unit per lattice row;
-    /// throws Cancelled.
-    LightMap(const GridSource::Impl& grid, const RenderSettings& settings, Progress* progress = nullptr,
+    /// March the lattice rays of settings.lights[@a light] through @a grid's field.
+    /// @a progress: one unit per lattice row; throws Cancelled.
+    LightMap(const GridSource::Impl& grid, const RenderSettings& settings, std::size_t light = 0, Progress* progress = nullptr,
         double pointBudget = kLightMapPointBudget);
 
     /// The shadow step and ray spacing used (voxel lengths): the settings', unless the budget

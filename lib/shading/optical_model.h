@@ -3,11 +3,16 @@
 ///        reference's ray samples) asks it for optical depth and source radiance, so they cannot
 ///        disagree by construction. vdb_render's model (OpenVDB tools/RayTracer.h,
 ///        VolumeRender): extinction (absorb + scatter) x density per voxel length, single
-///        scattering of one directional light attenuated by the shadow transmittance, plus an
+///        scattering of directional lights, each attenuated by its shadow transmittance, plus an
 ///        unshadowed ambient light and self-emission (docs/equations.md#optical-model).
 #pragma once
 
 #include <vdb_ewa/render_settings.h>
+
+#include "support/rgb.h"
+
+#include <array>
+#include <vector>
 
 namespace vdb_ewa {
 namespace detail {
@@ -15,13 +20,16 @@ namespace detail {
 class OpticalModel
 {
 public:
-    explicit OpticalModel(const RenderSettings& settings)
+    explicit OpticalModel(const RenderSettings& settings) : mLightScale(settings.lights.size())
     {
         for (int c = 0; c < 3; ++c) {
             mExtinction[c] = settings.medium.extinction()[c];
-            mAlbedo[c] = mExtinction[c] > 0.0 ? settings.light.color[c] * settings.medium.scatter[c] / mExtinction[c] : 0.0;
-            mEmitted[c] = mExtinction[c] > 0.0 ? settings.medium.emission[c] / mExtinction[c] : 0.0;
-            mAmbient[c] = mExtinction[c] > 0.0 ? settings.ambient[c] * settings.medium.scatter[c] / mExtinction[c] : 0.0;
+            const bool scatters = mExtinction[c] > 0.0;
+            for (std::size_t l = 0; l < mLightScale.size(); ++l) {
+                mLightScale[l][std::size_t(c)] = scatters ? settings.lights[l].color[c] * settings.medium.scatter[c] / mExtinction[c] : 0.0;
+            }
+            mEmitted[c] = scatters ? settings.medium.emission[c] / mExtinction[c] : 0.0;
+            mAmbient[c] = scatters ? settings.ambient[c] * settings.medium.scatter[c] / mExtinction[c] : 0.0;
         }
     }
 
@@ -34,32 +42,54 @@ public:
         return mExtinction[c] * density * voxelLengths;
     }
 
-    /// Source radiance per unit optical depth (the c of Eq. 7 and 10): the light's colour x
-    /// scattering albedo x material colour x @a lightTransmittance, plus the ambient light
-    /// scattered (ambient()), plus emission / extinction.
-    double source(int c, double lightTransmittance, double materialColor) const
+    /// The directional lights (RenderSettings::lights), in order.
+    std::size_t lightCount() const { return mLightScale.size(); }
+
+    /// Light @a l's colour x scattering albedo of channel @a c: the source radiance per unit
+    /// optical depth it gives white material in full light.
+    double lightScale(std::size_t l, int c) const { return mLightScale[l][std::size_t(c)]; }
+
+    /// Source radiance per unit optical depth (the c of Eq. 7 and 10): each light's colour x
+    /// scattering albedo x material colour x its transmittance @a lightTransmittances[l]
+    /// (one per light), summed, plus the ambient light scattered (ambient()), plus emission /
+    /// extinction.
+    double source(int c, const Rgb* lightTransmittances, double materialColor) const
     {
-        return mAlbedo[c] * materialColor * lightTransmittance + ambient(c, materialColor) + mEmitted[c];
+        return scattered(c, lightTransmittances, materialColor) + ambient(c, materialColor) + mEmitted[c];
     }
 
     /// The ambient light scattered per unit optical depth: ambient x scattering albedo x
     /// material colour. Never shadowed, so the splatter carries it with the emission.
     double ambient(int c, double materialColor) const { return mAmbient[c] * materialColor; }
 
-    /// The scattering part of source() alone: light colour x albedo x colour x transmittance.
-    double scattered(int c, double lightTransmittance, double materialColor) const
+    /// The lights' part of source() alone.
+    double scattered(int c, const Rgb* lightTransmittances, double materialColor) const
     {
-        return mAlbedo[c] * materialColor * lightTransmittance;
+        double sum = 0.0;
+        for (std::size_t l = 0; l < mLightScale.size(); ++l) {
+            sum += mLightScale[l][std::size_t(c)] * materialColor * double(lightTransmittances[l][std::size_t(c)]);
+        }
+        return sum;
     }
 
     /// The emission part of source() alone (the emission pass).
     double emitted(int c) const { return mEmitted[c]; }
 
-    /// True if nothing scatters light: the shadow transmittance is never used.
-    bool unlit() const { return mAlbedo[0] == 0.0 && mAlbedo[1] == 0.0 && mAlbedo[2] == 0.0; }
+    /// True if no light scatters: the shadow transmittance is never used.
+    bool unlit() const
+    {
+        for (const auto& scale : mLightScale) {
+            if (scale[0] != 0.0 || scale[1] != 0.0 || scale[2] != 0.0) return false;
+        }
+        return true;
+    }
+
+    /// True if light @a l scatters nothing (black, or nothing scatters): it needs no light map.
+    bool dark(std::size_t l) const { return mLightScale[l][0] == 0.0 && mLightScale[l][1] == 0.0 && mLightScale[l][2] == 0.0; }
 
 private:
-    double mExtinction[3], mAlbedo[3], mEmitted[3], mAmbient[3];
+    double mExtinction[3], mEmitted[3], mAmbient[3];
+    std::vector<std::array<double, 3>> mLightScale; ///< per light: colour x scatter / extinction
 };
 
 } // namespace detail

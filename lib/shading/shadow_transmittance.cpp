@@ -14,10 +14,10 @@
 namespace vdb_ewa {
 namespace detail {
 
-ShadowMarcher::ShadowMarcher(const GridSource::Impl& grid, const RenderSettings& settings)
+ShadowMarcher::ShadowMarcher(const GridSource::Impl& grid, const RenderSettings& settings, std::size_t light)
     : mGrid(grid), mSkipper(*grid.field, 0), mSettings(settings), mModel(settings)
 {
-    const Vec3d l = settings.light.unitDirection();
+    const Vec3d l = settings.lights[light].unitDirection();
     mLightWorld = l;
     if (grid.linear) {
         // Index-space displacement per voxel length travelled towards the light.
@@ -81,16 +81,22 @@ double ShadowMarcher::exitDistance(const Vec3d& start) const
 
 namespace {
 
-/// March from every point of a list, one task per block.
+/// March from every point of a list towards every light ([point * lights + light]; 1 for a
+/// dark light), one task per block.
 std::vector<Rgb> marchAll(const GridSource::Impl& grid, const std::vector<Vec3d>& points, const RenderSettings& settings,
     Progress* progress)
 {
-    std::vector<Rgb> out(points.size());
+    const std::size_t lights = settings.lights.size();
+    const OpticalModel model(settings);
+    std::vector<Rgb> out(points.size() * lights, Rgb{1.0f, 1.0f, 1.0f});
     setUnits(progress, points.size());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.size(), 1024),
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 1024),
         [&](const tbb::blocked_range<std::size_t>& range) {
-            ShadowMarcher marcher(grid, settings);
-            for (std::size_t i = range.begin(); i < range.end(); ++i) out[i] = marcher.march(points[i]);
+            for (std::size_t l = 0; l < lights; ++l) {
+                if (model.dark(l)) continue;
+                ShadowMarcher marcher(grid, settings, l);
+                for (std::size_t i = range.begin(); i < range.end(); ++i) out[i * lights + l] = marcher.march(points[i]);
+            }
             advance(progress, range.size());
         });
     return out;
@@ -103,7 +109,7 @@ std::vector<Rgb> shadowTransmittance(const GridSource::Impl& grid, const KernelS
 {
     // No scattering or no light: nothing is lit, so the transmittance is never used.
     if (OpticalModel(settings).unlit()) {
-        return std::vector<Rgb>(kernels.kernels.size(), Rgb{1.0f, 1.0f, 1.0f});
+        return std::vector<Rgb>(kernels.kernels.size() * settings.lights.size(), Rgb{1.0f, 1.0f, 1.0f});
     }
     std::vector<Vec3d> centres(kernels.kernels.size());
     for (std::size_t i = 0; i < centres.size(); ++i) centres[i] = kernels.kernels[i].pIndex;

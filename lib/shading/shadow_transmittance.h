@@ -1,5 +1,5 @@
 /// @file shadow_transmittance.h
-/// @brief Transmittance from each kernel centre towards the directional light (pre-shading:
+/// @brief Transmittance from each kernel centre towards each directional light (pre-shading:
 ///        one colour per kernel, as the paper's c_k). The model is vdb_render's shadow ray.
 #pragma once
 
@@ -14,14 +14,14 @@
 namespace vdb_ewa {
 namespace detail {
 
-/// vdb_render's shadow ray through the field (GridSource::Impl::field) towards the directional
-/// light, for one thread (it owns a ValueAccessor): samples at s = k * shadow.step voxel
+/// vdb_render's shadow ray through the field (GridSource::Impl::field) towards directional
+/// light settings.lights[light], for one thread (it owns a ValueAccessor): samples at s = k * shadow.step voxel
 /// lengths (k >= 1), trilinear density d, T *= exp(-sigma_t d shadow.step / (1 + shadow.gain s)),
 /// stopping where |T|^2 < cutoff; empty tree nodes are skipped.
 class ShadowMarcher
 {
 public:
-    ShadowMarcher(const GridSource::Impl& grid, const RenderSettings& settings);
+    ShadowMarcher(const GridSource::Impl& grid, const RenderSettings& settings, std::size_t light);
 
     /// The light's transmittance at the index-space point @a pIndex.
     Rgb march(const Vec3d& pIndex);
@@ -41,8 +41,8 @@ private:
 };
 
 /// ShadowMarcher from each kernel centre (the shading of --method raymarch-gaussian, which
-/// models per-kernel pre-shading). One task per block of kernels.
-/// @a progress: one unit per march; throws Cancelled.
+/// models per-kernel pre-shading), for every light: [kernel * lights + light]. One task per
+/// block of kernels. @a progress: one unit per march; throws Cancelled.
 std::vector<Rgb> shadowTransmittance(const GridSource::Impl& grid, const KernelSet& kernels,
     const RenderSettings& settings, Progress* progress = nullptr);
 
