@@ -35,6 +35,19 @@ void RenderSettings::validate() const
     }
     if (!coefficient3(medium.emission)) fail("--emission must be in [0, 1e6] per voxel length");
     if (!coefficient3(ambient)) fail("--ambient must be in [0, 1e6]");
+    if (!coefficient3(gridEmission.color)) fail("--emission-color must be in [0, 1e6]");
+    if (!(gridEmission.intensity >= 0.0 && gridEmission.intensity <= kMaxCoefficient)) fail("--emission-intensity must be in [0, 1e6]");
+    if (!(gridEmission.blackbodyIntensity >= 0.0 && gridEmission.blackbodyIntensity <= kMaxCoefficient)) {
+        fail("--blackbody-intensity must be in [0, 1e6]");
+    }
+    if (!(std::abs(gridEmission.kelvinScale) <= 1e6) || !(std::abs(gridEmission.kelvinOffset) <= 1e6)) {
+        fail("--temperature-scale and --temperature-offset must be finite and within 1e6 Kelvin");
+    }
+    for (int c = 0; c < 3; ++c) {
+        if (!finite3(gridEmission.rec709ToWorking[c]) || !(glm::length(gridEmission.rec709ToWorking[c]) <= kMaxCoefficient)) {
+            fail("the blackbody's colour matrix (GridEmission::rec709ToWorking) must be finite");
+        }
+    }
     for (int c = 0; c < 3; ++c) {
         if (medium.emission[c] > 0.0 && !(medium.absorb[c] + medium.scatter[c] > 0.0)) {
             fail("--emission needs --absorb + --scatter > 0 in every channel that emits (the slab update divides by the optical depth)");

@@ -115,6 +115,9 @@ void Renderer::renderLevelSet(const GridSource::Impl& grid, const Camera& camera
         throw ValueError("level sets give the beauty, Z and transmittance (shadow, emission and deep passes are volume passes)");
     }
     if (!std::isnan(mSettings.surface.iso)) throw ValueError("--iso is for fog volumes; a level set's surface is chosen with --isovalue");
+    if (grid.emission || grid.temperature) {
+        throw ValueError("--emission-grid and --temperature light fog volumes; '" + grid.name + "' is a level set");
+    }
     StageTimer timer;
     progress.stage(0, 60);
     // At most one surface kernel an active voxel.
@@ -160,6 +163,15 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
         &progress, refinedWithin);
     stats.refinedVoxels = refinement.sampledVoxels;
     if (alpha > 0.0) stats.haloKernels = detail::quasiInterpolate(g, alpha, kernels, &sampled);
+    const std::uint64_t densityKernels = kernels.kernels.size();
+    // Emission grids' kernels after the density's (KernelSet::emitterBegin).
+    detail::EmitterKernels emitters = detail::emitterKernels(g, mSettings, &lod, nullptr, &budget);
+    if (!emitters.kernels.kernels.empty()) {
+        budget.check(double(kernels.kernels.size() + emitters.kernels.kernels.size()), "kernels with the emission grids'", detail::kBytesPerKernel);
+        kernels.emitterBegin = kernels.kernels.size();
+        kernels.kernels.insert(kernels.kernels.end(), emitters.kernels.kernels.begin(), emitters.kernels.kernels.end());
+        kernels.emitted = std::move(emitters.radiance);
+    }
     stats.kernelSeconds = timer.lap();
     progress.stage(10, 35);
     // The light maps take at most a quarter of the budget (4 bytes a lattice point), shared
@@ -200,6 +212,7 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     stats.activeVoxels = kernels.activeVoxels;
     stats.activeTiles = kernels.activeTiles;
     stats.kernels = kernels.kernels.size();
+    stats.emitterKernels = kernels.kernels.size() - densityKernels;
     stats.kernelsSkipped = kernels.belowCutoff + kernels.notANumber;
     stats.voxelsMerged = kernels.mergedVoxels;
     stats.mergedKernels = kernels.mergedKernels;
@@ -213,6 +226,15 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     stats.slabComposites = raster.slabComposites;
     stats.rasterBackend = raster.backend;
     if (kernels.activeVoxels == 0 && kernels.activeTiles == 0) stats.warnings.push_back("the grid has no active values: the image is empty");
+    if (g.temperature) {
+        const double hottest = detail::hottestKelvin(*g.temperature, detail::EmissionModel(mSettings));
+        if (hottest < detail::kVisibleKelvin) {
+            std::ostringstream w;
+            w << "the temperature grid '" << g.temperature->name << "' reaches " << hottest << " K at most, too cold to glow visibly "
+              << "(below " << detail::kVisibleKelvin << " K): --temperature-scale and --temperature-offset map its values to Kelvin";
+            stats.warnings.push_back(w.str());
+        }
+    }
     if (kernels.notANumber) stats.warnings.push_back(countLine(kernels.notANumber, "NaN voxel values skipped"));
     if (kernels.clamped) stats.warnings.push_back(countLine(kernels.clamped, "voxel values above 1e6 (or +Inf) clamped to 1e6"));
     if (splats.beforeNear) stats.warnings.push_back(countLine(splats.beforeNear, "voxels in front of the near plane left out (lower --near to see them)"));

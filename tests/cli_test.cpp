@@ -253,7 +253,7 @@ TEST_F(Cli, GreyValuesStayGreyInEveryInputSpace)
     ASSERT_EQ(runCli(mDir, mGrid + " " + b + " -res 48x32 -translate 0,0,5 --input-space ACEScg").code, 0);
     EXPECT_EQ(maxAbsDiff(readExr(a), readExr(b)), 0.0);
     const CliRun coloured = runCli(mDir, mGrid + " " + b + " -res 16x16 -translate 0,0,5 -light 0,1,0,1,0,0 -v");
-    EXPECT_NE(coloured.out.find("model in the working space: --absorb 0.1,0.1,0.1 --scatter 1.5,1.5,1.5 --emission 0,0,0 --light colour 0.613"),
+    EXPECT_NE(coloured.out.find("model in the working space: --absorb 0.1,0.1,0.1 --scatter 1.5,1.5,1.5 --emission 0,0,0 --light 0,1,0,0.613"),
         std::string::npos) << coloured.out;
     // Outside the working space's gamut (pure ACEScg green in linear Rec.709): a warning, and 0.
     const CliRun r = runCli(mDir, mGrid + " " + b + " -res 16x16 -translate 0,0,5 --input-space ACEScg --working-space lin_rec709 -light 0,1,0,0,1,0");
@@ -446,6 +446,67 @@ TEST_F(Cli, DensityGridPicksAGridOfAPyroCache)
     const CliRun heatRun = runCli(mDir, file + " " + named + " -res 32x32 -translate 0,0,4 --density-grid heat -v");
     EXPECT_NE(heatRun.out.find("vdb_ewa: grid 'heat'"), std::string::npos) << heatRun.out;
     EXPECT_GT(maxAbsDiff(readExr(picked), readExr(named)), 0.1) << "another grid, another image";
+}
+
+TEST_F(Cli, LightsAPyroShot)
+{
+    // A pyro cache (density, flame, temperature) lit by two lights, from the command line and
+    // from a job file alike; its flame and temperature glow; a sky fills it.
+    const std::string file = mDir.file("pyro.vdb"), two = mDir.file("two.exr"), job = mDir.file("shot.json"), fromJob = mDir.file("job.exr");
+    auto density = makeBoxGrid(openvdb::Coord(-8), openvdb::Coord(7), 0.5f, 0.1);
+    density->setName("density");
+    auto flame = makeBoxGrid(openvdb::Coord(-4), openvdb::Coord(3), 0.5f, 0.1);
+    flame->setName("flame");
+    auto temperature = makeBoxGrid(openvdb::Coord(-4), openvdb::Coord(3), 2.0f, 0.1);
+    temperature->setName("temperature");
+    openvdb::io::File(file).write({density, flame, temperature});
+    const std::string camera = " -res 32x32 -translate 0,0,4";
+    const CliRun lit = runCli(mDir, file + " " + two + camera + " --light 1,1,0,1,0.8,0.6 -light -1,0.5,0,0.2,0.3,0.9 -v");
+    ASSERT_EQ(lit.code, 0) << lit.err;
+    EXPECT_NE(lit.out.find("--light 1,1,0,1,0.8,0.6 --light -1,0.5,0,0.2,0.3,0.9 --ambient"), std::string::npos) << lit.out;
+    std::ofstream(job) << R"({"input": ")" << file << R"(", "output": ")" << fromJob
+                       << R"(", "res": "32x32", "translate": [0, 0, 4], "light": [[1, 1, 0, 1, 0.8, 0.6], [-1, 0.5, 0, 0.2, 0.3, 0.9]]})";
+    ASSERT_EQ(runCli(mDir, "render --job " + job).code, 0);
+    expectSameFile(two, fromJob);
+
+    // Flame: brighter, through the density around it, in its colour; -v and the header say so.
+    const std::string glowing = mDir.file("flame.exr");
+    const CliRun flameRun = runCli(mDir, file + " " + glowing + camera + " --emission-grid flame --emission-color 1,0.5,0.2 --emission-intensity 10 -v");
+    ASSERT_EQ(flameRun.code, 0) << flameRun.err;
+    EXPECT_NE(flameRun.out.find("--emission-grid flame --emission-color"), std::string::npos) << flameRun.out;
+    ASSERT_EQ(runCli(mDir, file + " " + mDir.file("plain.exr") + camera).code, 0);
+    const Image unlit = readExr(mDir.file("plain.exr")), flamed = readExr(glowing);
+    EXPECT_GT(flamed.pixel(16, 16)[0], unlit.pixel(16, 16)[0] + 0.05f);
+    EXPECT_GT(flamed.pixel(16, 16)[0] - unlit.pixel(16, 16)[0], flamed.pixel(16, 16)[2] - unlit.pixel(16, 16)[2]) << "the flame's colour";
+
+    // Temperature: 2 K as written is too cold to glow, and the warning says how to map it;
+    // at 1000 K a unit (2000 K) it glows through the density around it.
+    const CliRun cold = runCli(mDir, file + " " + mDir.file("cold.exr") + camera + " --temperature temperature");
+    ASSERT_EQ(cold.code, 0) << cold.err;
+    EXPECT_NE(cold.err.find("too cold to glow visibly"), std::string::npos) << cold.err;
+    EXPECT_NE(cold.err.find("--temperature-scale"), std::string::npos) << cold.err;
+    const CliRun hot = runCli(mDir, file + " " + mDir.file("hot.exr") + camera + " --temperature temperature --temperature-scale 1000 --blackbody-intensity 10");
+    ASSERT_EQ(hot.code, 0) << hot.err;
+    EXPECT_EQ(hot.err.find("too cold"), std::string::npos) << hot.err;
+    EXPECT_GT(readExr(mDir.file("hot.exr")).pixel(16, 16)[0], unlit.pixel(16, 16)[0] + 0.05f);
+    expectFailure(file + " " + mDir.file("out.exr") + camera + " --temperature heat", 3, "no grid named 'heat'");
+
+    // A sky: a lat-long image fills from above.
+    Image sky(64, 32);
+    for (int y = 0; y < 32; ++y)
+        for (int x = 0; x < 64; ++x) {
+            float* p = sky.pixel(x, y);
+            p[0] = p[1] = y < 16 ? 0.5f : 0.0f;
+            p[2] = y < 16 ? 1.0f : 0.0f;
+            p[3] = 1.0f;
+        }
+    writeImage(sky, mDir.file("sky.hdr"), nullptr, {"Linear Rec.709 (sRGB)", {}});
+    const CliRun filled = runCli(mDir, file + " " + mDir.file("sky.exr") + camera + " --environment " + mDir.file("sky.hdr") + " -v");
+    ASSERT_EQ(filled.code, 0) << filled.err;
+    EXPECT_NE(filled.out.find("--environment-lights 16"), std::string::npos) << filled.out;
+    EXPECT_GT(readExr(mDir.file("sky.exr")).pixel(16, 16)[2], unlit.pixel(16, 16)[2] + 0.01f);
+    writeImage(Image(32, 32), mDir.file("square.hdr"), nullptr, {"Linear Rec.709 (sRGB)", {}});
+    expectFailure(file + " " + mDir.file("out.exr") + camera + " --environment " + mDir.file("square.hdr"), 2, "twice as wide as high");
 }
 
 TEST_F(Cli, VerbosePrintsThePresetResolvedWithOverrides)

@@ -109,15 +109,19 @@ void OutputOptions::prepare(const std::string& output, const std::string& previe
         if (mConfig->isData(*space)) throw ValueError("colour space '" + *space + "' is a data space; renders need a colour space");
     }
     ColorTransform::between(*mConfig, mWorkingSpace, mOutputSpace); // fails now, not after the render
-    if (mInputSpace.empty()) {
-        // vdb_render's colour values are linear sRGB: the config's name for it, if it has one.
-        for (const char* name : {"lin_rec709", "Linear Rec.709 (sRGB)", "lin_srgb", "Utility - Linear - sRGB", "linear"}) {
-            try {
-                mInputSpace = mConfig->colorSpace(name);
-                break;
-            } catch (const ValueError&) {
-            }
+    // vdb_render's colour values are linear sRGB: the config's name for it, if it has one. The
+    // blackbody's colour is computed there too.
+    std::string rec709;
+    for (const char* name : {"lin_rec709", "Linear Rec.709 (sRGB)", "lin_srgb", "Utility - Linear - sRGB", "linear"}) {
+        try {
+            rec709 = mConfig->colorSpace(name);
+            break;
+        } catch (const ValueError&) {
         }
+    }
+    if (!rec709.empty()) mRec709ToWorking = ColorTransform::between(*mConfig, rec709, mWorkingSpace);
+    if (mInputSpace.empty()) {
+        mInputSpace = rec709;
         if (mInputSpace.empty()) {
             warnings.push_back(mConfig->origin() + " has no linear Rec.709 colour space: colour values are taken in the working space " +
                                mWorkingSpace + " (--input-space chooses)");
@@ -170,6 +174,15 @@ void OutputOptions::toWorkingSpace(RenderSettings& rs, std::vector<std::string>&
     convert("--scatter", rs.medium.scatter);
     convert("--emission", rs.medium.emission);
     convert("--ambient", rs.ambient);
+    convert("--emission-color", rs.gridEmission.color);
+    // The blackbody's Rec.709 colours: a linear map, its columns the images of the primaries.
+    if (mRec709ToWorking) {
+        for (int c = 0; c < 3; ++c) {
+            Vec3d primary(0.0);
+            primary[c] = 1.0;
+            rs.gridEmission.rec709ToWorking[c] = mRec709ToWorking->apply(primary);
+        }
+    }
 }
 
 Attributes OutputOptions::resolved() const

@@ -33,8 +33,9 @@ public:
     /// --preview as given (it may hold a frame pattern); empty without one.
     const std::string& previewOption() const { return mPreview; }
 
-    /// Convert the colour values of @a rs (the --light colour, --ambient, --absorb, --scatter, --emission)
-    /// from --input-space to the working space (after prepare). A grey value the conversion
+    /// Convert the colour values of @a rs (the --light colours, --ambient, --absorb, --scatter,
+    /// --emission, --emission-color) from --input-space to the working space (after prepare), and
+    /// set the blackbody's Rec.709 -> working-space matrix. A grey value the conversion
     /// leaves grey stays bit for bit what it was; components outside the working space's gamut
     /// (negative) become 0, with a line in @a warnings.
     void toWorkingSpace(RenderSettings& rs, std::vector<std::string>& warnings) const;
@@ -68,6 +69,7 @@ private:
 
     std::optional<ColorConfig> mConfig;
     std::optional<ColorTransform> mInputToWorking;
+    std::optional<ColorTransform> mRec709ToWorking; ///< null where the config has no linear Rec.709
     PassRequest mPasses;
     ExrOptions mExr;
 };

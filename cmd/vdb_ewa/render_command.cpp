@@ -97,6 +97,13 @@ public:
         mApp->add_option("--ambient", mAmbient,
             "constant ambient (sky) light R,G,B, never shadowed, scattered like --light: a fill for fog volumes; each in "
             "[0, 1e6], in --input-space (default: 0,0,0)");
+        mApp->add_option("--environment", mEnvironment,
+            "latitude-longitude environment image (.exr, .hdr; +Y up, its centre facing -Z), RGB radiance in --input-space: "
+            "a low-order, shadowed fill, added to --light as --environment-lights directional lights (default: none)");
+        mApp->add_option("--environment-lights", mEnvironmentLights,
+            "lights the environment becomes, each from the part of the sphere nearest its direction, in [1, " +
+                std::to_string(kMaxLights) + "] (default: 16)");
+        mApp->add_option("--environment-intensity", mEnvironmentIntensity, "multiplies the environment's radiance, >= 0 (default: 1)");
         mApp->add_option("--gain", mGain, "shadow-ray extinction falls as 1/(1 + gain * distance in voxels) (default: " + fmt(rs.shadow.gain) + ")");
         mApp->add_option("--cutoff", mCutoff,
             "density cutoff, and rays stop where |transmittance RGB|^2 < cutoff (default: " + fmt(rs.cutoff) + ")");
@@ -136,6 +143,26 @@ public:
         mApp->add_option("--color", mColor,
             "name of a vec3s grid in the input file with material colours, sampled trilinearly: level sets multiply "
             "the shader by it, fog volumes the scattering albedo (and the --iso surface's colour) (default: white)");
+        // Emission from grids (pyro caches).
+        const GridEmission ge;
+        mApp->add_option("--emission-grid", mEmissionGrid,
+            "name of a float grid in the input file that emits light wherever it is, whatever the density (a pyro cache's "
+            "flame): radiance --emission-color x --emission-intensity x value per voxel length (default: none)");
+        mApp->add_option("--emission-color", mEmissionColor,
+            "colour R,G,B of --emission-grid, each in [0, 1e6], in --input-space (default: " + fmt3(ge.color) + ")");
+        mApp->add_option("--emission-intensity", mEmissionIntensity,
+            "multiplies --emission-color, in [0, 1e6] (default: " + fmt(ge.intensity) + ")");
+        mApp->add_option("--temperature", mTemperatureGrid,
+            "name of a float grid in the input file whose values are temperatures: blackbody emission of Planck's law "
+            "(CIE 1931 colour, luminance --blackbody-intensity x 1e-6 sigma T^4 / pi per voxel length, Blender's Principled "
+            "Volume) wherever it is, whatever the density (default: none)");
+        mApp->add_option("--temperature-scale", mKelvinScale,
+            "Kelvin per unit of --temperature's values: Kelvin = value x scale + offset (Blender: the node's Temperature; "
+            "Houdini: T1 - T0) (default: " + fmt(ge.kelvinScale) + ")");
+        mApp->add_option("--temperature-offset", mKelvinOffset,
+            "Kelvin at value 0 (Houdini: T0), within 1e6 (default: " + fmt(ge.kelvinOffset) + ")");
+        mApp->add_option("--blackbody-intensity", mBlackbodyIntensity,
+            "multiplies the blackbody's radiance, in [0, 1e6]; 1 is physically based (default: " + fmt(ge.blackbodyIntensity) + ")");
         mApp->add_option("--samples", mSamples,
             "level sets: vdb_render's rays per pixel; accepted for compatibility, the EWA filter anti-aliases "
             "without extra samples (default: 1)");
@@ -334,7 +361,9 @@ private:
         const auto t0 = std::chrono::steady_clock::now();
         stallForTests("read");
         const GridSource opened = GridSource::open(input, mName);
-        const GridSource grid = mColor.empty() ? opened : opened.withColorGrid(mColor);
+        GridSource grid = mColor.empty() ? opened : opened.withColorGrid(mColor);
+        if (!mEmissionGrid.empty()) grid = grid.withEmissionGrid(mEmissionGrid);
+        if (!mTemperatureGrid.empty()) grid = grid.withTemperatureGrid(mTemperatureGrid);
         const double loadSeconds = seconds(t0);
         const Camera camera(cam, grid.worldCentre());
         if (camera.looksDownZByDefault() && verbosity != Verbosity::Quiet) {
@@ -404,6 +433,21 @@ private:
                 rs.lights.push_back(light);
             }
         }
+        if (!mEmissionColor.empty()) rs.gridEmission.color = parseVec3("emission-color", mEmissionColor, true);
+        if (mEmissionIntensity) rs.gridEmission.intensity = *mEmissionIntensity;
+        if (mKelvinScale) rs.gridEmission.kelvinScale = *mKelvinScale;
+        if (mKelvinOffset) rs.gridEmission.kelvinOffset = *mKelvinOffset;
+        if (mBlackbodyIntensity) rs.gridEmission.blackbodyIntensity = *mBlackbodyIntensity;
+        mEnvironmentLightCount = 0;
+        if (!mEnvironment.empty()) {
+            const std::vector<Light> fill = environmentLights(readLatLongImage(mEnvironment), mEnvironmentLights, mEnvironmentIntensity);
+            if (rs.lights.size() + fill.size() > kMaxLights) {
+                throw ValueError("--environment-lights: " + std::to_string(fill.size()) + " environment lights and " + std::to_string(rs.lights.size()) +
+                                 " --light options exceed " + std::to_string(kMaxLights) + " lights");
+            }
+            rs.lights.insert(rs.lights.end(), fill.begin(), fill.end());
+            mEnvironmentLightCount = fill.size();
+        }
         if (mGain) rs.shadow.gain = *mGain;
         if (mCutoff) rs.cutoff = *mCutoff;
         if (mShadowStep) rs.shadow.step = *mShadowStep;
@@ -452,9 +496,25 @@ private:
                  {"frame", fmt(c.frame)}, {"near", fmt(c.near)}, {"far", fmt(c.far)}})
             cameraGroup.emplace_back(k, v);
         Attributes model{{"absorb", fmt3(rs.medium.absorb)}, {"scatter", fmt3(rs.medium.scatter)}, {"emission", fmt3(rs.medium.emission)},
-            {"light", lightsText(rs.lights)}, {"ambient", fmt3(rs.ambient)}, {"gain", fmt(rs.shadow.gain)}, {"cutoff", fmt(rs.cutoff)},
+            {"light", lightsText({rs.lights.begin(), rs.lights.end() - std::ptrdiff_t(mEnvironmentLightCount)})}, {"ambient", fmt3(rs.ambient)}, {"gain", fmt(rs.shadow.gain)}, {"cutoff", fmt(rs.cutoff)},
             {"shadowstep", fmt(rs.shadow.step)}, {"shadow-res", fmt(rs.shadow.resolution)}};
         if (grid.hasColorGrid()) model.emplace_back("color", mColor);
+        if (!mEnvironment.empty()) {
+            model.emplace_back("environment", mEnvironment);
+            model.emplace_back("environment-lights", std::to_string(mEnvironmentLights));
+            model.emplace_back("environment-intensity", fmt(mEnvironmentIntensity));
+        }
+        if (grid.hasEmissionGrid()) {
+            model.emplace_back("emission-grid", mEmissionGrid);
+            model.emplace_back("emission-color", fmt3(rs.gridEmission.color));
+            model.emplace_back("emission-intensity", fmt(rs.gridEmission.intensity));
+        }
+        if (grid.hasTemperatureGrid()) {
+            model.emplace_back("temperature", mTemperatureGrid);
+            model.emplace_back("temperature-scale", fmt(rs.gridEmission.kelvinScale));
+            model.emplace_back("temperature-offset", fmt(rs.gridEmission.kelvinOffset));
+            model.emplace_back("blackbody-intensity", fmt(rs.gridEmission.blackbodyIntensity));
+        }
         Attributes method{{"method", choiceName(rs.method, kMethods)}};
         if (rs.method != Method::Splat) method.emplace_back("step", fmt(rs.step));
         if (!grid.isLevelSet() && !std::isnan(rs.surface.iso)) {
@@ -533,7 +593,8 @@ private:
         out << "vdb_ewa: " << s.activeVoxels << " active voxels and " << counted(s.activeTiles, "active tile") << " read; "
                   << s.kernels << " kernels (" << s.voxelsMerged << " voxels merged into " << s.mergedKernels
                   << " by --lod, " << (s.surfaceLattice > 1 ? "one surface kernel a " + std::to_string(s.surfaceLattice) + "^3 block by --lod, " : "")
-                  << s.haloKernels << " halo kernels by --prefilter, " << s.refinedVoxels << " voxels sampled by --refine), " << s.kernelsSkipped << " values skipped (below --cutoff or NaN), "
+                  << s.haloKernels << " halo kernels by --prefilter, " << s.refinedVoxels << " voxels sampled by --refine"
+                  << (s.emitterKernels ? ", " + std::to_string(s.emitterKernels) + " of the emission grids" : "") << "), " << s.kernelsSkipped << " values skipped (below --cutoff or NaN), "
                   << s.kernelsCulled << " kernels culled, " << s.splats << " splatted into " << s.splatTilePairs
                   << " (splat, tile) pairs; " << s.screenTilesOpaque << " of " << s.screenTiles
                   << " screen tiles turned opaque early, skipping " << s.splatTilePairsSkipped << " pairs; "
@@ -552,7 +613,11 @@ private:
     std::optional<int> mTileSpacing, mRefine, mSamples;
     std::optional<double> mShadowRes;
     std::optional<double> mIsovalue, mIso, mIsoOpacity;
-    std::string mShader, mColor;
+    std::string mShader, mColor, mEmissionGrid, mTemperatureGrid, mEmissionColor, mEnvironment;
+    int mEnvironmentLights = 16;
+    double mEnvironmentIntensity = 1.0;
+    mutable std::size_t mEnvironmentLightCount = 0; ///< the last lights of the settings come from --environment
+    std::optional<double> mEmissionIntensity, mKelvinScale, mKelvinOffset, mBlackbodyIntensity;
     std::optional<double> mFov, mFocal, mAperture, mFrame, mNear, mFar, mGain, mCutoff, mShadowStep, mStep, mLod, mLodError;
     std::optional<double> mKernelSigma, mSurfaceSigma, mLowpass, mCutoffRadius, mSlab;
     int mThreads = 0;

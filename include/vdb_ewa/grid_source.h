@@ -29,6 +29,18 @@ public:
     GridSource withColorGrid(const std::string& colorName) const;
     bool hasColorGrid() const;
 
+    /// The same grid with emission from the float grid @a emissionName of its file: its value x
+    /// GridEmission's colour and intensity is radiance per voxel length, wherever it is
+    /// (a pyro cache's flame). Sampled in this grid's index space: resampled trilinearly where its
+    /// transform differs. @throw IoError, InputError (no such grid, not a float grid, or a host
+    /// grid without a file: use withEmissionGrid in openvdb_grid.h).
+    GridSource withEmissionGrid(const std::string& emissionName) const;
+    /// The same grid with blackbody emission from the float grid @a temperatureName of its file
+    /// (Kelvin = value x GridEmission::kelvinScale + kelvinOffset), as withEmissionGrid.
+    GridSource withTemperatureGrid(const std::string& temperatureName) const;
+    bool hasEmissionGrid() const;
+    bool hasTemperatureGrid() const;
+
     const std::string& name() const;
     /// File the grid came from, empty for a host grid.
     const std::string& path() const;

@@ -23,4 +23,12 @@ VDB_EWA_API GridSource gridSourceFromOpenVDB(openvdb::GridBase::ConstPtr grid);
 /// @throw InputError for a null grid or another value type.
 VDB_EWA_API GridSource withColorGrid(const GridSource& source, openvdb::GridBase::ConstPtr colorGrid);
 
+/// @a source with emission from a host's float or double grid (see GridSource::withEmissionGrid).
+/// @throw InputError for a null grid or another value type.
+VDB_EWA_API GridSource withEmissionGrid(const GridSource& source, openvdb::GridBase::ConstPtr emissionGrid);
+
+/// @a source with blackbody emission from a host's temperature grid (see
+/// GridSource::withTemperatureGrid). @throw InputError for a null grid or another value type.
+VDB_EWA_API GridSource withTemperatureGrid(const GridSource& source, openvdb::GridBase::ConstPtr temperatureGrid);
+
 } // namespace vdb_ewa

@@ -77,6 +77,24 @@ struct Light
     }
 };
 
+/// Emission from grids of the file besides the density (GridSource::withEmissionGrid,
+/// withTemperatureGrid; a pyro cache's flame and temperature): radiance per voxel length
+/// wherever they are, whatever the density (docs/equations.md#emission-grids).
+struct GridEmission
+{
+    Vec3d color{1.0, 1.0, 1.0};   ///< emission grid: radiance R,G,B per voxel length per unit of its value
+    double intensity = 1.0;       ///< emission grid: multiplies color
+    double kelvinScale = 1.0;     ///< temperature grid: Kelvin = value x kelvinScale + kelvinOffset
+    double kelvinOffset = 0.0;
+    /// Blackbody radiance: luminance blackbodyIntensity x 1e-6 sigma T^4 / pi per voxel length
+    /// (Blender's Principled Volume at Blackbody Intensity 1, per world unit there), colour of
+    /// Planck's law seen by the CIE 1931 observer.
+    double blackbodyIntensity = 1.0;
+    /// Linear Rec.709 -> the space the other colours are in (the working space): the blackbody's
+    /// colour is computed in Rec.709 and brought there. Identity: colours are linear Rec.709.
+    Mat3d rec709ToWorking{1.0};
+};
+
 /// Most directional lights a render takes (RenderSettings::lights): each has a light map.
 constexpr std::size_t kMaxLights = 64;
 
@@ -151,6 +169,7 @@ struct VDB_EWA_API RenderSettings
     /// unit of scattering scatters it as it would the light (a fill for fog volumes; level sets
     /// and --iso surfaces ignore it). 0: none.
     Vec3d ambient{0.0, 0.0, 0.0};
+    GridEmission gridEmission;  ///< emission and temperature grids
     ShadowOptions shadow;       ///< the lights' transmittance
     SplatOptions splat;         ///< EWA splatting knobs
     SurfaceOptions surface;     ///< level sets and fog iso-surfaces

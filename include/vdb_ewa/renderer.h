@@ -32,6 +32,7 @@ struct RenderStats
     std::uint64_t activeTiles = 0;
     std::uint64_t kernels = 0;        ///< kernels built (voxels + tile kernels + halo kernels)
     std::uint64_t haloKernels = 0;    ///< negative kernels beside the support (--prefilter)
+    std::uint64_t emitterKernels = 0; ///< kernels of the emission and temperature grids (included in kernels)
     std::uint64_t refinedVoxels = 0;  ///< voxels sampled on the finer lattice (--refine)
     std::uint64_t kernelsSkipped = 0; ///< below the density cutoff, or invalid values
     std::uint64_t voxelsMerged = 0;   ///< active voxels merged into level-of-detail kernels (--lod)

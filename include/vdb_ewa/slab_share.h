@@ -60,9 +60,13 @@ inline float slabAbsorbed(float tau) { return tau > 0.0f ? -std::expm1(-tau) : 0
 /// @a scattered, a source already integrated across the slab (the scattering weight x the
 /// light's colour x slabLightIntegral):
 /// C += T ((E / tau)(1 - exp(-tau)) + scattered); T *= exp(-tau). @a absorbed: slabAbsorbed(tau).
+/// Without optical depth (emission grids where there is no density) C += T E.
 inline void compositeSlab(float tau, float absorbed, float emission, float scattered, float& colour, float& transmittance)
 {
-    if (!(tau > 0.0f)) return;
+    if (!(tau > 0.0f)) {
+        if (emission > 0.0f) colour += transmittance * emission;
+        return;
+    }
     const float emitted = emission == 0.0f ? 0.0f : (tau > 1e-7f ? emission / tau * absorbed : emission);
     colour += transmittance * (emitted + scattered);
     transmittance *= 1.0f - absorbed;

@@ -14,6 +14,7 @@
 #include "image.h"
 #include "make_grid.h"
 #include "output_file.h"
+#include "environment.h"
 #include "image_output.h"
 #include "render_settings.h"
 #include "interrupter.h"

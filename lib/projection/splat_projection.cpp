@@ -150,6 +150,19 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels, c
                 // depth x their radiance per unit optical depth, never shadowed) and the
                 // scattering weight, lit by the compositor per slab sample.
                 float* pass = passSources.data() + i * std::size_t(passCount) * 3;
+                if (i >= kernels.emitterBegin) {
+                    // An emitter: its radiance per voxel length x its weight in voxel lengths,
+                    // no optical depth (docs/equations.md#emission-grids).
+                    const std::array<float, 3>& radiance = kernels.emitted[i - kernels.emitterBegin];
+                    for (int c = 0; c < 3; ++c) {
+                        sp.tau[c] = sp.scatter[c] = 0.0f;
+                        sp.emission[c] = float(weight * double(radiance[std::size_t(c)]));
+                        if (layout.shadow >= 0) pass[3 * layout.shadow + c] = 0.0f;
+                        if (layout.emission >= 0) pass[3 * layout.emission + c] = sp.emission[c];
+                    }
+                    visible[i] = 1;
+                    continue;
+                }
                 for (int c = 0; c < 3; ++c) {
                     const double tau = model.opticalDepth(c, weight, 1.0);
                     sp.tau[c] = float(tau);

@@ -318,7 +318,8 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
             const Floats tau = hn::LoadU(d, &mTau[i]), a = hn::Load(d, absorbed[c]);
             hn::Store(litSum[c], d, lit[c]);
             hn::Store(colouredSum[c], d, litColoured[c]);
-            const auto update = hn::And(chosen, hn::Gt(tau, zero));
+            // Emitters without optical depth (emission grids) add their light too.
+            const auto update = hn::And(chosen, hn::Or(hn::Gt(tau, zero), hn::Gt(hn::Load(d, emission[c]), zero)));
             float* colour = &mC[c * kTilePixels + p];
             float* transmittance = &mT[c * kTilePixels + p];
             const Floats t = hn::LoadU(d, transmittance);

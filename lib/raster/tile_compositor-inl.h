@@ -248,7 +248,7 @@ private:
                 t[c] = 1.0f;
                 const float tau = mTau[base + c * kTilePixels];
                 compositeSlab(tau, slabAbsorbed(tau), emission[c], lighted[c], colour[c], t[c]);
-                empty = empty && !(mTau[base + c * kTilePixels] > 0.0f);
+                empty = empty && !(mTau[base + c * kTilePixels] > 0.0f) && !(emission[c] > 0.0f);
             }
             if (!empty) {
                 DeepSample d;

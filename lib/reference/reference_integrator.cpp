@@ -133,8 +133,9 @@ class GaussianSumSampler
 {
 public:
     GaussianSumSampler(const ReferenceVolume& v, double sigma) : mSum(v, sigma) {}
-    bool sample(const Vec3d& pIndex, double& density, double source[3])
+    bool sample(const Vec3d& pIndex, double& density, double source[3], Vec3d& emitted)
     {
+        emitted = Vec3d(0.0);
         Vec3d sourceSum;
         mSum.sample(pIndex, density, sourceSum);
         if (!(density > 0.0)) return false;
@@ -146,25 +147,31 @@ private:
     KernelSum mSum;
 };
 
-/// The field's sampler: trilinear density, and the source from a shadow ray towards each light
-/// marched from the sample itself and the material colour there. One per thread.
+/// The field's sampler: trilinear density, the source from a shadow ray towards each light
+/// marched from the sample itself and the material colour there, and the emission grids'
+/// radiance per voxel length (EmissionSampler). One per thread.
 class TrilinearSampler
 {
 public:
     TrilinearSampler(const GridSource::Impl& grid, const RenderSettings& settings)
         : mGrid(grid), mAccessor(grid.field->getConstAccessor()), mColor(grid), mModel(settings), mCutoff(settings.cutoff),
-          mTinted(bool(grid.color)), mShadow(settings.lights.size(), Rgb{1.0f, 1.0f, 1.0f})
+          mTinted(bool(grid.color)), mShadow(settings.lights.size(), Rgb{1.0f, 1.0f, 1.0f}), mEmission(grid, settings)
     {
         for (std::size_t l = 0; l < settings.lights.size(); ++l) {
             if (!mModel.dark(l)) mShadows.emplace_back(l, ShadowMarcher(grid, settings, l));
         }
     }
-    bool sample(const Vec3d& pIndex, double& density, double source[3])
+    bool sample(const Vec3d& pIndex, double& density, double source[3], Vec3d& emitted)
     {
         float d = 0.0f;
         openvdb::tools::BoxSampler::sample(mAccessor, openvdb::Vec3d(pIndex.x, pIndex.y, pIndex.z), d);
         density = d;
-        if (!(density >= mCutoff) || !(density > 0.0)) return false; // vdb_render skips samples below its cutoff
+        emitted = mEmission.any() ? mEmission.at(pIndex) : Vec3d(0.0);
+        if (!(density >= mCutoff) || !(density > 0.0)) { // vdb_render skips samples below its cutoff
+            density = 0.0;
+            for (int c = 0; c < 3; ++c) source[c] = 0.0;
+            return emitted.x > 0.0 || emitted.y > 0.0 || emitted.z > 0.0;
+        }
         for (auto& [l, marcher] : mShadows) mShadow[l] = marcher.march(pIndex);
         const Vec3d color = mTinted ? mColor.at(mGrid.indexToWorld(pIndex)) : Vec3d(1.0);
         for (int c = 0; c < 3; ++c) source[c] = mModel.source(c, mShadow.data(), color[c]);
@@ -180,10 +187,14 @@ private:
     double mCutoff;
     bool mTinted;
     std::vector<Rgb> mShadow; ///< per light: its transmittance at the sample (1 if dark)
+    EmissionSampler mEmission;
 };
 
 void checkMarchable(const GridSource::Impl& grid, const PassRequest& passes, const char* method)
 {
+    if (std::string(method) != "raymarch" && (grid.emission || grid.temperature)) {
+        throw ValueError(std::string("--method ") + method + " has no emission grids (--emission-grid, --temperature): use --method splat or raymarch");
+    }
     if (!grid.linear) throw ValueError(std::string("--method ") + method + " needs an affine grid transform (this grid has a frustum map)");
     if (passes.shadow || passes.emission || passes.deep) {
         throw ValueError(std::string("--method ") + method + " renders the beauty, Z and transmittance only (shadow, emission and deep passes need --method splat)");
@@ -243,11 +254,14 @@ Frame marchRays(const GridSource::Impl& grid, const Camera& camera, const Render
                             continue;
                         }
                         double density, source[3];
-                        if (!sampler.sample(p, density, source)) continue;
+                        Vec3d emitted;
+                        if (!sampler.sample(p, density, source, emitted)) continue;
                         const float before = (T[0] + T[1] + T[2]) / 3.0f;
                         for (int c = 0; c < 3; ++c) {
+                            // The emission grids' radiance per voxel length over the step (no
+                            // optical depth of their own: compositeSlab's exact update).
                             const float tau = float(model.opticalDepth(c, density, step));
-                            compositeSlab(tau, float(tau * source[c]), C[c], T[c]);
+                            compositeSlab(tau, float(tau * source[c] + emitted[c] * step), C[c], T[c]);
                         }
                         if (passes.depth && before > 0.5f && !std::isfinite(z)) {
                             const double u = halfAlphaFraction(before, (T[0] + T[1] + T[2]) / 3.0f);
@@ -277,13 +291,23 @@ Frame rayMarchReference(const GridSource::Impl& grid, const Camera& camera, cons
     const auto t0 = std::chrono::steady_clock::now();
     stats.activeVoxels = grid.activeVoxels;
     stats.activeTiles = grid.activeTiles;
-    const openvdb::CoordBBox box = grid.field->evalActiveVoxelBoundingBox();
+    // Emission grids (in the grid's index space) emit where there is no density: the march
+    // covers and skips by the union of their active voxels.
+    openvdb::FloatGrid::ConstPtr occupancy = grid.field;
+    if (grid.emission || grid.temperature) {
+        openvdb::FloatGrid::Ptr all = grid.field->deepCopy();
+        for (const auto& emitter : {grid.emission, grid.temperature}) {
+            if (emitter) all->tree().topologyUnion(emitter->field->tree());
+        }
+        occupancy = all;
+    }
+    const openvdb::CoordBBox box = occupancy->evalActiveVoxelBoundingBox();
     if (box.empty()) return blankFrame(camera.width(), camera.height(), passes);
     // Trilinear support: one voxel beyond the active ones.
     const Vec3d boxLo = Vec3d(box.min().x(), box.min().y(), box.min().z()) - 1.0;
     const Vec3d boxHi = Vec3d(box.max().x(), box.max().y(), box.max().z()) + 1.0;
     if (progress) progress->stage(0, 100);
-    Frame frame = marchRays(grid, camera, settings, passes, *grid.field, 0, boxLo, boxHi,
+    Frame frame = marchRays(grid, camera, settings, passes, *occupancy, 0, boxLo, boxHi,
         [&] { return TrilinearSampler(grid, settings); }, progress);
     stats.rasterSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return frame;

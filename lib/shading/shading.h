@@ -5,6 +5,8 @@
 ///        (docs/architecture.md).
 #pragma once
 
+#include "shading/blackbody.h"
+#include "shading/grid_emission.h"
 #include "shading/light_map.h"
 #include "shading/optical_model.h"
 #include "shading/shadow_transmittance.h"

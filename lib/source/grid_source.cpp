@@ -2,6 +2,7 @@
 /// @brief Reading grids from .vdb files and from host applications.
 #include "source/grid_source_impl.h"
 #include "source/vdb_layout_check.h"
+#include "support/openvdb_tools.h"
 
 #include <vdb_ewa/error.h>
 #include <vdb_ewa/openvdb_grid.h>
@@ -225,6 +226,37 @@ GridSource attachColor(const GridSource::Impl& impl, const openvdb::GridBase::Co
     return GridSource(copy);
 }
 
+/// @a impl with @a base as its emission grid (@a temperature false) or temperature grid, in
+/// @a impl's index space. @throw InputError
+GridSource attachEmitter(const GridSource::Impl& impl, const openvdb::GridBase::ConstPtr& base, const std::string& where, bool temperature)
+{
+    const std::string option = temperature ? "--temperature" : "--emission-grid";
+    if (!base) throw InputError(where + ": null " + (temperature ? "temperature" : "emission") + " grid");
+    auto emitter = std::make_shared<GridSource::Impl>();
+    emitter->grid = asFloatGrid(base, emitter->storedType);
+    if (!emitter->grid) {
+        throw InputError(where + ": grid '" + base->getName() + "' holds " + base->valueType() + " values; " + option +
+                         " needs a float or double grid");
+    }
+    if (emitter->grid->getGridClass() == openvdb::GRID_LEVEL_SET) {
+        throw InputError(where + ": grid '" + base->getName() + "' is a level set; " + option + " needs a fog volume");
+    }
+    if (emitter->grid->transform() != impl.grid->transform()) {
+        // Another voxel size or placement: resampled trilinearly onto the density's voxels, so
+        // that every integrator reads both in one index space.
+        openvdb::FloatGrid::Ptr resampled = openvdb::FloatGrid::create(0.0f);
+        resampled->setTransform(impl.grid->transform().copy());
+        openvdb::tools::resampleToMatch<openvdb::tools::BoxSampler>(*emitter->grid, *resampled);
+        emitter->grid = resampled;
+    }
+    emitter->name = base->getName();
+    emitter->path = impl.path;
+    emitter->derive();
+    auto copy = std::make_shared<GridSource::Impl>(impl);
+    (temperature ? copy->temperature : copy->emission) = emitter;
+    return GridSource(copy);
+}
+
 } // namespace
 
 GridSource GridSource::open(const std::string& path, const std::string& gridName)
@@ -239,6 +271,31 @@ GridSource GridSource::withColorGrid(const std::string& colorName) const
 }
 
 bool GridSource::hasColorGrid() const { return bool(mImpl->color); }
+
+GridSource GridSource::withEmissionGrid(const std::string& emissionName) const
+{
+    if (mImpl->path.empty()) throw InputError("host grid: withEmissionGrid needs a file; use vdb_ewa::withEmissionGrid with the host's grid");
+    return attachEmitter(*mImpl, readGrid(mImpl->path, emissionName, isScalarFloatType, "scalar floating-point"), mImpl->path, false);
+}
+
+GridSource GridSource::withTemperatureGrid(const std::string& temperatureName) const
+{
+    if (mImpl->path.empty()) throw InputError("host grid: withTemperatureGrid needs a file; use vdb_ewa::withTemperatureGrid with the host's grid");
+    return attachEmitter(*mImpl, readGrid(mImpl->path, temperatureName, isScalarFloatType, "scalar floating-point"), mImpl->path, true);
+}
+
+bool GridSource::hasEmissionGrid() const { return bool(mImpl->emission); }
+bool GridSource::hasTemperatureGrid() const { return bool(mImpl->temperature); }
+
+GridSource withEmissionGrid(const GridSource& source, openvdb::GridBase::ConstPtr emissionGrid)
+{
+    return attachEmitter(source.impl(), emissionGrid, "host grid", false);
+}
+
+GridSource withTemperatureGrid(const GridSource& source, openvdb::GridBase::ConstPtr temperatureGrid)
+{
+    return attachEmitter(source.impl(), temperatureGrid, "host grid", true);
+}
 
 GridSource withColorGrid(const GridSource& source, openvdb::GridBase::ConstPtr colorGrid)
 {

@@ -30,6 +30,9 @@ struct VDB_EWA_LOCAL GridSource::Impl
     Vec3d worldCentre{0.0};
     /// Material colours for level-set shaders (vdb_render -color), or null.
     openvdb::Vec3SGrid::ConstPtr color;
+    /// Emission grids of fog volumes (GridSource::withEmissionGrid, withTemperatureGrid), in this
+    /// grid's index space (resampled where their transform differs), or null.
+    std::shared_ptr<const Impl> emission, temperature;
     /// The voxel values of the continuous field every integrator reconstructs (its trilinear
     /// interpolation, OpenVDB's BoxSampler; docs/equations.md#the-field): @c grid with NaN,
     /// negative values and inactive values read as 0 and values above kMaxDensity clamped. The

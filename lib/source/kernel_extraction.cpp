@@ -135,7 +135,7 @@ int tileLatticeSpacing(int tileDim, int maxSpacing)
 }
 
 KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& settings, const LevelOfDetail* lod,
-    Progress* progress, const MemoryBudget* budget)
+    Progress* progress, const MemoryBudget* budget, const LevelSource* levelsFrom)
 {
     const openvdb::FloatTree& tree = grid.grid->tree();
     const float cutoff = float(settings.cutoff);
@@ -166,11 +166,22 @@ KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& set
         if (budget) budget->check(double(merged), "level-of-detail leaf nodes", LevelOfDetail::kBlocks * sizeof(float));
         levels.resize(LevelOfDetail::kBlocks * merged);
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size()), [&](const tbb::blocked_range<std::size_t>& range) {
-            LeafValues values;
+            LeafValues values, decider;
             for (std::size_t i = range.begin(); i < range.end(); ++i) {
                 if (!merges[i]) continue;
                 readLeaf(*leaves[i], cutoff, values, nullptr);
-                lod->blockLevels(values.density, nodes[i], &levels[levelsAt[i]]);
+                const LeafValues* decides = &values;
+                if (levelsFrom) {
+                    // Another grid's values choose the levels, so that both merge alike.
+                    const LeafT* other = levelsFrom->tree->probeConstLeaf(leaves[i]->origin());
+                    if (other) {
+                        readLeaf(*other, levelsFrom->cutoff, decider, nullptr);
+                    } else {
+                        std::fill(std::begin(decider.density), std::end(decider.density), 0.0f);
+                    }
+                    decides = &decider;
+                }
+                lod->blockLevels(decides->density, nodes[i], &levels[levelsAt[i]]);
                 offsets[i + 1] = sharedSlots(values.active, &levels[levelsAt[i]]);
             }
         });

@@ -11,7 +11,9 @@
 #include "support/memory_budget.h"
 #include "support/progress.h"
 
+#include <array>
 #include <cstdint>
+#include <limits>
 #include <algorithm>
 #include <cmath>
 #include <vector>
@@ -61,6 +63,10 @@ struct KernelSet
     std::uint64_t clamped = 0;     ///< values > kMaxDensity (including +Inf): clamped
     std::uint64_t mergedVoxels = 0; ///< active voxels merged into level-of-detail kernels
     std::uint64_t mergedKernels = 0; ///< level-of-detail kernels they became
+    /// Kernels from emitterBegin on are emitters (emission grids, EmitterKernels): no optical
+    /// depth, radiance emitted[i - emitterBegin] per unit weight and voxel length.
+    std::size_t emitterBegin = std::numeric_limits<std::size_t>::max();
+    std::vector<std::array<float, 3>> emitted;
 };
 
 /// Lattice spacing (voxels) used for an active tile of @a tileDim voxels a side: the largest
@@ -73,8 +79,17 @@ int tileLatticeSpacing(int tileDim, int maxSpacing);
 /// block's mean density at the block's centre, spacing = block size: mass is kept).
 /// @a progress: one unit per leaf node; throws Cancelled. @a budget: the voxels' and the active
 /// tiles' kernels are counted against it before they are allocated (BudgetError).
+/// @a levelsFrom: where given, the level of detail's blocks take the levels this grid's values
+/// give (values below its cutoff read as 0): an emission grid merges as the density does, so
+/// that their kernels keep the same shapes (docs/equations.md#emission-grids).
+struct LevelSource
+{
+    const openvdb::FloatTree* tree;
+    float cutoff;
+};
 KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& settings,
-    const LevelOfDetail* lod = nullptr, Progress* progress = nullptr, const MemoryBudget* budget = nullptr);
+    const LevelOfDetail* lod = nullptr, Progress* progress = nullptr, const MemoryBudget* budget = nullptr,
+    const LevelSource* levelsFrom = nullptr);
 
 } // namespace detail
 } // namespace vdb_ewa

@@ -5,6 +5,7 @@
 #include "support/openvdb.h"
 
 #pragma GCC visibility push(default)
+#include <openvdb/tools/GridTransformer.h>
 #include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/Prune.h>
 #pragma GCC visibility pop

@@ -1,0 +1,144 @@
+/// @file grid_emission_test.cpp
+/// @brief Emission grids and blackbody temperature grids against closed forms, for the splatter
+///        and the reference integrator.
+#include "fixtures.h"
+
+#include "shading/shading.h"
+
+#include <vdb_ewa/error.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using namespace vdb_ewa;
+using namespace vdb_ewa::test;
+
+namespace {
+
+constexpr int kDepth = 12;
+constexpr double kH = 0.1;
+constexpr double kPi = 3.14159265358979323846;
+
+/// 40 x 40 x kDepth voxels of @a value centred on the origin in x, y; z in [0, kDepth), shifted
+/// by @a dx voxels in x.
+openvdb::FloatGrid::Ptr box(float value, int dx = 0, double h = kH, int scale = 1)
+{
+    return makeBoxGrid(openvdb::Coord(-20 / scale + dx, -20 / scale, 0), openvdb::Coord(19 / scale + dx, 19 / scale, kDepth / scale - 1), value, h);
+}
+
+/// No light, no cutoff: only what the grids emit.
+RenderSettings emissionOnly(Method method)
+{
+    RenderSettings s;
+    s.method = method;
+    s.lights.clear();
+    s.cutoff = 0.0;
+    s.step = 0.25;
+    return s;
+}
+
+Image render(const GridSource& source, const RenderSettings& s)
+{
+    return Renderer(s).render(source, Camera(orthoDownZ(-0.05, -0.05, 10.0, 1.0, 16), source.worldCentre()));
+}
+
+/// Every pixel's R, G, B within @a relative of @a expected.
+void expectEveryPixel(const Image& img, const Vec3d& expected, double relative, const std::string& what)
+{
+    for (int j = 0; j < img.height; ++j)
+        for (int i = 0; i < img.width; ++i)
+            for (int c = 0; c < 3; ++c) {
+                ASSERT_NEAR(img.pixel(i, j)[c], expected[c], relative * expected[c]) << what << " pixel " << i << "," << j << " c " << c;
+            }
+}
+
+} // namespace
+
+TEST(GridEmission, EmissionInsideADensitySlabMatchesTheClosedForm)
+{
+    // Emission e per voxel length inside absorbing density rho: C = e / sigma_t rho (1 - exp(-tau)).
+    const double rho = 0.5, value = 0.8;
+    for (const Method method : {Method::Splat, Method::RayMarch}) {
+        RenderSettings s = emissionOnly(method);
+        s.medium.absorb = Vec3d(0.05, 0.1, 0.2);
+        s.medium.scatter = Vec3d(0.1);
+        s.gridEmission.color = Vec3d(1.0, 0.5, 0.25);
+        s.gridEmission.intensity = 2.0;
+        const GridSource source = withEmissionGrid(gridSourceFromOpenVDB(box(float(rho))), box(float(value)));
+        Vec3d expected;
+        for (int c = 0; c < 3; ++c) {
+            const double sigma = s.medium.absorb[c] + s.medium.scatter[c];
+            const double e = value * s.gridEmission.color[c] * s.gridEmission.intensity;
+            expected[c] = e / (sigma * rho) * (1.0 - std::exp(-sigma * rho * kDepth));
+        }
+        expectEveryPixel(render(source, s), expected, 0.01, method == Method::Splat ? "splat" : "raymarch");
+    }
+}
+
+TEST(GridEmission, EmitsWhereThereIsNoDensity)
+{
+    // The density lies beside the view: the emission grid alone, C = e D, alpha 0. Also with the
+    // emission grid at half the resolution (resampled onto the density's voxels).
+    const double value = 0.3;
+    for (const Method method : {Method::Splat, Method::RayMarch}) {
+        for (const int scale : {1, 2}) {
+            RenderSettings s = emissionOnly(method);
+            s.gridEmission.color = Vec3d(0.2, 0.4, 1.0);
+            const GridSource source = withEmissionGrid(gridSourceFromOpenVDB(box(1.0f, 200)), box(float(value), 0, kH * scale, scale));
+            const Image img = render(source, s);
+            const std::string what = std::string(method == Method::Splat ? "splat" : "raymarch") + (scale == 2 ? ", resampled" : "");
+            expectEveryPixel(img, value * kDepth * s.gridEmission.color, 0.01, what);
+            for (int j = 0; j < img.height; ++j)
+                for (int i = 0; i < img.width; ++i) ASSERT_EQ(img.pixel(i, j)[3], 0.0f) << what;
+        }
+    }
+}
+
+TEST(GridEmission, BlackbodyOfAUniformTemperatureIsPlancksColourAndStefanBoltzmannsRadiance)
+{
+    // 3000 K everywhere in a slab of kDepth voxels with no density: C = L(T) x colour x D,
+    // L = 1e-6 sigma T^4 / pi (Blender's unit), the colour of luminance 1 in linear Rec.709; its
+    // chromaticity back in CIE xy is the Planckian locus's at 3000 K (NREL Radiance
+    // blackbody.cal: 0.4369393, 0.4040768). D: the trilinear temperature falls to 0 K over the
+    // voxel beyond each face, which adds the integral of (1 - u)^4 there: D = kDepth - 1 + 2/5,
+    // slightly redder, for the reference (which samples T along the ray) and the splatter
+    // (whose kernels carry each voxel's mean blackbody); T^4 of the voxel values would give
+    // kDepth, 5 % more.
+    const double sigma = 5.670374419e-8, kelvin = 3000.0;
+    const double luminance = 1e-6 * sigma * std::pow(kelvin, 4) / kPi;
+    const Vec3d colour = detail::xyzToLinearRec709(detail::blackbodyXyz(kelvin));
+    for (const Method method : {Method::Splat, Method::RayMarch}) {
+        RenderSettings s = emissionOnly(method);
+        s.gridEmission.kelvinScale = 1000.0; // Blender's convention: the grid's value x the node's Temperature
+        const GridSource source = withTemperatureGrid(gridSourceFromOpenVDB(box(1.0f, 200)), box(3.0f));
+        const Image img = render(source, s);
+        const std::string what = method == Method::Splat ? "splat" : "raymarch";
+        expectEveryPixel(img, luminance * (kDepth - 1 + 0.4) * colour, 0.025, what);
+        const float* px = img.pixel(8, 8);
+        const Vec3d xyz = glm::inverse(detail::kXyzToLinearRec709) * Vec3d(px[0], px[1], px[2]);
+        const double xyTolerance = 3e-3;
+        EXPECT_NEAR(xyz.x / (xyz.x + xyz.y + xyz.z), 0.4369393, xyTolerance) << what;
+        EXPECT_NEAR(xyz.y / (xyz.x + xyz.y + xyz.z), 0.4040768, xyTolerance) << what;
+        // Twice the intensity, twice the light; hotter, bluer.
+        s.gridEmission.blackbodyIntensity = 2.0;
+        EXPECT_NEAR(render(source, s).pixel(8, 8)[1], 2.0 * px[1], 1e-4 * px[1]) << what;
+        s.gridEmission.blackbodyIntensity = 1.0;
+        s.gridEmission.kelvinScale = 2000.0;
+        const float* hot = render(source, s).pixel(8, 8);
+        EXPECT_GT(hot[2] / hot[0], 2.0 * px[2] / px[0]) << what;
+    }
+}
+
+TEST(GridEmission, RefusesWhatItCannotRender)
+{
+    const GridSource fog = gridSourceFromOpenVDB(box(1.0f));
+    EXPECT_THROW(withEmissionGrid(fog, openvdb::Vec3SGrid::create()), InputError);
+    EXPECT_THROW(withTemperatureGrid(fog, nullptr), InputError);
+    EXPECT_THROW(fog.withEmissionGrid("flame"), InputError); // a host grid has no file
+    const GridSource glowing = withEmissionGrid(fog, box(1.0f));
+    RenderSettings s = emissionOnly(Method::RayMarchGaussian);
+    EXPECT_THROW(render(glowing, s), ValueError);
+    const GridSource sphere = withEmissionGrid(gridSourceFromOpenVDB(sphereLevelSet(1.0, 0.1)), box(1.0f));
+    EXPECT_THROW(render(sphere, emissionOnly(Method::Splat)), ValueError);
+}
