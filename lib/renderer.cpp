@@ -79,6 +79,8 @@ IsoSurface isoSurface(const RenderSettings& settings, const GridSource::Impl& gr
         const detail::SurfaceKernel& k = surfaces.kernels[i];
         if (!(k.area > 0.0)) continue; // not drawn
         for (std::size_t l = 0; l < lights.size(); ++l) {
+            const Vec3d& colour = settings.lights[l].color;
+            if (colour.x == 0.0 && colour.y == 0.0 && colour.z == 0.0) continue; // black: as the volume's shadow pass
             const detail::Rgb t = lights[l].transmittance(lights[l].coordinates(k.pWorld));
             const double lambert = std::max(0.0, glm::dot(k.normal, settings.lights[l].unitDirection()));
             for (std::size_t c = 0; c < 3; ++c) {
@@ -165,10 +167,11 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     if (alpha > 0.0) stats.haloKernels = detail::quasiInterpolate(g, alpha, kernels, &sampled);
     const std::uint64_t densityKernels = kernels.kernels.size();
     // Emission grids' kernels after the density's (KernelSet::emitterBegin).
-    detail::EmitterKernels emitters = detail::emitterKernels(g, mSettings, &lod, nullptr, &budget);
+    detail::EmitterKernels emitters = detail::emitterKernels(g, mSettings, &lod, &progress, &budget);
     if (!emitters.kernels.kernels.empty()) {
         budget.check(double(kernels.kernels.size() + emitters.kernels.kernels.size()), "kernels with the emission grids'", detail::kBytesPerKernel);
         kernels.emitterBegin = kernels.kernels.size();
+        kernels.kernels.reserve(kernels.kernels.size() + emitters.kernels.kernels.size());
         kernels.kernels.insert(kernels.kernels.end(), emitters.kernels.kernels.begin(), emitters.kernels.kernels.end());
         kernels.emitted = std::move(emitters.radiance);
     }
@@ -176,7 +179,10 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     progress.stage(10, 35);
     // The light maps take at most a quarter of the budget (4 bytes a lattice point), shared
     // between the lights.
-    const double lightCount = double(std::max<std::size_t>(mSettings.lights.size(), 1));
+    const detail::OpticalModel model(mSettings);
+    std::size_t lit = 0;
+    for (std::size_t l = 0; l < mSettings.lights.size(); ++l) lit += model.dark(l) ? 0 : 1;
+    const double lightCount = double(std::max<std::size_t>(lit, 1));
     const double lightPoints = std::min(detail::kLightMapPointBudget, budget.itemsWithin(0.25, 4.0)) / lightCount;
     std::vector<detail::LightMap> lights;
     lights.reserve(mSettings.lights.size());
@@ -225,10 +231,15 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     stats.footprintSamples = raster.footprintSamples;
     stats.slabComposites = raster.slabComposites;
     stats.rasterBackend = raster.backend;
-    if (kernels.activeVoxels == 0 && kernels.activeTiles == 0) stats.warnings.push_back("the grid has no active values: the image is empty");
+    if (kernels.activeVoxels == 0 && kernels.activeTiles == 0 && stats.emitterKernels == 0) {
+        stats.warnings.push_back("the grid has no active values: the image is empty");
+    }
+    if (emitters.kernels.clamped) {
+        stats.warnings.push_back(countLine(emitters.kernels.clamped, "emitting voxels above 1e6 radiance per voxel length clamped to 1e6"));
+    }
     if (g.temperature) {
         const double hottest = detail::hottestKelvin(*g.temperature, detail::EmissionModel(mSettings));
-        if (hottest < detail::kVisibleKelvin) {
+        if (std::isfinite(hottest) && hottest < detail::kVisibleKelvin) {
             std::ostringstream w;
             w << "the temperature grid '" << g.temperature->name << "' reaches " << hottest << " K at most, too cold to glow visibly "
               << "(below " << detail::kVisibleKelvin << " K): --temperature-scale and --temperature-offset map its values to Kelvin";

@@ -139,6 +139,12 @@ TEST_F(Cli, WritesEveryImageFormatByItsExtension)
     const std::string exr = mDir.file("float.exr");
     ASSERT_EQ(runCli(mDir, mGrid + " " + exr + args + "--exr-type float --output-space lin_rec709").code, 0);
     const Image beauty = readExr(exr);
+    // The EXR names its colour space beside the chromaticities: the name OpenImageIO reads
+    // (oiio:ColorSpace, which 2.4 itself never writes to EXR) and the Color Interop Forum's
+    // colorInteropID (Blender's working_space_interop_id).
+    const ImageFile header = readImageFile(exr);
+    EXPECT_EQ(header.spec.get_string_attribute("oiio:ColorSpace"), "Linear Rec.709 (sRGB)");
+    EXPECT_EQ(header.spec.get_string_attribute("colorInteropID"), "lin_rec709_scene");
     for (const std::string ext : {"png", "jpg", "tif", "ppm", "hdr"}) {
         SCOPED_TRACE(ext);
         const std::string out = mDir.file("out." + ext), preview = mDir.file("preview_" + ext + ".png");

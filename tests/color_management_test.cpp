@@ -195,6 +195,18 @@ TEST(ColorManagement, ConfigPrecedenceAndFallbacks)
     EXPECT_EQ(ColorConfig::fromString(shippedConfigText()).roleSpace("scene_linear"), "ACEScg");
 }
 
+TEST(ColorManagement, ColorInteropIds)
+{
+    const ColorConfig config = ColorConfig::shipped();
+    EXPECT_EQ(colorInteropIdOf(config, "ACEScg"), "lin_ap1_scene");
+    EXPECT_EQ(colorInteropIdOf(config, "ACES2065-1"), "lin_ap0_scene");
+    EXPECT_EQ(colorInteropIdOf(config, "lin_srgb"), "lin_rec709_scene"); // by alias
+    EXPECT_EQ(colorInteropIdOf(config, "sRGB - Texture"), "srgb_rec709_scene");
+    EXPECT_EQ(colorInteropIdOf(config, "Raw"), "data");
+    EXPECT_EQ(colorInteropIdOf(config, "ACEScct"), "") << "a space without an identifier gets none";
+    EXPECT_EQ(colorInteropIdOf(config, "no such space"), "");
+}
+
 TEST(ColorManagement, Chromaticities)
 {
     const ColorConfig config = ColorConfig::shipped();

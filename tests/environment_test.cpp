@@ -48,13 +48,17 @@ Vec3d colourSum(const std::vector<Light>& lights)
 
 } // namespace
 
-TEST(Environment, LatLongDirectionsFollowHoudinisConvention)
+TEST(Environment, LatLongDirectionsFollowOpenExrAndUsd)
 {
-    expectDirection(latLongDirection(0.5, 0.5), Vec3d(0, 0, -1)); // the centre faces -Z
-    expectDirection(latLongDirection(0.75, 0.5), Vec3d(1, 0, 0));
-    expectDirection(latLongDirection(0.25, 0.5), Vec3d(-1, 0, 0));
+    // OpenEXR's latitude-longitude map (and USD's DomeLight): "latitude 0, longitude 0 points
+    // into positive z direction; and latitude 0, longitude pi/2 points into positive x
+    // direction"; the first pixel has latitude +pi/2 and longitude +pi.
+    expectDirection(latLongDirection(0.5, 0.5), Vec3d(0, 0, 1));
+    expectDirection(latLongDirection(0.25, 0.5), Vec3d(1, 0, 0));
+    expectDirection(latLongDirection(0.75, 0.5), Vec3d(-1, 0, 0));
     expectDirection(latLongDirection(0.3, 0.0), Vec3d(0, 1, 0)); // the top row is +Y
-    expectDirection(latLongDirection(0.0, 0.5), Vec3d(0, 0, 1));
+    expectDirection(latLongDirection(0.3, 1.0), Vec3d(0, -1, 0));
+    expectDirection(latLongDirection(0.0, 0.5), Vec3d(0, 0, -1));
 }
 
 TEST(Environment, LightsKeepTheEnvironmentsLight)

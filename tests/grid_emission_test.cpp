@@ -130,6 +130,25 @@ TEST(GridEmission, BlackbodyOfAUniformTemperatureIsPlancksColourAndStefanBoltzma
     }
 }
 
+TEST(GridEmission, EmptySpaceStaysDarkWhateverTheOffset)
+{
+    // Houdini's mapping puts value 0 at T0 (--temperature-offset): the grid's background reads
+    // 0, yet only the cells touching its active voxels glow, in both integrators. A gap of
+    // inactive voxels through the temperature slab stays dark.
+    for (const Method method : {Method::Splat, Method::RayMarch}) {
+        RenderSettings s = emissionOnly(method);
+        s.gridEmission.kelvinOffset = 1500.0;
+        s.gridEmission.kelvinScale = 1000.0;
+        auto temperature = box(1.0f);
+        temperature->tree().fill(openvdb::CoordBBox(openvdb::Coord(-6, -20, 0), openvdb::Coord(5, 19, kDepth - 1)), 0.0f, false);
+        const GridSource source = withTemperatureGrid(gridSourceFromOpenVDB(box(1.0f, 200)), temperature);
+        const Image img = Renderer(s).render(source, Camera(orthoDownZ(-0.05, -0.05, 10.0, 2.0, 24), source.worldCentre()));
+        const std::string what = method == Method::Splat ? "splat" : "raymarch";
+        EXPECT_GT(img.pixel(1, 12)[0], 1.0f) << what << ": the slab glows";
+        for (int c = 0; c < 3; ++c) EXPECT_EQ(img.pixel(12, 12)[c], 0.0f) << what << ": the gap stays dark";
+    }
+}
+
 TEST(GridEmission, RefusesWhatItCannotRender)
 {
     const GridSource fog = gridSourceFromOpenVDB(box(1.0f));

@@ -246,6 +246,11 @@ void OutputOptions::writeExrInOutputSpace(Frame& frame, const Camera& camera, co
     ExrOptions exr = mExr;
     exr.camera = &camera;
     exr.attributes = attributes;
+    // The colour space by name, besides the chromaticities: OpenImageIO's attribute and the
+    // Color Interop Forum's identifier (docs/output.md#colour-management-opencolorio-21).
+    exr.attributes.emplace_back("oiio:ColorSpace", mOutputSpace);
+    const std::string interopId = colorInteropIdOf(*mConfig, mOutputSpace);
+    if (!interopId.empty()) exr.attributes.emplace_back("colorInteropID", interopId);
     if (mPasses.deep) {
         // Deep samples are premultiplied by their own alpha: convert each as a pixel.
         std::vector<float> rgba(frame.deep.samples.size() * 4);

@@ -98,7 +98,7 @@ public:
             "constant ambient (sky) light R,G,B, never shadowed, scattered like --light: a fill for fog volumes; each in "
             "[0, 1e6], in --input-space (default: 0,0,0)");
         mApp->add_option("--environment", mEnvironment,
-            "latitude-longitude environment image (.exr, .hdr; +Y up, its centre facing -Z), RGB radiance in --input-space: "
+            "latitude-longitude environment image (.exr, .hdr; OpenEXR's and USD's orientation: +Y up, its centre facing +Z), RGB radiance in --input-space: "
             "a low-order, shadowed fill, added to --light as --environment-lights directional lights (default: none)");
         mApp->add_option("--environment-lights", mEnvironmentLights,
             "lights the environment becomes, each from the part of the sphere nearest its direction, in [1, " +
@@ -217,6 +217,7 @@ public:
         // The colour values as given (printed by -v, kept in the EXR) and in the working space.
         RenderSettings working = rs;
         mOutputOptions.toWorkingSpace(working, warnings);
+        ignoredOptionWarnings(warnings);
         const Renderer renderer(working);
         if (verbosity != Verbosity::Quiet) {
             for (const std::string& w : warnings) std::cerr << "vdb_ewa: warning: " << w << "\n";
@@ -357,7 +358,7 @@ private:
     {
         const std::string input = pathOf(mInput, frameNumber);
         const std::string preview = pathOf(mOutputOptions.previewOption(), frameNumber);
-        mOutputOptions.refuseInputs(output, preview, {input, mJob});
+        mOutputOptions.refuseInputs(output, preview, {input, mJob, mEnvironment});
         const auto t0 = std::chrono::steady_clock::now();
         stallForTests("read");
         const GridSource opened = GridSource::open(input, mName);
@@ -535,6 +536,22 @@ private:
                  {"threads", std::to_string(rs.threads)}, {"simd", choiceName(rs.simd, kOnOff)}})
             method.emplace_back(k, v);
         return {cameraGroup, model, method, mOutputOptions.resolved()};
+    }
+
+    /// A line for each option given without the one it qualifies: it would change nothing.
+    void ignoredOptionWarnings(std::vector<std::string>& warnings) const
+    {
+        const auto given = [&](const char* name) { return mApp->get_option(name)->count() > 0; };
+        const std::pair<const char*, std::vector<const char*>> groups[] = {
+            {"--emission-grid", {"--emission-color", "--emission-intensity"}},
+            {"--temperature", {"--temperature-scale", "--temperature-offset", "--blackbody-intensity"}},
+            {"--environment", {"--environment-lights", "--environment-intensity"}}};
+        for (const auto& [main, qualifiers] : groups) {
+            if (given(main)) continue;
+            for (const char* q : qualifiers) {
+                if (given(q)) warnings.push_back(std::string(q) + " changes nothing without " + main);
+            }
+        }
     }
 
     /// The lights as --light takes them, X,Y,Z,R,G,B each, separated by @a separator ("none"

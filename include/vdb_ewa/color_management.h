@@ -97,4 +97,10 @@ struct Chromaticities
 VDB_EWA_API std::optional<Chromaticities> chromaticitiesOf(const ColorConfig& config, const std::string& space,
     std::string* how = nullptr);
 
+/// The Color Interop Forum's identifier of @a space (its `colorInteropID` in OpenEXR files, which
+/// Blender and OpenImageIO read): lin_ap1_scene for ACEScg, lin_ap0_scene, lin_rec709_scene,
+/// lin_p3d65_scene, lin_rec2020_scene, srgb_rec709_scene, by the space's name or an alias;
+/// "data" for data spaces; empty when the space is none of these.
+VDB_EWA_API std::string colorInteropIdOf(const ColorConfig& config, const std::string& space);
+
 } // namespace vdb_ewa

@@ -13,8 +13,9 @@
 namespace vdb_ewa {
 
 /// Direction (unit, world, +Y up) of the point (@a u, @a v) of a latitude-longitude image, both
-/// in [0, 1]: v = 0 is +Y (the top row), v = 1 is -Y; u = 0.5 looks down -Z, u = 0.75 along +X
-/// (Houdini's and Nuke's convention, and OpenEXR's envmap LATLONG turned to +Y up).
+/// in [0, 1]: OpenEXR's latitude-longitude map, which USD's DomeLight (Karma, Solaris) follows:
+/// longitude pi (1 - 2u), latitude pi (1/2 - v); v = 0 is +Y (the top row), u = 0.5 faces +Z,
+/// u = 0.25 faces +X.
 VDB_EWA_API Vec3d latLongDirection(double u, double v);
 
 /// The environment @a latlong (RGB radiance; alpha ignored) as @a count directional lights: the

@@ -291,7 +291,40 @@ const std::map<std::string, Chromaticities>& knownChromaticities()
     return table;
 }
 
+/// The Color Interop Forum's identifiers of the well-known spaces, by lower-case name or alias.
+const std::map<std::string, std::string>& knownInteropIds()
+{
+    static const std::map<std::string, std::string> table = [] {
+        std::map<std::string, std::string> t;
+        for (const char* n : {"acescg", "lin_ap1", "aces - acescg", "lin_ap1_scene"}) t[n] = "lin_ap1_scene";
+        for (const char* n : {"aces2065-1", "aces2065_1", "lin_ap0", "aces - aces2065-1", "lin_ap0_scene"}) t[n] = "lin_ap0_scene";
+        for (const char* n : {"linear rec.709 (srgb)", "lin_rec709_srgb", "lin_rec709", "lin_srgb", "linear srgb", "utility - linear - srgb",
+                 "utility - linear - rec.709", "scene-linear rec.709-srgb", "linear rec.709", "lin_rec709_scene"})
+            t[n] = "lin_rec709_scene";
+        for (const char* n : {"linear p3-d65", "lin_p3d65", "utility - linear - p3-d65", "lin_p3d65_scene"}) t[n] = "lin_p3d65_scene";
+        for (const char* n : {"linear rec.2020", "lin_rec2020", "utility - linear - rec.2020", "lin_rec2020_scene"}) t[n] = "lin_rec2020_scene";
+        for (const char* n : {"srgb - texture", "srgb_texture", "utility - srgb - texture", "srgb_rec709_scene", "srgb encoded rec.709 (srgb)"})
+            t[n] = "srgb_rec709_scene";
+        return t;
+    }();
+    return table;
+}
+
 } // namespace
+
+std::string colorInteropIdOf(const ColorConfig& config, const std::string& space)
+{
+    const OCIO::ConstColorSpaceRcPtr cs = config.impl().config->getColorSpace(space.c_str());
+    if (!cs) return "";
+    if (cs->isData()) return "data";
+    std::vector<std::string> names{cs->getName()};
+    for (std::size_t i = 0; i < cs->getNumAliases(); ++i) names.emplace_back(cs->getAlias(i));
+    for (const std::string& n : names) {
+        const auto it = knownInteropIds().find(lower(n));
+        if (it != knownInteropIds().end()) return it->second;
+    }
+    return "";
+}
 
 std::optional<Chromaticities> chromaticitiesOf(const ColorConfig& config, const std::string& space, std::string* how)
 {

@@ -27,21 +27,31 @@ std::vector<Vec3d> fibonacciDirections(int count)
     return out;
 }
 
+/// OpenImageIO's error text on one line of at most 160 characters.
+std::string oneLine(std::string text)
+{
+    for (char& ch : text) {
+        if (ch == '\n' || ch == '\r' || ch == '\t') ch = ' ';
+    }
+    return text.size() > 160 ? text.substr(0, 157) + "..." : text;
+}
+
 } // namespace
 
 Vec3d latLongDirection(double u, double v)
 {
-    const double theta = kPi * v, phi = 2.0 * kPi * (u - 0.5);
-    return Vec3d(std::sin(theta) * std::sin(phi), std::cos(theta), -std::sin(theta) * std::cos(phi));
+    // OpenEXR (ImfEnvmap.h): latitude 0, longitude 0 is +Z; longitude pi/2 is +X.
+    const double longitude = kPi * (1.0 - 2.0 * u), latitude = kPi * (0.5 - v);
+    return Vec3d(std::sin(longitude) * std::cos(latitude), std::sin(latitude), std::cos(longitude) * std::cos(latitude));
 }
 
 std::vector<Light> environmentLights(const Image& latlong, int count, double intensity)
 {
-    if (latlong.width <= 0 || latlong.height <= 0) throw ValueError("environment: the image is empty");
+    if (latlong.width <= 0 || latlong.height <= 0) throw ValueError("--environment: the image is empty");
     if (count < 1 || std::size_t(count) > kMaxLights) {
-        throw ValueError("environment: the number of lights must be in [1, " + std::to_string(kMaxLights) + "]");
+        throw ValueError("--environment-lights must be in [1, " + std::to_string(kMaxLights) + "]");
     }
-    if (!(intensity >= 0.0) || !std::isfinite(intensity)) throw ValueError("environment: the intensity must be finite and >= 0");
+    if (!(intensity >= 0.0) || !std::isfinite(intensity)) throw ValueError("--environment-intensity must be finite and >= 0");
     const std::vector<Vec3d> centres = fibonacciDirections(count);
     std::vector<Vec3d> colour(centres.size(), Vec3d(0.0)), direction(centres.size(), Vec3d(0.0));
     const double du = 1.0 / latlong.width, dv = 1.0 / latlong.height;
@@ -64,7 +74,7 @@ std::vector<Light> environmentLights(const Image& latlong, int count, double int
     }
     std::vector<Light> lights;
     for (std::size_t c = 0; c < centres.size(); ++c) {
-        if (colour[c].x + colour[c].y + colour[c].z <= 0.0) continue;
+        if (!(intensity * (colour[c].x + colour[c].y + colour[c].z) > 0.0)) continue;
         Light light;
         // A cell's light from opposite sides can cancel its mean direction: its centre then.
         light.direction = glm::length(direction[c]) > 1e-9 * (colour[c].x + colour[c].y + colour[c].z) ? glm::normalize(direction[c]) : centres[c];
@@ -79,7 +89,7 @@ Image readLatLongImage(const std::string& path)
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) throw IoError(path + ": no such image file");
     auto in = OIIO::ImageInput::open(path);
-    if (!in) throw IoError(path + ": cannot be read as an image (" + OIIO::geterror() + ")");
+    if (!in) throw IoError(path + ": cannot be read as an image (" + oneLine(OIIO::geterror()) + ")");
     const OIIO::ImageSpec& spec = in->spec();
     if (spec.width <= 0 || spec.height <= 0 || spec.nchannels < 1) throw IoError(path + ": an empty image");
     if (std::abs(double(spec.width) / double(spec.height) - 2.0) > 0.02) {
@@ -89,12 +99,13 @@ Image readLatLongImage(const std::string& path)
     if (double(spec.width) * double(spec.height) > 1e8) throw ValueError(path + ": larger than 100 megapixels");
     std::vector<float> pixels(std::size_t(spec.width) * std::size_t(spec.height) * std::size_t(spec.nchannels));
     if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, pixels.data())) {
-        throw IoError(path + ": cannot read its pixels (" + in->geterror() + ")");
+        throw IoError(path + ": cannot read its pixels (" + oneLine(in->geterror()) + ")");
     }
     Image out(spec.width, spec.height);
     for (std::size_t i = 0; i < std::size_t(spec.width) * std::size_t(spec.height); ++i) {
         for (int c = 0; c < 3; ++c) {
-            const float v = pixels[i * std::size_t(spec.nchannels) + std::size_t(std::min(c, spec.nchannels - 1))];
+            // Grey (and grey + alpha) images: every colour from the first channel.
+            const float v = pixels[i * std::size_t(spec.nchannels) + std::size_t(spec.nchannels >= 3 ? c : 0)];
             out.rgba[4 * i + std::size_t(c)] = std::isfinite(v) && v > 0.0f ? v : 0.0f;
         }
         out.rgba[4 * i + 3] = 1.0f;

@@ -22,6 +22,17 @@ namespace {
 constexpr double kTableKelvinMin = 100.0, kTableKelvinMax = 1e5;
 constexpr int kTableSize = 2048;
 
+/// True if the trilinear cell around @a p has an active voxel of @a temperature at a corner:
+/// elsewhere the temperature grid emits nothing, whatever --temperature-offset maps 0 to.
+bool inTemperatureCell(const openvdb::FloatGrid::ConstAccessor& temperature, const openvdb::Vec3d& p)
+{
+    const openvdb::Coord c = openvdb::Coord::floor(p);
+    for (int corner = 0; corner < 8; ++corner) {
+        if (temperature.isValueOn(c.offsetBy(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1))) return true;
+    }
+    return false;
+}
+
 } // namespace
 
 EmissionModel::EmissionModel(const RenderSettings& settings)
@@ -40,7 +51,7 @@ EmissionModel::EmissionModel(const RenderSettings& settings)
 double EmissionModel::blackbodyLuminance(double value) const
 {
     const double k = kelvin(value);
-    return k > 0.0 ? mIntensity * kBlackbodyUnit * blackbodyRadiance(std::min(k, 1e30)) : 0.0;
+    return k > 0.0 ? std::min(mIntensity * kBlackbodyUnit * blackbodyRadiance(std::min(k, 1e30)), kMaxRadiance) : 0.0;
 }
 
 Vec3d EmissionModel::blackbodyColour(double value) const
@@ -60,18 +71,21 @@ double hottestKelvin(const GridSource::Impl& temperature, const EmissionModel& m
     return hottest;
 }
 
-EmissionSampler::EmissionSampler(const GridSource::Impl& grid, const RenderSettings& settings) : mModel(settings)
+EmissionSampler::EmissionSampler(const GridSource::Impl& grid, const RenderSettings& settings)
 {
     if (grid.emission) mEmission.emplace(grid.emission->field->getConstAccessor());
     if (grid.temperature) mTemperature.emplace(grid.temperature->field->getConstAccessor());
+    if (any()) mModel.emplace(settings);
 }
 
 Vec3d EmissionSampler::at(const Vec3d& pIndex)
 {
     const openvdb::Vec3d p(pIndex.x, pIndex.y, pIndex.z);
     Vec3d out(0.0);
-    if (mEmission) out += mModel.emitted(double(openvdb::tools::BoxSampler::sample(*mEmission, p)));
-    if (mTemperature) out += mModel.blackbody(double(openvdb::tools::BoxSampler::sample(*mTemperature, p)));
+    if (mEmission) out += mModel->emitted(double(openvdb::tools::BoxSampler::sample(*mEmission, p)));
+    if (mTemperature && inTemperatureCell(*mTemperature, p)) {
+        out += mModel->blackbody(double(openvdb::tools::BoxSampler::sample(*mTemperature, p)));
+    }
     return out;
 }
 
@@ -117,9 +131,14 @@ constexpr int kBlackbodySamples = 4;
 /// temperature's voxels and the one-voxel shell its interpolation spreads into), so that the
 /// kernels carry the light a renderer sampling T along rays would see (docs/equations.md#
 /// emission-grids), not T^4 of the voxel value, which over-lights every edge. Voxels whose
-/// 27-neighbourhood is uniform take their value directly. @a progress: one unit per leaf.
-BlackbodyVoxels classifyBlackbody(const GridSource::Impl& temperature, const EmissionModel& model, Progress* progress)
+/// 27-neighbourhood is active and uniform take their value directly. @a progress: one unit per leaf.
+BlackbodyVoxels classifyBlackbody(const GridSource::Impl& temperature, const EmissionModel& model, Progress* progress,
+    const MemoryBudget* budget)
 {
+    // A float and a Vec3s a voxel, the shell at most doubling a sparse grid's voxels.
+    if (budget) {
+        budget->check(2.0 * (double(temperature.activeVoxels) + 512.0 * double(temperature.activeTiles)), "temperature voxels classified", 16.0);
+    }
     BlackbodyVoxels out;
     out.luminance = openvdb::FloatGrid::create(0.0f);
     out.luminance->setTransform(temperature.field->transform().copy());
@@ -142,7 +161,10 @@ BlackbodyVoxels classifyBlackbody(const GridSource::Impl& temperature, const Emi
                 bool uniform = true;
                 for (int dz = -1; dz <= 1 && uniform; ++dz)
                     for (int dy = -1; dy <= 1 && uniform; ++dy)
-                        for (int dx = -1; dx <= 1 && uniform; ++dx) uniform = t.getValue(ijk.offsetBy(dx, dy, dz)) == centre;
+                        for (int dx = -1; dx <= 1 && uniform; ++dx) {
+                            float v = 0.0f;
+                            uniform = t.probeValue(ijk.offsetBy(dx, dy, dz), v) && v == centre;
+                        }
                 double y = 0.0;
                 Vec3d rgb(0.0);
                 if (uniform) {
@@ -154,6 +176,7 @@ BlackbodyVoxels classifyBlackbody(const GridSource::Impl& temperature, const Emi
                         for (int j = 0; j < n; ++j)
                             for (int i = 0; i < n; ++i) {
                                 const openvdb::Vec3d p = ijk.asVec3d() + (openvdb::Vec3d(i, j, k) + 0.5) / double(n) - 0.5;
+                                if (!inTemperatureCell(t, p)) continue; // as EmissionSampler
                                 const double value = double(openvdb::tools::BoxSampler::sample(t, p));
                                 const double sampleY = model.blackbodyLuminance(value);
                                 if (!(sampleY > 0.0)) continue;
@@ -186,7 +209,7 @@ EmitterKernels emitterKernels(const GridSource::Impl& grid, const RenderSettings
         append(out, set, std::vector<Rgb>(set.kernels.size(), Rgb{float(c.x), float(c.y), float(c.z)}));
     }
     if (grid.temperature) {
-        const BlackbodyVoxels voxels = classifyBlackbody(*grid.temperature, model, progress);
+        const BlackbodyVoxels voxels = classifyBlackbody(*grid.temperature, model, progress, budget);
         auto source = std::make_shared<GridSource::Impl>(*grid.temperature);
         source->grid = voxels.luminance;
         source->derive();

@@ -19,6 +19,10 @@
 namespace vdb_ewa {
 namespace detail {
 
+/// The most radiance per voxel length an emission grid gives (a channel, or a blackbody's
+/// luminance): as the medium's coefficients, opaque-scale and inside float's range.
+constexpr double kMaxRadiance = 1e6;
+
 /// Blender's unit: Cycles' Principled Volume emits 1e-6 sigma T^4 / pi per unit length at
 /// Blackbody Intensity 1 (intern/cycles/kernel/svm/closure.h); vdb_ewa, per voxel length.
 constexpr double kBlackbodyUnit = 1e-6;
@@ -29,12 +33,13 @@ class EmissionModel
 public:
     explicit EmissionModel(const RenderSettings& settings);
 
-    /// An emission-grid value's radiance per voxel length: value x colour x intensity.
-    Vec3d emitted(double value) const { return value > 0.0 ? value * mColour : Vec3d(0.0); }
+    /// An emission-grid value's radiance per voxel length: value x colour x intensity, at most
+    /// kMaxRadiance a channel.
+    Vec3d emitted(double value) const { return value > 0.0 ? glm::min(value * mColour, Vec3d(kMaxRadiance)) : Vec3d(0.0); }
     /// The Kelvin of a temperature-grid value: value x kelvinScale + kelvinOffset.
     double kelvin(double value) const { return value * mScale + mOffset; }
     /// The luminance (Y) of a blackbody at a temperature-grid value, per voxel length:
-    /// intensity x kBlackbodyUnit x sigma T^4 / pi (0 at or below 0 K).
+    /// intensity x kBlackbodyUnit x sigma T^4 / pi (0 at or below 0 K), at most kMaxRadiance.
     double blackbodyLuminance(double value) const;
     /// The working-space colour of luminance 1 of a blackbody at a temperature-grid value
     /// (negative components, outside the working space's gamut, 0): a table over log Kelvin,
@@ -67,10 +72,12 @@ public:
 
     /// True if the grid has an emission or a temperature grid.
     bool any() const { return mEmission.has_value() || mTemperature.has_value(); }
+    /// The radiance at @a pIndex; 0 in a cell with no active temperature voxel at its corners
+    /// (empty space stays dark whatever --temperature-offset says, as in the splatter).
     Vec3d at(const Vec3d& pIndex);
 
 private:
-    EmissionModel mModel;
+    std::optional<EmissionModel> mModel; ///< built only with an emitting grid
     std::optional<openvdb::FloatGrid::ConstAccessor> mEmission, mTemperature;
 };
 
