@@ -125,7 +125,8 @@ TEST(GridEmission, BlackbodyOfAUniformTemperatureIsPlancksColourAndStefanBoltzma
         EXPECT_NEAR(render(source, s).pixel(8, 8)[1], 2.0 * px[1], 1e-4 * px[1]) << what;
         s.gridEmission.blackbodyIntensity = 1.0;
         s.gridEmission.kelvinScale = 2000.0;
-        const float* hot = render(source, s).pixel(8, 8);
+        const Image hotter = render(source, s);
+        const float* hot = hotter.pixel(8, 8);
         EXPECT_GT(hot[2] / hot[0], 2.0 * px[2] / px[0]) << what;
     }
 }

@@ -39,6 +39,9 @@ public:
     /// leaves grey stays bit for bit what it was; components outside the working space's gamut
     /// (negative) become 0, with a line in @a warnings.
     void toWorkingSpace(RenderSettings& rs, std::vector<std::string>& warnings) const;
+    /// True if the config has a linear Rec.709 space (after prepare): the blackbody's colours
+    /// are brought from it.
+    bool hasLinearRec709() const { return mRec709ToWorking.has_value(); }
 
     /// The passes the EXR will hold.
     PassRequest passes() const { return mPasses; }

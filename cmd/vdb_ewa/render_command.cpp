@@ -20,6 +20,7 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <optional>
 #include <sstream>
 
 #include <unistd.h>
@@ -218,6 +219,10 @@ public:
         RenderSettings working = rs;
         mOutputOptions.toWorkingSpace(working, warnings);
         ignoredOptionWarnings(warnings);
+        if (!mTemperatureGrid.empty() && !mOutputOptions.hasLinearRec709()) {
+            warnings.push_back("--temperature: the OCIO config has no linear Rec.709 space, so the blackbody's Rec.709 colours are taken as "
+                               "working-space values (--ocio-config)");
+        }
         const Renderer renderer(working);
         if (verbosity != Verbosity::Quiet) {
             for (const std::string& w : warnings) std::cerr << "vdb_ewa: warning: " << w << "\n";
@@ -441,7 +446,9 @@ private:
         if (mBlackbodyIntensity) rs.gridEmission.blackbodyIntensity = *mBlackbodyIntensity;
         mEnvironmentLightCount = 0;
         if (!mEnvironment.empty()) {
-            const std::vector<Light> fill = environmentLights(readLatLongImage(mEnvironment), mEnvironmentLights, mEnvironmentIntensity);
+            // Read once: validate() and run() both resolve.
+            if (!mEnvironmentFill) mEnvironmentFill = environmentLights(readLatLongImage(mEnvironment), mEnvironmentLights, mEnvironmentIntensity);
+            const std::vector<Light>& fill = *mEnvironmentFill;
             if (rs.lights.size() + fill.size() > kMaxLights) {
                 throw ValueError("--environment-lights: " + std::to_string(fill.size()) + " environment lights and " + std::to_string(rs.lights.size()) +
                                  " --light options exceed " + std::to_string(kMaxLights) + " lights");
@@ -634,6 +641,7 @@ private:
     int mEnvironmentLights = 16;
     double mEnvironmentIntensity = 1.0;
     mutable std::size_t mEnvironmentLightCount = 0; ///< the last lights of the settings come from --environment
+    mutable std::optional<std::vector<Light>> mEnvironmentFill; ///< --environment's lights, once read
     std::optional<double> mEmissionIntensity, mKelvinScale, mKelvinOffset, mBlackbodyIntensity;
     std::optional<double> mFov, mFocal, mAperture, mFrame, mNear, mFar, mGain, mCutoff, mShadowStep, mStep, mLod, mLodError;
     std::optional<double> mKernelSigma, mSurfaceSigma, mLowpass, mCutoffRadius, mSlab;
