@@ -237,14 +237,11 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     if (emitters.kernels.clamped) {
         stats.warnings.push_back(countLine(emitters.kernels.clamped, "emitting voxels above 1e6 radiance per voxel length clamped to 1e6"));
     }
-    if (g.temperature) {
-        const double hottest = detail::hottestKelvin(*g.temperature, detail::EmissionModel(mSettings));
-        if (std::isfinite(hottest) && hottest < detail::kVisibleKelvin) {
-            std::ostringstream w;
-            w << "the temperature grid '" << g.temperature->name << "' reaches " << hottest << " K at most, too cold to glow visibly "
-              << "(below " << detail::kVisibleKelvin << " K): --temperature-scale and --temperature-offset map its values to Kelvin";
-            stats.warnings.push_back(w.str());
-        }
+    if (emitters.hottestKelvin < detail::kVisibleKelvin) { // NaN without a temperature grid
+        std::ostringstream w;
+        w << "the temperature grid '" << g.temperature->name << "' reaches " << emitters.hottestKelvin << " K at most, too cold to glow visibly "
+          << "(below " << detail::kVisibleKelvin << " K): --temperature-scale and --temperature-offset map its values to Kelvin";
+        stats.warnings.push_back(w.str());
     }
     if (kernels.notANumber) stats.warnings.push_back(countLine(kernels.notANumber, "NaN voxel values skipped"));
     if (kernels.clamped) stats.warnings.push_back(countLine(kernels.clamped, "voxel values above 1e6 (or +Inf) clamped to 1e6"));

@@ -277,14 +277,18 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
             u0 = hn::IfThenElseZero(lightedLanes, hn::Max(hn::Sub(mean, half), zero));
             u1 = hn::IfThenElseZero(lightedLanes, hn::Min(hn::Add(mean, half), one));
         }
-        Floats source[C], litSum[C], colouredSum[C];
+        // Per channel, once for every light: the optical depth, the scattering weight, and the
+        // emission as the source's start.
+        Floats tau[C], weight[C], source[C], litSum[C], colouredSum[C];
         for (int c = 0; c < C; ++c) {
             const std::size_t i = base + std::size_t(c) * kTilePixels + std::size_t(p);
+            tau[c] = hn::LoadU(d, &mTau[i]);
+            weight[c] = hn::Max(hn::LoadU(d, mScatter.empty() ? &mTau[i] : &mScatter[i]), zero);
             Floats emitted = zero, em = zero;
             if (!mEmission.empty()) {
                 // Halo kernels (--prefilter) weigh negative: a slab's sums stay >= 0.
                 em = hn::Max(hn::LoadU(d, &mEmission[i]), zero);
-                emitted = hn::IfThenElse(hn::Gt(hn::LoadU(d, &mTau[i]), hn::Set(d, 1e-7f)), hn::Mul(hn::Div(em, hn::LoadU(d, &mTau[i])), hn::Load(d, absorbed[c])), em);
+                emitted = hn::IfThenElse(hn::Gt(tau[c], hn::Set(d, 1e-7f)), hn::Mul(hn::Div(em, tau[c]), hn::Load(d, absorbed[c])), em);
             }
             hn::Store(em, d, emission[c]);
             source[c] = emitted;
@@ -299,12 +303,9 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
             logTransmittances(map, densityDepths(map, mapPoints(map, rays.base, rays.dir, p, u1, z, thickness)), C, log1);
             const Floats floor = hn::Set(d, kLogLightFloor); // as lightLogRatio
             for (int c = 0; c < C; ++c) {
-                const std::size_t i = base + std::size_t(c) * kTilePixels + std::size_t(p);
                 const Floats front = hn::Exp(d, log0[c]);
                 const Floats logRatio = hn::Sub(hn::Max(log0[c], floor), hn::Max(log1[c], floor));
-                const Floats tau = hn::LoadU(d, &mTau[i]);
-                const Floats weight = hn::Max(hn::LoadU(d, mScatter.empty() ? &mTau[i] : &mScatter[i]), zero);
-                const Floats l = hn::IfThenElseZero(lightedLanes, hn::Mul(weight, lightIntegral(tau, front, logRatio)));
+                const Floats l = hn::IfThenElseZero(lightedLanes, hn::Mul(weight[c], lightIntegral(tau[c], front, logRatio)));
                 const Floats scale = hn::Set(d, mOptions.lights[light].scale[c]);
                 litSum[c] = hn::Add(litSum[c], l);
                 colouredSum[c] = hn::MulAdd(scale, l, colouredSum[c]);
@@ -314,12 +315,11 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
         const auto chosen = hn::Ne(hn::Load(d, composite), zero);
         Floats t2Now = zero;
         for (int c = 0; c < C; ++c) {
-            const std::size_t i = base + std::size_t(c) * kTilePixels + std::size_t(p);
-            const Floats tau = hn::LoadU(d, &mTau[i]), a = hn::Load(d, absorbed[c]);
+            const Floats a = hn::Load(d, absorbed[c]);
             hn::Store(litSum[c], d, lit[c]);
             hn::Store(colouredSum[c], d, litColoured[c]);
             // Emitters without optical depth (emission grids) add their light too.
-            const auto update = hn::And(chosen, hn::Or(hn::Gt(tau, zero), hn::Gt(hn::Load(d, emission[c]), zero)));
+            const auto update = hn::And(chosen, hn::Or(hn::Gt(tau[c], zero), hn::Gt(hn::Load(d, emission[c]), zero)));
             float* colour = &mC[c * kTilePixels + p];
             float* transmittance = &mT[c * kTilePixels + p];
             const Floats t = hn::LoadU(d, transmittance);

@@ -15,6 +15,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 namespace vdb_ewa {
 namespace detail {
@@ -149,13 +150,14 @@ private:
 
 /// The field's sampler: trilinear density, the source from a shadow ray towards each light
 /// marched from the sample itself and the material colour there, and the emission grids'
-/// radiance per voxel length (EmissionSampler). One per thread.
+/// radiance per voxel length (EmissionSampler, with the frame's @a emission model). One per
+/// thread.
 class TrilinearSampler
 {
 public:
-    TrilinearSampler(const GridSource::Impl& grid, const RenderSettings& settings)
+    TrilinearSampler(const GridSource::Impl& grid, const RenderSettings& settings, const EmissionModel* emission)
         : mGrid(grid), mAccessor(grid.field->getConstAccessor()), mColor(grid), mModel(settings), mCutoff(settings.cutoff),
-          mTinted(bool(grid.color)), mShadow(settings.lights.size(), Rgb{1.0f, 1.0f, 1.0f}), mEmission(grid, settings)
+          mTinted(bool(grid.color)), mShadow(settings.lights.size(), Rgb{1.0f, 1.0f, 1.0f}), mEmission(grid, emission)
     {
         for (std::size_t l = 0; l < settings.lights.size(); ++l) {
             if (!mModel.dark(l)) mShadows.emplace_back(l, ShadowMarcher(grid, settings, l));
@@ -292,9 +294,11 @@ Frame rayMarchReference(const GridSource::Impl& grid, const Camera& camera, cons
     stats.activeVoxels = grid.activeVoxels;
     stats.activeTiles = grid.activeTiles;
     // Emission grids (in the grid's index space) emit where there is no density: the march
-    // covers and skips by the union of their active voxels.
+    // covers and skips by the union of their active voxels. One emission model for every ray.
     openvdb::FloatGrid::ConstPtr occupancy = grid.field;
+    std::optional<EmissionModel> emission;
     if (grid.emission || grid.temperature) {
+        emission.emplace(settings);
         openvdb::FloatGrid::Ptr all = grid.field->deepCopy();
         for (const auto& emitter : {grid.emission, grid.temperature}) {
             if (emitter) all->tree().topologyUnion(emitter->field->tree());
@@ -308,7 +312,7 @@ Frame rayMarchReference(const GridSource::Impl& grid, const Camera& camera, cons
     const Vec3d boxHi = Vec3d(box.max().x(), box.max().y(), box.max().z()) + 1.0;
     if (progress) progress->stage(0, 100);
     Frame frame = marchRays(grid, camera, settings, passes, *occupancy, 0, boxLo, boxHi,
-        [&] { return TrilinearSampler(grid, settings); }, progress);
+        [&] { return TrilinearSampler(grid, settings, emission ? &*emission : nullptr); }, progress);
     stats.rasterSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return frame;
 }

@@ -64,18 +64,11 @@ Vec3d EmissionModel::blackbodyColour(double value) const
     return (1.0 - f) * mTable[std::size_t(i)] + f * mTable[std::size_t(i) + 1];
 }
 
-double hottestKelvin(const GridSource::Impl& temperature, const EmissionModel& model)
+EmissionSampler::EmissionSampler(const GridSource::Impl& grid, const EmissionModel* model) : mModel(model)
 {
-    double hottest = -std::numeric_limits<double>::infinity();
-    for (auto it = temperature.field->cbeginValueOn(); it; ++it) hottest = std::max(hottest, model.kelvin(double(*it)));
-    return hottest;
-}
-
-EmissionSampler::EmissionSampler(const GridSource::Impl& grid, const RenderSettings& settings)
-{
+    if (!model) return;
     if (grid.emission) mEmission.emplace(grid.emission->field->getConstAccessor());
     if (grid.temperature) mTemperature.emplace(grid.temperature->field->getConstAccessor());
-    if (any()) mModel.emplace(settings);
 }
 
 Vec3d EmissionSampler::at(const Vec3d& pIndex)
@@ -202,6 +195,7 @@ EmitterKernels emitterKernels(const GridSource::Impl& grid, const RenderSettings
     const MemoryBudget* budget)
 {
     EmitterKernels out;
+    if (!grid.emission && !grid.temperature) return out; // and no blackbody table to build
     const EmissionModel model(settings);
     if (grid.emission) {
         const KernelSet set = kernelsOf(*grid.emission, grid, settings, lod, progress, budget);
@@ -209,6 +203,9 @@ EmitterKernels emitterKernels(const GridSource::Impl& grid, const RenderSettings
         append(out, set, std::vector<Rgb>(set.kernels.size(), Rgb{float(c.x), float(c.y), float(c.z)}));
     }
     if (grid.temperature) {
+        for (auto it = grid.temperature->field->cbeginValueOn(); it; ++it) {
+            out.hottestKelvin = std::fmax(out.hottestKelvin, model.kelvin(double(*it))); // fmax passes NaN by
+        }
         const BlackbodyVoxels voxels = classifyBlackbody(*grid.temperature, model, progress, budget);
         auto source = std::make_shared<GridSource::Impl>(*grid.temperature);
         source->grid = voxels.luminance;

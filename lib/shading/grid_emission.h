@@ -13,6 +13,7 @@
 
 #include <vdb_ewa/render_settings.h>
 
+#include <limits>
 #include <optional>
 #include <vector>
 
@@ -58,17 +59,14 @@ private:
 /// draws a warning.
 constexpr double kVisibleKelvin = 200.0;
 
-/// The hottest Kelvin of a temperature grid's active values under @a model's mapping (-inf
-/// without any): a lighter's check that the mapping makes it glow.
-double hottestKelvin(const GridSource::Impl& temperature, const EmissionModel& model);
-
 /// Radiance per voxel length of a grid's emission and temperature grids at index-space points
 /// of the grid (trilinear lookups, then the model: post-classification, as vdb_render would).
-/// Holds accessors: one per thread.
+/// Holds accessors: one per thread; @a model, built once per frame, is shared (null: the grid
+/// has no emission or temperature grid).
 class EmissionSampler
 {
 public:
-    EmissionSampler(const GridSource::Impl& grid, const RenderSettings& settings);
+    EmissionSampler(const GridSource::Impl& grid, const EmissionModel* model);
 
     /// True if the grid has an emission or a temperature grid.
     bool any() const { return mEmission.has_value() || mTemperature.has_value(); }
@@ -77,7 +75,7 @@ public:
     Vec3d at(const Vec3d& pIndex);
 
 private:
-    std::optional<EmissionModel> mModel; ///< built only with an emitting grid
+    const EmissionModel* mModel;
     std::optional<openvdb::FloatGrid::ConstAccessor> mEmission, mTemperature;
 };
 
@@ -93,6 +91,9 @@ struct EmitterKernels
 {
     KernelSet kernels;
     std::vector<Rgb> radiance;
+    /// The hottest Kelvin of the temperature grid's active values under the mapping (NaN
+    /// without a temperature grid or active values): a lighter's check that it glows.
+    double hottestKelvin = std::numeric_limits<double>::quiet_NaN();
 };
 EmitterKernels emitterKernels(const GridSource::Impl& grid, const RenderSettings& settings, const LevelOfDetail* lod = nullptr,
     Progress* progress = nullptr, const MemoryBudget* budget = nullptr);
