@@ -167,7 +167,7 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     if (alpha > 0.0) stats.haloKernels = detail::quasiInterpolate(g, alpha, kernels, &sampled);
     const std::uint64_t densityKernels = kernels.kernels.size();
     // Emission grids' kernels after the density's (KernelSet::emitterBegin).
-    detail::EmitterKernels emitters = detail::emitterKernels(g, mSettings, &lod, &progress, &budget);
+    detail::EmitterKernels emitters = detail::emitterKernels(g, mSettings, &lod, &progress, &budget, {refinement.n, alpha, &sampled});
     if (!emitters.kernels.kernels.empty()) {
         budget.check(double(kernels.kernels.size() + emitters.kernels.kernels.size()), "kernels with the emission grids'", detail::kBytesPerKernel);
         kernels.emitterBegin = kernels.kernels.size();

@@ -189,18 +189,161 @@ BlackbodyVoxels classifyBlackbody(const GridSource::Impl& temperature, const Emi
     return out;
 }
 
+/// A light sampled at index-space points: its weight (per unit colour) and its colour there.
+struct LightSample
+{
+    double weight = 0.0;
+    Rgb colour{0.0f, 0.0f, 0.0f};
+};
+
+/// The cells of the fine lattice an emitter's refinement samples: every cell (named by its lower
+/// corner) with a corner in @a sampled.
+openvdb::MaskGrid::Ptr cellsAround(const openvdb::MaskGrid& sampled)
+{
+    auto cells = openvdb::MaskGrid::create(false);
+    auto acc = cells->getAccessor();
+    for (auto it = sampled.cbeginValueOn(); it; ++it) {
+        for (int corner = 0; corner < 8; ++corner) acc.setValueOn(it.getCoord().offsetBy(-(corner & 1), -((corner >> 1) & 1), -((corner >> 2) & 1)));
+    }
+    return cells;
+}
+
+/// Fine points a side of a cell with one beyond each end, at the finest refinement.
+constexpr int kMaxFine = kMaxRefinement + 2;
+
+/// The share of the trilinear partition of unity that the voxels of @a sampled hold at the @a m^3
+/// fine points around @a cell (@a tent: each point's tent weights on the cell's 4 voxels a side).
+void shareOf(const openvdb::MaskGrid::ConstAccessor& sampled, const openvdb::Coord& cell, const double (&tent)[kMaxFine][4], int m,
+    double (&share)[kMaxFine][kMaxFine][kMaxFine])
+{
+    bool on[4][4][4];
+    for (int x = 0; x < 4; ++x)
+        for (int y = 0; y < 4; ++y)
+            for (int z = 0; z < 4; ++z) on[x][y][z] = sampled.isValueOn(cell.offsetBy(x - 1, y - 1, z - 1));
+    double a[4][4][kMaxFine], b[4][kMaxFine][kMaxFine];
+    for (int x = 0; x < 4; ++x)
+        for (int y = 0; y < 4; ++y)
+            for (int k = 0; k < m; ++k) {
+                a[x][y][k] = 0.0;
+                for (int z = 0; z < 4; ++z) a[x][y][k] += on[x][y][z] ? tent[k][z] : 0.0;
+            }
+    for (int x = 0; x < 4; ++x)
+        for (int j = 0; j < m; ++j)
+            for (int k = 0; k < m; ++k) {
+                b[x][j][k] = 0.0;
+                for (int y = 0; y < 4; ++y) b[x][j][k] += a[x][y][k] * tent[j][y];
+            }
+    for (int i = 0; i < m; ++i)
+        for (int j = 0; j < m; ++j)
+            for (int k = 0; k < m; ++k) {
+                share[i][j][k] = 0.0;
+                for (int x = 0; x < 4; ++x) share[i][j][k] += b[x][j][k] * tent[i][x];
+            }
+}
+
+/// Replace the unit kernels of @a set (and their @a radiance) at the voxels @a refined sampled by
+/// the light's samples on its fine lattice, the points c + a / n (a = 0 .. n - 1 a side) of every
+/// cell c with a sampled corner, the lattice refineKernels uses. A sample carries the sampled
+/// voxels' share of the trilinear partition of unity at its point (1 inside, falling across the
+/// cells where sampled voxels meet kept ones), so that it and the kept voxels' kernels add up to
+/// the light once (docs/lighting.md#emission-at-dense-hot-edges-and-refined-emitters). Its weight
+/// is prefiltered with the fine lattice's Laplacian (quasi_interpolation.h); it keeps its point's
+/// colour. @a makeLight() gives a thread's sampler, p -> LightSample. Deterministic: the kernels
+/// kept in their order, then the samples in the cells' tree order. @a budget: n^3 kernels a cell
+/// at most; @a progress: one unit a leaf node of cells, throws Cancelled.
+template <typename MakeLight>
+void refineEmitters(KernelSet& set, std::vector<Rgb>& radiance, const EmitterRefinement& refined, Progress* progress,
+    const MemoryBudget* budget, MakeLight&& makeLight)
+{
+    if (refined.n <= 1 || !refined.sampled || refined.sampled->tree().empty()) return;
+    const int n = refined.n, m = n + 2;
+    const openvdb::MaskGrid::Ptr cells = cellsAround(*refined.sampled);
+    if (budget) budget->check(double(set.kernels.size()) + double(cells->activeVoxelCount()) * n * n * n, "refined emitter kernels", kBytesPerKernel);
+    using MaskLeaf = openvdb::MaskTree::LeafNodeType;
+    std::vector<const MaskLeaf*> leaves;
+    cells->tree().getNodes(leaves);
+    std::vector<std::vector<Kernel>> kernels(leaves.size());
+    std::vector<std::vector<Rgb>> colours(leaves.size());
+    setUnits(progress, leaves.size());
+    // tent[i][x]: the tent of the cell's voxel x - 1 at the fine point i - 1 (of n) along an axis.
+    double tent[kMaxFine][4];
+    for (int i = 0; i < m; ++i)
+        for (int x = 0; x < 4; ++x) tent[i][x] = std::max(0.0, 1.0 - std::abs(double(i - 1) / double(n) - double(x - 1)));
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+        auto light = makeLight();
+        auto inSampled = refined.sampled->getConstAccessor();
+        std::vector<LightSample> f(std::size_t(m * m * m));
+        const auto at = [&](int i, int j, int k) -> LightSample& { return f[std::size_t((i * m + j) * m + k)]; };
+        for (std::size_t l = r.begin(); l < r.end(); ++l) {
+            for (auto it = leaves[l]->cbeginValueOn(); it; ++it) {
+                const openvdb::Coord cell = it.getCoord();
+                // The sampled share of the partition of unity at the fine points of the cell and
+                // one beyond each side, from the tents of the cell's 4^3 voxels (separably).
+                double share[kMaxFine][kMaxFine][kMaxFine];
+                shareOf(inSampled, cell, tent, m, share);
+                bool any = false;
+                for (int i = 0; i < m; ++i)
+                    for (int j = 0; j < m; ++j)
+                        for (int k = 0; k < m; ++k) {
+                            LightSample& s = at(i, j, k);
+                            s = share[i][j][k] > 0.0 ? light(cell.asVec3d() + openvdb::Vec3d(i - 1, j - 1, k - 1) / double(n)) : LightSample{};
+                            s.weight *= share[i][j][k];
+                            any = any || s.weight > 0.0;
+                        }
+                if (!any) continue;
+                for (int i = 1; i <= n; ++i)
+                    for (int j = 1; j <= n; ++j)
+                        for (int k = 1; k <= n; ++k) {
+                            const double c = at(i, j, k).weight;
+                            const double laplacian = 6.0 * c - at(i - 1, j, k).weight - at(i + 1, j, k).weight - at(i, j - 1, k).weight -
+                                                     at(i, j + 1, k).weight - at(i, j, k - 1).weight - at(i, j, k + 1).weight;
+                            const float w = float(c + refined.alpha * laplacian);
+                            if (w == 0.0f) continue;
+                            const Vec3d p = Vec3d(cell.x(), cell.y(), cell.z()) + Vec3d(i - 1, j - 1, k - 1) / double(n);
+                            kernels[l].push_back({p, w, float(1.0 / n)});
+                            colours[l].push_back(at(i, j, k).colour);
+                        }
+            }
+        }
+        advance(progress, r.size());
+    });
+    // The kernels that stay, then the samples.
+    auto inSampled = refined.sampled->getConstAccessor();
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < set.kernels.size(); ++i) {
+        const Kernel& k = set.kernels[i];
+        if (isUnitKernel(k) && inSampled.isValueOn(voxelOf(k))) continue;
+        set.kernels[kept] = k;
+        radiance[kept] = radiance[i];
+        ++kept;
+    }
+    set.kernels.resize(kept);
+    radiance.resize(kept);
+    for (std::size_t l = 0; l < leaves.size(); ++l) {
+        set.kernels.insert(set.kernels.end(), kernels[l].begin(), kernels[l].end());
+        radiance.insert(radiance.end(), colours[l].begin(), colours[l].end());
+    }
+}
+
 } // namespace
 
 EmitterKernels emitterKernels(const GridSource::Impl& grid, const RenderSettings& settings, const LevelOfDetail* lod, Progress* progress,
-    const MemoryBudget* budget)
+    const MemoryBudget* budget, const EmitterRefinement& refined)
 {
     EmitterKernels out;
     if (!grid.emission && !grid.temperature) return out; // and no blackbody table to build
     const EmissionModel model(settings);
     if (grid.emission) {
-        const KernelSet set = kernelsOf(*grid.emission, grid, settings, lod, progress, budget);
+        KernelSet set = kernelsOf(*grid.emission, grid, settings, lod, progress, budget);
         const Vec3d c = model.emitted(1.0);
-        append(out, set, std::vector<Rgb>(set.kernels.size(), Rgb{float(c.x), float(c.y), float(c.z)}));
+        const Rgb colour{float(c.x), float(c.y), float(c.z)};
+        std::vector<Rgb> radiance(set.kernels.size(), colour);
+        refineEmitters(set, radiance, refined, progress, budget, [&] {
+            return [acc = grid.emission->field->getConstAccessor(), colour](const openvdb::Vec3d& p) mutable {
+                return LightSample{std::max(double(openvdb::tools::BoxSampler::sample(acc, p)), 0.0), colour};
+            };
+        });
+        append(out, set, radiance);
     }
     if (grid.temperature) {
         for (auto it = grid.temperature->field->cbeginValueOn(); it; ++it) {
@@ -210,7 +353,7 @@ EmitterKernels emitterKernels(const GridSource::Impl& grid, const RenderSettings
         auto source = std::make_shared<GridSource::Impl>(*grid.temperature);
         source->grid = voxels.luminance;
         source->derive();
-        const KernelSet set = kernelsOf(*source, grid, settings, lod, progress, budget);
+        KernelSet set = kernelsOf(*source, grid, settings, lod, progress, budget);
         // Each kernel's colour: its voxel's (trilinear at other lattice points: halo kernels).
         std::vector<Rgb> radiance(set.kernels.size());
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, radiance.size(), 4096), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -220,6 +363,14 @@ EmitterKernels emitterKernels(const GridSource::Impl& grid, const RenderSettings
                 const openvdb::Vec3s c = openvdb::tools::BoxSampler::sample(colour, openvdb::Vec3d(p.x, p.y, p.z));
                 radiance[i] = Rgb{c.x(), c.y(), c.z()};
             }
+        });
+        refineEmitters(set, radiance, refined, progress, budget, [&] {
+            return [acc = grid.temperature->field->getConstAccessor(), &model](const openvdb::Vec3d& p) mutable {
+                if (!inTemperatureCell(acc, p)) return LightSample{};
+                const double value = double(openvdb::tools::BoxSampler::sample(acc, p));
+                const Vec3d c = model.blackbodyColour(value);
+                return LightSample{model.blackbodyLuminance(value), Rgb{float(c.x), float(c.y), float(c.z)}};
+            };
         });
         append(out, set, radiance);
     }

@@ -85,7 +85,7 @@ private:
 /// carry each voxel's mean blackbody luminance (of the trilinear temperature, over the voxel and
 /// the shell it spreads into); @c radiance is each kernel's colour per unit weight (the emission
 /// colour, or its voxel's blackbody colour). With @a lod, blocks merge where the density's do
-/// (LevelSource), so that emission and density keep the same kernel shapes; no refinement. In
+/// (LevelSource), so that emission and density keep the same kernel shapes. In
 /// the grid's index space.
 struct EmitterKernels
 {
@@ -95,8 +95,22 @@ struct EmitterKernels
     /// without a temperature grid or active values): a lighter's check that it glows.
     double hottestKelvin = std::numeric_limits<double>::quiet_NaN();
 };
+/// The density's refinement (refineKernels) as the emitters follow it: the voxels it sampled on
+/// the lattice of spacing 1/n, and the prefilter's alpha there.
+struct EmitterRefinement
+{
+    int n = 1;
+    double alpha = 0.0;
+    const openvdb::MaskGrid* sampled = nullptr;
+};
+
+/// With @a refined (n > 1), the emitter kernels of the voxels the density's refinement sampled
+/// are replaced by the light itself sampled on the same fine lattice (the emission value, or the
+/// blackbody of the trilinear temperature, at each point, with its own colour), so that emission
+/// and density keep the same sub-voxel profiles where voxels are large on screen
+/// (docs/lighting.md#emission-at-dense-hot-edges-and-refined-emitters).
 EmitterKernels emitterKernels(const GridSource::Impl& grid, const RenderSettings& settings, const LevelOfDetail* lod = nullptr,
-    Progress* progress = nullptr, const MemoryBudget* budget = nullptr);
+    Progress* progress = nullptr, const MemoryBudget* budget = nullptr, const EmitterRefinement& refined = {});
 
 } // namespace detail
 } // namespace vdb_ewa
