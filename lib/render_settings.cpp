@@ -66,6 +66,7 @@ void RenderSettings::validate() const
     if (!(splat.slab >= 0.05 && splat.slab <= 1.0e4)) fail("--slab must be in [0.05, 10000] voxels");
     if (splat.tileKernelSpacing < 1 || splat.tileKernelSpacing > 64) fail("tile kernel spacing must be in [1, 64] voxels");
     if (splat.refine < 1 || splat.refine > 4) fail("--refine must be in [1, 4]");
+    if (splat.refineEmission < 1 || splat.refineEmission > 4) fail("--refine-emission must be in [1, 4]");
     if (!(splat.lodPixels >= 0.0 && splat.lodPixels <= 64.0)) fail("--lod must be in [0, 64] pixels");
     if (!(splat.lodError >= 0.0 && splat.lodError <= 1.0)) fail("--lod-error must be in [0, 1] (a difference of transmittance)");
     if (!std::isfinite(surface.isovalue)) fail("--isovalue must be finite");
@@ -89,6 +90,7 @@ RenderSettings RenderSettings::preset(Quality quality)
         s.splat.lodPixels = 10.0;
         s.splat.lodError = 0.25;
         s.splat.taper = true;
+        s.splat.refineEmission = 1;
         break;
     case Quality::Default:
         break;
@@ -99,6 +101,7 @@ RenderSettings RenderSettings::preset(Quality quality)
         s.splat.tileKernelSpacing = 2;
         s.splat.expEvaluation = ExpEvaluation::Exact;
         s.splat.lodPixels = 0.0;
+        s.splat.refineEmission = 4;
         break;
     case Quality::Final: // high, with refined kernels where voxels span 2 pixels or more
         s = preset(Quality::High);

@@ -168,6 +168,7 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     const std::uint64_t densityKernels = kernels.kernels.size();
     // Emission grids' kernels after the density's (KernelSet::emitterBegin).
     detail::EmitterKernels emitters = detail::emitterKernels(g, mSettings, &lod, &progress, &budget, {refinement.n, alpha, &sampled});
+    const bool emittersLowered = emitters.refinementLowered;
     if (!emitters.kernels.kernels.empty()) {
         budget.check(double(kernels.kernels.size() + emitters.kernels.kernels.size()), "kernels with the emission grids'", detail::kBytesPerKernel);
         kernels.emitterBegin = kernels.kernels.size();
@@ -196,6 +197,11 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
           << " voxels: finer shadows would need more than their share of memory (" << lightPoints << " light-map points a light; raise --max-memory)";
         stats.warnings.push_back(w.str());
         break;
+    }
+    if (emittersLowered) {
+        std::ostringstream w;
+        w << "--refine-emission lowered: the refined emission and temperature kernels would need more than their share of memory; raise --max-memory";
+        stats.warnings.push_back(w.str());
     }
     if (refinement.lowered) {
         std::ostringstream w;

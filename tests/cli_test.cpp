@@ -536,6 +536,7 @@ TEST_F(Cli, ArgumentAndOutputErrors)
     expectFailure("render " + mGrid + " " + out + " --res 0x10", 2, "--res");
     expectFailure("render " + mGrid + " " + out + " --prefilter maybe", 2, "--prefilter");
     expectFailure("render " + mGrid + " " + out + " --refine 5", 2, "--refine");
+    expectFailure("render " + mGrid + " " + out + " --refine-emission 0", 2, "--refine-emission");
     expectFailure("render " + mGrid + " " + out + " --max-memory 12Q", 2, "--max-memory: '12Q' is not a size in bytes");
     expectFailure("render " + mGrid + " " + out + " --max-memory 10M", 2, "--max-memory must be");
     // Over the budget: exit 5, one line naming the file, the grid, the count and the budget.
@@ -617,7 +618,7 @@ TEST_F(Cli, HelpDocumentsEveryOptionWithItsDefault)
     for (const char* opt : {"--res", "--translate", "--rotate", "--lookat", "--up", "--camera", "--fov", "--focal",
              "--aperture", "--frame", "--near", "--far", "--name", "--density-grid", "--absorb", "--scatter", "--light", "--ambient", "--gain",
              "--cutoff", "--shadowstep", "--step", "--kernel-sigma", "--lowpass", "--aa", "--cutoff-radius", "--slab",
-             "--quality", "--exp", "--renormalize", "--taper", "--prefilter", "--precision", "--tile-spacing", "--refine", "--shadow-res", "--method",
+             "--quality", "--exp", "--renormalize", "--taper", "--prefilter", "--precision", "--tile-spacing", "--refine", "--refine-emission", "--shadow-res", "--method",
              "--lod", "--lod-error", "--threads", "--max-memory", "--verbose", "--emission", "--ocio-config", "--working-space", "--output-space",
              "--preview", "--display", "--view", "--input-space", "--camera-file", "--exr-type", "--compression", "--aov", "--deep", "--isovalue",
              "--shader", "--samples", "--color", "--iso", "--iso-opacity"}) {

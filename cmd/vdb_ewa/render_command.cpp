@@ -129,6 +129,7 @@ public:
         mApp->add_option("--precision", mPrecision, "world-to-camera transform and covariances in double or float (default: double)");
         mApp->add_option("--tile-spacing", mTileSpacing, "largest kernel spacing in voxels for active tiles, 1 to voxelise them (default: 4)");
         mApp->add_option("--refine", mRefine, "where voxels span N pixels or more, their kernels on a lattice N times finer: the trilinear field sampled every 1/N voxel (emission and temperature grids too), kernels N times narrower, N^3 as many; range [1, 4], 1 = off (default: " + std::to_string(rs.splat.refine) + ")");
+        mApp->add_option("--refine-emission", mRefineEmission, "emission and temperature grids where their light changes several-fold between neighbouring voxels in optically thick density: the light sampled every 1/N voxel where voxels span N pixels or more (the finer of this and --refine); range [1, 4], 1 = off (default: " + std::to_string(rs.splat.refineEmission) + "; draft 1, high and final 4)");
         mApp->add_option("--lod", mLod, "level of detail, pixels in [0, 64]: fog volumes: blocks of 2, 4 or 8 voxels a side become one kernel where the block projects to at most this many pixels, each voxel shared between two block sizes continuously with distance (no popping); level sets: one surface kernel a 2^3 or 4^3 block of voxels (for each sheet through it) where the block projects to at most a quarter as many; 0 = off (default: " + fmt(rs.splat.lodPixels) + ")");
         mApp->add_option("--lod-error", mLodError, "level of detail, fog volumes: a block wider than a pixel merges only where its values are smooth: the transmittance through any depth of it differs by at most this much between its columns; range [0, 1], 1 = by screen size alone (default: " + fmt(rs.splat.lodError) + ", draft 0.25)");
         // Fog volumes with an iso-surface.
@@ -473,6 +474,7 @@ private:
         if (!mPrefilter.empty()) rs.splat.prefilter = parseChoice("prefilter", mPrefilter, kOnOff);
         if (mTileSpacing) rs.splat.tileKernelSpacing = *mTileSpacing;
         if (mRefine) rs.splat.refine = *mRefine;
+        if (mRefineEmission) rs.splat.refineEmission = *mRefineEmission;
         if (!mPrecision.empty()) rs.splat.doublePrecision = parseChoice("precision", mPrecision, kPrecisions);
         if (mSlab) rs.splat.slab = *mSlab;
         if (mLod) rs.splat.lodPixels = *mLod;
@@ -539,7 +541,7 @@ private:
                  {"aa", choiceName(rs.splat.antiAliasing, kAntiAliasing)}, {"cutoff-radius", fmt(rs.splat.cutoffRadius)},
                  {"renormalize", choiceName(rs.splat.renormalize, kOnOff)}, {"taper", choiceName(rs.splat.taper, kOnOff)}, {"exp", choiceName(rs.splat.expEvaluation, kExpEvaluations)},
                  {"precision", choiceName(rs.splat.doublePrecision, kPrecisions)}, {"slab", fmt(rs.splat.slab)},
-                 {"tile-spacing", std::to_string(rs.splat.tileKernelSpacing)}, {"refine", std::to_string(rs.splat.refine)}, {"lod", fmt(rs.splat.lodPixels)}, {"lod-error", fmt(rs.splat.lodError)},
+                 {"tile-spacing", std::to_string(rs.splat.tileKernelSpacing)}, {"refine", std::to_string(rs.splat.refine)}, {"refine-emission", std::to_string(rs.splat.refineEmission)}, {"lod", fmt(rs.splat.lodPixels)}, {"lod-error", fmt(rs.splat.lodError)},
                  {"threads", std::to_string(rs.threads)}, {"simd", choiceName(rs.simd, kOnOff)}})
             method.emplace_back(k, v);
         return {cameraGroup, model, method, mOutputOptions.resolved()};
@@ -634,7 +636,7 @@ private:
     std::string mInput, mOutput, mCameraFile, mName, mRes, mTranslate, mRotate, mLookAt, mUp, mCamera;
     std::vector<std::string> mLights;
     std::string mAbsorb, mScatter, mEmission, mAmbient, mAa, mMethod, mQuality, mExp, mRenormalize, mTaper, mPrefilter, mPrecision;
-    std::optional<int> mTileSpacing, mRefine, mSamples;
+    std::optional<int> mTileSpacing, mRefine, mRefineEmission, mSamples;
     std::optional<double> mShadowRes;
     std::optional<double> mIsovalue, mIso, mIsoOpacity;
     std::string mShader, mColor, mEmissionGrid, mTemperatureGrid, mEmissionColor, mEnvironment;

@@ -131,6 +131,11 @@ struct SplatOptions
     /// times finer: the trilinear field sampled every 1/n voxel, kernels of std. deviation
     /// kernelSigma / n (n^3 the kernels; 1 = off; docs/numerics.md#refined-kernels).
     int refine = 1;
+    /// Emission and temperature grids where their light changes several-fold between
+    /// neighbouring voxels in optically thick density: sampled on a lattice of spacing 1/n where
+    /// voxels span n pixels or more (the finer of this and refine; 1 = off;
+    /// docs/lighting.md#emission-at-dense-hot-edges-and-refined-emitters).
+    int refineEmission = 2;
     double lodPixels = 2.0;     ///< level of detail: merge blocks of 2^L voxels into one kernel where
                                 ///< the block spacing projects to at most this many pixels, each
                                 ///< voxel shared between two levels continuously with distance

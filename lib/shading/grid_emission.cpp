@@ -249,16 +249,15 @@ void shareOf(const openvdb::MaskGrid::ConstAccessor& sampled, const openvdb::Coo
 /// the light once (docs/lighting.md#emission-at-dense-hot-edges-and-refined-emitters). Its weight
 /// is prefiltered with the fine lattice's Laplacian (quasi_interpolation.h); it keeps its point's
 /// colour. @a makeLight() gives a thread's sampler, p -> LightSample. Deterministic: the kernels
-/// kept in their order, then the samples in the cells' tree order. @a budget: n^3 kernels a cell
-/// at most; @a progress: one unit a leaf node of cells, throws Cancelled.
+/// kept in their order, then the samples in the cells' tree order. @a progress: one unit a leaf
+/// node of cells, throws Cancelled.
 template <typename MakeLight>
-void refineEmitters(KernelSet& set, std::vector<Rgb>& radiance, const EmitterRefinement& refined, Progress* progress,
-    const MemoryBudget* budget, MakeLight&& makeLight)
+void refineEmitters(KernelSet& set, std::vector<Rgb>& radiance, const openvdb::MaskGrid& sampled, int n, double alpha, Progress* progress,
+    MakeLight&& makeLight)
 {
-    if (refined.n <= 1 || !refined.sampled || refined.sampled->tree().empty()) return;
-    const int n = refined.n, m = n + 2;
-    const openvdb::MaskGrid::Ptr cells = cellsAround(*refined.sampled);
-    if (budget) budget->check(double(set.kernels.size()) + double(cells->activeVoxelCount()) * n * n * n, "refined emitter kernels", kBytesPerKernel);
+    if (n <= 1 || sampled.tree().empty()) return;
+    const int m = n + 2;
+    const openvdb::MaskGrid::Ptr cells = cellsAround(sampled);
     using MaskLeaf = openvdb::MaskTree::LeafNodeType;
     std::vector<const MaskLeaf*> leaves;
     cells->tree().getNodes(leaves);
@@ -271,7 +270,7 @@ void refineEmitters(KernelSet& set, std::vector<Rgb>& radiance, const EmitterRef
         for (int x = 0; x < 4; ++x) tent[i][x] = std::max(0.0, 1.0 - std::abs(double(i - 1) / double(n) - double(x - 1)));
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size()), [&](const tbb::blocked_range<std::size_t>& r) {
         auto light = makeLight();
-        auto inSampled = refined.sampled->getConstAccessor();
+        auto inSampled = sampled.getConstAccessor();
         std::vector<LightSample> f(std::size_t(m * m * m));
         const auto at = [&](int i, int j, int k) -> LightSample& { return f[std::size_t((i * m + j) * m + k)]; };
         for (std::size_t l = r.begin(); l < r.end(); ++l) {
@@ -297,7 +296,7 @@ void refineEmitters(KernelSet& set, std::vector<Rgb>& radiance, const EmitterRef
                             const double c = at(i, j, k).weight;
                             const double laplacian = 6.0 * c - at(i - 1, j, k).weight - at(i + 1, j, k).weight - at(i, j - 1, k).weight -
                                                      at(i, j + 1, k).weight - at(i, j, k - 1).weight - at(i, j, k + 1).weight;
-                            const float w = float(c + refined.alpha * laplacian);
+                            const float w = float(c + alpha * laplacian);
                             if (w == 0.0f) continue;
                             const Vec3d p = Vec3d(cell.x(), cell.y(), cell.z()) + Vec3d(i - 1, j - 1, k - 1) / double(n);
                             kernels[l].push_back({p, w, float(1.0 / n)});
@@ -308,7 +307,7 @@ void refineEmitters(KernelSet& set, std::vector<Rgb>& radiance, const EmitterRef
         advance(progress, r.size());
     });
     // The kernels that stay, then the samples.
-    auto inSampled = refined.sampled->getConstAccessor();
+    auto inSampled = sampled.getConstAccessor();
     std::size_t kept = 0;
     for (std::size_t i = 0; i < set.kernels.size(); ++i) {
         const Kernel& k = set.kernels[i];
@@ -325,6 +324,98 @@ void refineEmitters(KernelSet& set, std::vector<Rgb>& radiance, const EmitterRef
     }
 }
 
+/// Where one kernel a voxel cannot carry an emitter's light (docs/lighting.md#emission-at-dense-
+/// hot-edges-and-refined-emitters): the light changes several-fold from one voxel to the next
+/// (its 3^3 neighbourhood's spread over its largest, kSteepLight or more) where the density is
+/// optically thick (kappa x its largest value there, kThickVoxel or more a voxel). A voxel's
+/// Gaussian spreads its light half a voxel onto the dim side, where the density already hides
+/// what lies behind.
+constexpr double kSteepLight = 0.75;
+constexpr double kThickVoxel = 0.5;
+
+/// The voxels whose emitter kernels refineEmitters replaces, by lattice: the density's refined
+/// voxels (@a refined) and the voxels of @a light (per-voxel light) that are steep and thick, in
+/// leaf nodes that the level of detail leaves whole; each node's on the finest lattice its
+/// voxels span (spacing 1/n, n at most the finer of --refine and --refine-emission, n pixels or
+/// more a voxel, as refineKernels), so coarser views still refine at n = 2. Lattices meet
+/// through the partition of unity (refineEmitters), so each voxel is on one. The finest n is
+/// lowered until the samples fit @a within kernels; @a lowered says so.
+struct EmitterLattices
+{
+    std::vector<std::pair<int, openvdb::MaskGrid::Ptr>> lattices; ///< (n, its voxels), n >= 2
+    bool lowered = false;
+};
+EmitterLattices emitterLattices(const openvdb::FloatGrid& light, const GridSource::Impl& grid, const RenderSettings& settings,
+    const LevelOfDetail* lod, const EmitterRefinement& refined, double within)
+{
+    EmitterLattices out;
+    const Vec3d extinction = settings.medium.extinction();
+    const double kappa = std::max({extinction.x, extinction.y, extinction.z});
+    // Each voxel to refine with the finest lattice its node allows.
+    const auto nodeLattice = [&](const openvdb::Coord& ijk) {
+        const openvdb::Coord origin(ijk.x() & ~7, ijk.y() & ~7, ijk.z() & ~7);
+        if (!lod) return kMaxRefinement;
+        if (lod->nodeLevels(origin, 8).merges()) return 1;
+        return int(std::clamp(std::floor(lod->voxelPixels(origin, 8)), 1.0, double(kMaxRefinement)));
+    };
+    using LeafType = openvdb::FloatTree::LeafNodeType;
+    std::vector<const LeafType*> leaves;
+    light.tree().getNodes(leaves);
+    std::vector<std::vector<std::pair<openvdb::Coord, int>>> voxels(leaves.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+        auto value = light.getConstAccessor();
+        auto rho = grid.field->getConstAccessor();
+        for (std::size_t l = r.begin(); l < r.end(); ++l) {
+            const int n = nodeLattice(leaves[l]->origin());
+            if (n < 2) continue;
+            for (auto it = leaves[l]->cbeginValueOn(); it; ++it) {
+                const openvdb::Coord ijk = it.getCoord();
+                double lo = std::numeric_limits<double>::infinity(), hi = 0.0, dense = 0.0;
+                for (int x = -1; x <= 1; ++x)
+                    for (int y = -1; y <= 1; ++y)
+                        for (int z = -1; z <= 1; ++z) {
+                            const openvdb::Coord c = ijk.offsetBy(x, y, z);
+                            const double v = std::max(double(value.getValue(c)), 0.0);
+                            lo = std::min(lo, v);
+                            hi = std::max(hi, v);
+                            dense = std::max(dense, double(rho.getValue(c)));
+                        }
+                if (hi > 0.0 && hi - lo >= kSteepLight * hi && kappa * dense >= kThickVoxel) voxels[l].emplace_back(ijk, n);
+            }
+        }
+    });
+    if (refined.sampled) {
+        for (auto it = refined.sampled->cbeginValueOn(); it; ++it) voxels.push_back({{it.getCoord(), nodeLattice(it.getCoord())}});
+    }
+    for (int finest = std::min(std::max(refined.n, settings.splat.refineEmission), kMaxRefinement); finest > 1; --finest) {
+        std::vector<openvdb::MaskGrid::Ptr> masks(std::size_t(finest + 1));
+        for (const auto& leaf : voxels)
+            for (const auto& [ijk, node] : leaf) {
+                const int n = std::min(node, finest);
+                if (n < 2) continue;
+                if (!masks[std::size_t(n)]) masks[std::size_t(n)] = openvdb::MaskGrid::create(false);
+                masks[std::size_t(n)]->tree().setValueOn(ijk);
+            }
+        // A voxel on two lattices (the density's and a steep node's) stays on the finer.
+        double samples = 0.0;
+        for (int n = finest; n >= 2; --n) {
+            if (!masks[std::size_t(n)]) continue;
+            for (int finer = n + 1; finer <= finest; ++finer) {
+                if (masks[std::size_t(finer)]) masks[std::size_t(n)]->tree().topologyDifference(masks[std::size_t(finer)]->tree());
+            }
+            samples += double(cellsAround(*masks[std::size_t(n)])->activeVoxelCount()) * n * n * n;
+        }
+        if (samples <= within) {
+            for (int n = finest; n >= 2; --n) {
+                if (masks[std::size_t(n)] && !masks[std::size_t(n)]->tree().empty()) out.lattices.emplace_back(n, masks[std::size_t(n)]);
+            }
+            return out;
+        }
+        out.lowered = true;
+    }
+    return out;
+}
+
 } // namespace
 
 EmitterKernels emitterKernels(const GridSource::Impl& grid, const RenderSettings& settings, const LevelOfDetail* lod, Progress* progress,
@@ -333,16 +424,22 @@ EmitterKernels emitterKernels(const GridSource::Impl& grid, const RenderSettings
     EmitterKernels out;
     if (!grid.emission && !grid.temperature) return out; // and no blackbody table to build
     const EmissionModel model(settings);
+    // Refined emitter kernels take at most a quarter of the budget.
+    const double within = std::min(kRefinedKernelBudget, budget ? budget->itemsWithin(0.25, kBytesPerKernel) : kRefinedKernelBudget);
     if (grid.emission) {
         KernelSet set = kernelsOf(*grid.emission, grid, settings, lod, progress, budget);
         const Vec3d c = model.emitted(1.0);
         const Rgb colour{float(c.x), float(c.y), float(c.z)};
         std::vector<Rgb> radiance(set.kernels.size(), colour);
-        refineEmitters(set, radiance, refined, progress, budget, [&] {
-            return [acc = grid.emission->field->getConstAccessor(), colour](const openvdb::Vec3d& p) mutable {
-                return LightSample{std::max(double(openvdb::tools::BoxSampler::sample(acc, p)), 0.0), colour};
-            };
-        });
+        const EmitterLattices lattices = emitterLattices(*grid.emission->field, grid, settings, lod, refined, within);
+        out.refinementLowered = out.refinementLowered || lattices.lowered;
+        for (const auto& [n, sampled] : lattices.lattices) {
+            refineEmitters(set, radiance, *sampled, n, refined.alpha, progress, [&] {
+                return [acc = grid.emission->field->getConstAccessor(), colour](const openvdb::Vec3d& p) mutable {
+                    return LightSample{std::max(double(openvdb::tools::BoxSampler::sample(acc, p)), 0.0), colour};
+                };
+            });
+        }
         append(out, set, radiance);
     }
     if (grid.temperature) {
@@ -364,14 +461,18 @@ EmitterKernels emitterKernels(const GridSource::Impl& grid, const RenderSettings
                 radiance[i] = Rgb{c.x(), c.y(), c.z()};
             }
         });
-        refineEmitters(set, radiance, refined, progress, budget, [&] {
-            return [acc = grid.temperature->field->getConstAccessor(), &model](const openvdb::Vec3d& p) mutable {
-                if (!inTemperatureCell(acc, p)) return LightSample{};
-                const double value = double(openvdb::tools::BoxSampler::sample(acc, p));
-                const Vec3d c = model.blackbodyColour(value);
-                return LightSample{model.blackbodyLuminance(value), Rgb{float(c.x), float(c.y), float(c.z)}};
-            };
-        });
+        const EmitterLattices lattices = emitterLattices(*voxels.luminance, grid, settings, lod, refined, within);
+        out.refinementLowered = out.refinementLowered || lattices.lowered;
+        for (const auto& [n, sampled] : lattices.lattices) {
+            refineEmitters(set, radiance, *sampled, n, refined.alpha, progress, [&] {
+                return [acc = grid.temperature->field->getConstAccessor(), &model](const openvdb::Vec3d& p) mutable {
+                    if (!inTemperatureCell(acc, p)) return LightSample{};
+                    const double value = double(openvdb::tools::BoxSampler::sample(acc, p));
+                    const Vec3d c = model.blackbodyColour(value);
+                    return LightSample{model.blackbodyLuminance(value), Rgb{float(c.x), float(c.y), float(c.z)}};
+                };
+            });
+        }
         append(out, set, radiance);
     }
     return out;

@@ -94,6 +94,8 @@ struct EmitterKernels
     /// The hottest Kelvin of the temperature grid's active values under the mapping (NaN
     /// without a temperature grid or active values): a lighter's check that it glows.
     double hottestKelvin = std::numeric_limits<double>::quiet_NaN();
+    /// The refined emitters' lattice was coarsened to fit the budget.
+    bool refinementLowered = false;
 };
 /// The density's refinement (refineKernels) as the emitters follow it: the voxels it sampled on
 /// the lattice of spacing 1/n, and the prefilter's alpha there.
@@ -104,11 +106,13 @@ struct EmitterRefinement
     const openvdb::MaskGrid* sampled = nullptr;
 };
 
-/// With @a refined (n > 1), the emitter kernels of the voxels the density's refinement sampled
-/// are replaced by the light itself sampled on the same fine lattice (the emission value, or the
-/// blackbody of the trilinear temperature, at each point, with its own colour), so that emission
-/// and density keep the same sub-voxel profiles where voxels are large on screen
-/// (docs/lighting.md#emission-at-dense-hot-edges-and-refined-emitters).
+/// Refined emitters: the emitter kernels of the voxels the density's refinement sampled
+/// (@a refined), and of the voxels where the light is steep and the density thick, are replaced
+/// by the light itself sampled on a fine lattice (spacing 1/n, n up to the finer of --refine
+/// and --refine-emission, SplatOptions::refineEmission, and the pixels a voxel spans): the
+/// emission value, or the blackbody of the trilinear temperature, at each point, with its own
+/// colour (docs/lighting.md#emission-at-dense-hot-edges-and-refined-emitters). Within a quarter
+/// of @a budget (the finest lattice coarsened to fit).
 EmitterKernels emitterKernels(const GridSource::Impl& grid, const RenderSettings& settings, const LevelOfDetail* lod = nullptr,
     Progress* progress = nullptr, const MemoryBudget* budget = nullptr, const EmitterRefinement& refined = {});
 
