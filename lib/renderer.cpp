@@ -167,7 +167,7 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     if (alpha > 0.0) stats.haloKernels = detail::quasiInterpolate(g, alpha, kernels, &sampled);
     const std::uint64_t densityKernels = kernels.kernels.size();
     // Emission grids' kernels after the density's (KernelSet::emitterBegin).
-    detail::EmitterKernels emitters = detail::emitterKernels(g, mSettings, &lod, &progress, &budget, {refinement.n, alpha, &sampled});
+    detail::EmitterKernels emitters = detail::emitterKernels(g, mSettings, &lod, &progress, &budget, {refinement.n, &sampled, kernels.kernels.size()});
     const bool emittersLowered = emitters.refinementLowered;
     if (!emitters.kernels.kernels.empty()) {
         budget.check(double(kernels.kernels.size() + emitters.kernels.kernels.size()), "kernels with the emission grids'", detail::kBytesPerKernel);
@@ -200,7 +200,8 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     }
     if (emittersLowered) {
         std::ostringstream w;
-        w << "--refine-emission lowered: the refined emission and temperature kernels would need more than their share of memory; raise --max-memory";
+        w << "--refine-emission lowered: refined emission and temperature kernels would need more than their share of memory ("
+          << std::min(detail::kRefinedKernelBudget, budget.itemsWithin(0.25, detail::kBytesPerKernel)) << " kernels; raise --max-memory)";
         stats.warnings.push_back(w.str());
     }
     if (refinement.lowered) {

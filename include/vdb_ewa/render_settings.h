@@ -131,10 +131,10 @@ struct SplatOptions
     /// times finer: the trilinear field sampled every 1/n voxel, kernels of std. deviation
     /// kernelSigma / n (n^3 the kernels; 1 = off; docs/numerics.md#refined-kernels).
     int refine = 1;
-    /// Emission and temperature grids where their light changes several-fold between
-    /// neighbouring voxels in optically thick density: sampled on a lattice of spacing 1/n where
-    /// voxels span n pixels or more (the finer of this and refine; 1 = off;
-    /// docs/lighting.md#emission-at-dense-hot-edges-and-refined-emitters).
+    /// Emission and temperature grids where their light does not go as the density (light over
+    /// density changes several-fold between neighbouring voxels) in optically thick density:
+    /// sampled every 1/n voxel, n up to this as voxels span n pixels or more (2 at least; refine
+    /// takes the emitters too; 1 = off; docs/lighting.md#emission-at-dense-hot-edges-and-refined-emitters).
     int refineEmission = 2;
     double lodPixels = 2.0;     ///< level of detail: merge blocks of 2^L voxels into one kernel where
                                 ///< the block spacing projects to at most this many pixels, each

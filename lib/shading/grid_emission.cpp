@@ -196,52 +196,7 @@ struct LightSample
     Rgb colour{0.0f, 0.0f, 0.0f};
 };
 
-/// The cells of the fine lattice an emitter's refinement samples: every cell (named by its lower
-/// corner) with a corner in @a sampled.
-openvdb::MaskGrid::Ptr cellsAround(const openvdb::MaskGrid& sampled)
-{
-    auto cells = openvdb::MaskGrid::create(false);
-    auto acc = cells->getAccessor();
-    for (auto it = sampled.cbeginValueOn(); it; ++it) {
-        for (int corner = 0; corner < 8; ++corner) acc.setValueOn(it.getCoord().offsetBy(-(corner & 1), -((corner >> 1) & 1), -((corner >> 2) & 1)));
-    }
-    return cells;
-}
-
-/// Fine points a side of a cell with one beyond each end, at the finest refinement.
-constexpr int kMaxFine = kMaxRefinement + 2;
-
-/// The share of the trilinear partition of unity that the voxels of @a sampled hold at the @a m^3
-/// fine points around @a cell (@a tent: each point's tent weights on the cell's 4 voxels a side).
-void shareOf(const openvdb::MaskGrid::ConstAccessor& sampled, const openvdb::Coord& cell, const double (&tent)[kMaxFine][4], int m,
-    double (&share)[kMaxFine][kMaxFine][kMaxFine])
-{
-    bool on[4][4][4];
-    for (int x = 0; x < 4; ++x)
-        for (int y = 0; y < 4; ++y)
-            for (int z = 0; z < 4; ++z) on[x][y][z] = sampled.isValueOn(cell.offsetBy(x - 1, y - 1, z - 1));
-    double a[4][4][kMaxFine], b[4][kMaxFine][kMaxFine];
-    for (int x = 0; x < 4; ++x)
-        for (int y = 0; y < 4; ++y)
-            for (int k = 0; k < m; ++k) {
-                a[x][y][k] = 0.0;
-                for (int z = 0; z < 4; ++z) a[x][y][k] += on[x][y][z] ? tent[k][z] : 0.0;
-            }
-    for (int x = 0; x < 4; ++x)
-        for (int j = 0; j < m; ++j)
-            for (int k = 0; k < m; ++k) {
-                b[x][j][k] = 0.0;
-                for (int y = 0; y < 4; ++y) b[x][j][k] += a[x][y][k] * tent[j][y];
-            }
-    for (int i = 0; i < m; ++i)
-        for (int j = 0; j < m; ++j)
-            for (int k = 0; k < m; ++k) {
-                share[i][j][k] = 0.0;
-                for (int x = 0; x < 4; ++x) share[i][j][k] += b[x][j][k] * tent[i][x];
-            }
-}
-
-/// Replace the unit kernels of @a set (and their @a radiance) at the voxels @a refined sampled by
+/// Replace the unit kernels of @a set (and their @a radiance) at the voxels of @a sampled by
 /// the light's samples on its fine lattice, the points c + a / n (a = 0 .. n - 1 a side) of every
 /// cell c with a sampled corner, the lattice refineKernels uses. A sample carries the sampled
 /// voxels' share of the trilinear partition of unity at its point (1 inside, falling across the
@@ -264,10 +219,7 @@ void refineEmitters(KernelSet& set, std::vector<Rgb>& radiance, const openvdb::M
     std::vector<std::vector<Kernel>> kernels(leaves.size());
     std::vector<std::vector<Rgb>> colours(leaves.size());
     setUnits(progress, leaves.size());
-    // tent[i][x]: the tent of the cell's voxel x - 1 at the fine point i - 1 (of n) along an axis.
-    double tent[kMaxFine][4];
-    for (int i = 0; i < m; ++i)
-        for (int x = 0; x < 4; ++x) tent[i][x] = std::max(0.0, 1.0 - std::abs(double(i - 1) / double(n) - double(x - 1)));
+    const FineTents tent(n);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size()), [&](const tbb::blocked_range<std::size_t>& r) {
         auto light = makeLight();
         auto inSampled = sampled.getConstAccessor();
@@ -279,7 +231,7 @@ void refineEmitters(KernelSet& set, std::vector<Rgb>& radiance, const openvdb::M
                 // The sampled share of the partition of unity at the fine points of the cell and
                 // one beyond each side, from the tents of the cell's 4^3 voxels (separably).
                 double share[kMaxFine][kMaxFine][kMaxFine];
-                shareOf(inSampled, cell, tent, m, share);
+                shareOf(inSampled, cell, tent, share);
                 bool any = false;
                 for (int i = 0; i < m; ++i)
                     for (int j = 0; j < m; ++j)
@@ -325,78 +277,114 @@ void refineEmitters(KernelSet& set, std::vector<Rgb>& radiance, const openvdb::M
 }
 
 /// Where one kernel a voxel cannot carry an emitter's light (docs/lighting.md#emission-at-dense-
-/// hot-edges-and-refined-emitters): the light changes several-fold from one voxel to the next
-/// (its 3^3 neighbourhood's spread over its largest, kSteepLight or more) where the density is
-/// optically thick (kappa x its largest value there, kThickVoxel or more a voxel). A voxel's
-/// Gaussian spreads its light half a voxel onto the dim side, where the density already hides
-/// what lies behind.
-constexpr double kSteepLight = 0.75;
+/// hot-edges-and-refined-emitters): the light does not go as the density, its source function
+/// (light over density, a voxel's values) changing several-fold from one voxel to the next (the
+/// 3^3 neighbourhood's spread over its largest, kSteepSource or more; light with no density
+/// beside light with density counts), where the density is optically thick (kappa x its largest
+/// value there, kThickVoxel or more a voxel). There a voxel's Gaussian spreads its light half a
+/// voxel from where the density lets it out; where the light goes as the density, their
+/// kernels keep the same shapes and the source function is right.
+constexpr double kSteepSource = 0.75;
 constexpr double kThickVoxel = 0.5;
 
-/// The voxels whose emitter kernels refineEmitters replaces, by lattice: the density's refined
-/// voxels (@a refined) and the voxels of @a light (per-voxel light) that are steep and thick, in
-/// leaf nodes that the level of detail leaves whole; each node's on the finest lattice its
-/// voxels span (spacing 1/n, n at most the finer of --refine and --refine-emission, n pixels or
-/// more a voxel, as refineKernels), so coarser views still refine at n = 2. Lattices meet
-/// through the partition of unity (refineEmitters), so each voxel is on one. The finest n is
-/// lowered until the samples fit @a within kernels; @a lowered says so.
+/// The voxels whose emitter kernels refineEmitters replaces, by lattice: the voxels of @a light
+/// (per-voxel light) whose source function is steep where the density is thick, with their 26
+/// neighbours (where the light falls to 0 beyond the grid's voxels), on lattices up to
+/// --refine-emission; and the density's refined voxels (@a refined), on lattices up to the
+/// finer of --refine and --refine-emission.
+/// Each voxel on the finest lattice its leaf node's voxels span in pixels (spacing 1/n, n pixels
+/// or more a voxel, as refineKernels; so coarser views still refine at n = 2), none in nodes the
+/// level of detail merges or under the light's active tiles (their kernels stay). Lattices meet
+/// through the partition of unity (refineEmitters); a voxel on two stays on the finer. The
+/// finest n is lowered until the samples fit @a within kernels; @a lowered says so. @a progress:
+/// checked for a cancel.
 struct EmitterLattices
 {
     std::vector<std::pair<int, openvdb::MaskGrid::Ptr>> lattices; ///< (n, its voxels), n >= 2
+    double samples = 0.0;                                        ///< kernels they will make, at most
     bool lowered = false;
 };
 EmitterLattices emitterLattices(const openvdb::FloatGrid& light, const GridSource::Impl& grid, const RenderSettings& settings,
-    const LevelOfDetail* lod, const EmitterRefinement& refined, double within)
+    const LevelOfDetail* lod, const EmitterRefinement& refined, double within, Progress* progress)
 {
     EmitterLattices out;
+    if (!lod) return out; // no screen sizes: nothing is refined
     const Vec3d extinction = settings.medium.extinction();
     const double kappa = std::max({extinction.x, extinction.y, extinction.z});
-    // Each voxel to refine with the finest lattice its node allows.
+    const int steepFinest = std::min(settings.splat.refineEmission, kMaxRefinement);
+    const int sampledFinest = std::min(std::max(refined.n, settings.splat.refineEmission), kMaxRefinement);
+    const float cutoff = float(settings.cutoff);
+    // The finest lattice a voxel's node allows (1: none); voxels come in tree order, so the
+    // last node's answer is kept.
+    auto lightAcc = light.getConstAccessor();
+    openvdb::Coord lastNode(std::numeric_limits<int>::max());
+    int lastLattice = 1;
     const auto nodeLattice = [&](const openvdb::Coord& ijk) {
         const openvdb::Coord origin(ijk.x() & ~7, ijk.y() & ~7, ijk.z() & ~7);
-        if (!lod) return kMaxRefinement;
-        if (lod->nodeLevels(origin, 8).merges()) return 1;
-        return int(std::clamp(std::floor(lod->voxelPixels(origin, 8)), 1.0, double(kMaxRefinement)));
-    };
-    using LeafType = openvdb::FloatTree::LeafNodeType;
-    std::vector<const LeafType*> leaves;
-    light.tree().getNodes(leaves);
-    std::vector<std::vector<std::pair<openvdb::Coord, int>>> voxels(leaves.size());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size()), [&](const tbb::blocked_range<std::size_t>& r) {
-        auto value = light.getConstAccessor();
-        auto rho = grid.field->getConstAccessor();
-        for (std::size_t l = r.begin(); l < r.end(); ++l) {
-            const int n = nodeLattice(leaves[l]->origin());
-            if (n < 2) continue;
-            for (auto it = leaves[l]->cbeginValueOn(); it; ++it) {
-                const openvdb::Coord ijk = it.getCoord();
-                double lo = std::numeric_limits<double>::infinity(), hi = 0.0, dense = 0.0;
-                for (int x = -1; x <= 1; ++x)
-                    for (int y = -1; y <= 1; ++y)
-                        for (int z = -1; z <= 1; ++z) {
-                            const openvdb::Coord c = ijk.offsetBy(x, y, z);
-                            const double v = std::max(double(value.getValue(c)), 0.0);
-                            lo = std::min(lo, v);
-                            hi = std::max(hi, v);
-                            dense = std::max(dense, double(rho.getValue(c)));
-                        }
-                if (hi > 0.0 && hi - lo >= kSteepLight * hi && kappa * dense >= kThickVoxel) voxels[l].emplace_back(ijk, n);
-            }
+        if (origin != lastNode) {
+            lastNode = origin;
+            lastLattice = lod->nodeLevels(origin, 8).merges() ? 1
+                          : int(std::clamp(std::floor(lod->voxelPixels(origin, 8)), 1.0, double(kMaxRefinement)));
         }
-    });
-    if (refined.sampled) {
-        for (auto it = refined.sampled->cbeginValueOn(); it; ++it) voxels.push_back({{it.getCoord(), nodeLattice(it.getCoord())}});
+        return lastLattice;
+    };
+    // The steep, thick voxels.
+    auto steep = openvdb::MaskGrid::create(false);
+    if (steepFinest > 1) {
+        using LeafType = openvdb::FloatTree::LeafNodeType;
+        std::vector<const LeafType*> leaves;
+        light.tree().getNodes(leaves);
+        std::vector<std::uint8_t> flags(leaves.size() * LeafType::SIZE, 0);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+            if (progress) progress->check();
+            auto value = light.getConstAccessor();
+            auto rho = grid.field->getConstAccessor();
+            for (std::size_t l = r.begin(); l < r.end(); ++l) {
+                for (auto it = leaves[l]->cbeginValueOn(); it; ++it) {
+                    const openvdb::Coord ijk = it.getCoord();
+                    // The source function, light over density, of the neighbourhood's voxels
+                    // that have either (infinite: light with no density).
+                    constexpr double kInf = std::numeric_limits<double>::infinity();
+                    double lo = kInf, hi = 0.0, dense = 0.0;
+                    for (int x = -1; x <= 1; ++x)
+                        for (int y = -1; y <= 1; ++y)
+                            for (int z = -1; z <= 1; ++z) {
+                                const openvdb::Coord c = ijk.offsetBy(x, y, z);
+                                const double v = std::max(double(value.getValue(c)), 0.0);
+                                const float r = rho.getValue(c);
+                                const double d = r >= cutoff ? double(r) : 0.0;
+                                if (!(v > 0.0) && !(d > 0.0)) continue;
+                                const double source = d > 0.0 ? v / d : kInf;
+                                lo = std::min(lo, source);
+                                hi = std::max(hi, source);
+                                dense = std::max(dense, d);
+                            }
+                    const bool steepSource = lo < kInf && (hi == kInf || hi - lo >= kSteepSource * hi) && hi > 0.0;
+                    if (steepSource && kappa * dense >= kThickVoxel) flags[l * LeafType::SIZE + it.pos()] = 1;
+                }
+            }
+        });
+        auto acc = steep->getAccessor();
+        for (std::size_t l = 0; l < leaves.size(); ++l)
+            for (auto it = leaves[l]->cbeginValueOn(); it; ++it) {
+                if (flags[l * LeafType::SIZE + it.pos()]) acc.setValueOn(it.getCoord());
+            }
+        openvdb::tools::dilateActiveValues(steep->tree(), 1, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
     }
-    for (int finest = std::min(std::max(refined.n, settings.splat.refineEmission), kMaxRefinement); finest > 1; --finest) {
+    for (int finest = sampledFinest; finest > 1; --finest) {
+        if (progress) progress->check();
         std::vector<openvdb::MaskGrid::Ptr> masks(std::size_t(finest + 1));
-        for (const auto& leaf : voxels)
-            for (const auto& [ijk, node] : leaf) {
-                const int n = std::min(node, finest);
-                if (n < 2) continue;
+        const auto add = [&](const openvdb::MaskGrid& voxels, int cap) {
+            for (auto it = voxels.cbeginValueOn(); it; ++it) {
+                const openvdb::Coord ijk = it.getCoord();
+                const int n = std::min({nodeLattice(ijk), finest, cap});
+                if (n < 2 || (lightAcc.isValueOn(ijk) && !lightAcc.probeConstLeaf(ijk))) continue; // an active tile's kernels stay
                 if (!masks[std::size_t(n)]) masks[std::size_t(n)] = openvdb::MaskGrid::create(false);
                 masks[std::size_t(n)]->tree().setValueOn(ijk);
             }
-        // A voxel on two lattices (the density's and a steep node's) stays on the finer.
+        };
+        add(*steep, steepFinest);
+        if (refined.sampled) add(*refined.sampled, sampledFinest);
         double samples = 0.0;
         for (int n = finest; n >= 2; --n) {
             if (!masks[std::size_t(n)]) continue;
@@ -409,6 +397,7 @@ EmitterLattices emitterLattices(const openvdb::FloatGrid& light, const GridSourc
             for (int n = finest; n >= 2; --n) {
                 if (masks[std::size_t(n)] && !masks[std::size_t(n)]->tree().empty()) out.lattices.emplace_back(n, masks[std::size_t(n)]);
             }
+            out.samples = samples;
             return out;
         }
         out.lowered = true;
@@ -424,17 +413,22 @@ EmitterKernels emitterKernels(const GridSource::Impl& grid, const RenderSettings
     EmitterKernels out;
     if (!grid.emission && !grid.temperature) return out; // and no blackbody table to build
     const EmissionModel model(settings);
-    // Refined emitter kernels take at most a quarter of the budget.
-    const double within = std::min(kRefinedKernelBudget, budget ? budget->itemsWithin(0.25, kBytesPerKernel) : kRefinedKernelBudget);
+    const double alpha = settings.splat.prefilter ? quasiInterpolationAlpha(settings.splat.kernelSigma) : 0.0;
+    // Refined emitter kernels of both grids take at most a quarter of the budget, and no more
+    // than the kernels already held leave (the renderer's check of them all).
+    double within = std::min(kRefinedKernelBudget, budget ? budget->itemsWithin(0.25, kBytesPerKernel) : kRefinedKernelBudget);
+    if (budget) within = std::min(within, budget->itemsWithin(1.0, kBytesPerKernel) - double(refined.kernelsHeld));
     if (grid.emission) {
         KernelSet set = kernelsOf(*grid.emission, grid, settings, lod, progress, budget);
         const Vec3d c = model.emitted(1.0);
         const Rgb colour{float(c.x), float(c.y), float(c.z)};
         std::vector<Rgb> radiance(set.kernels.size(), colour);
-        const EmitterLattices lattices = emitterLattices(*grid.emission->field, grid, settings, lod, refined, within);
+        within -= double(set.kernels.size());
+        const EmitterLattices lattices = emitterLattices(*grid.emission->field, grid, settings, lod, refined, within, progress);
+        within -= lattices.samples;
         out.refinementLowered = out.refinementLowered || lattices.lowered;
         for (const auto& [n, sampled] : lattices.lattices) {
-            refineEmitters(set, radiance, *sampled, n, refined.alpha, progress, [&] {
+            refineEmitters(set, radiance, *sampled, n, alpha, progress, [&] {
                 return [acc = grid.emission->field->getConstAccessor(), colour](const openvdb::Vec3d& p) mutable {
                     return LightSample{std::max(double(openvdb::tools::BoxSampler::sample(acc, p)), 0.0), colour};
                 };
@@ -461,10 +455,11 @@ EmitterKernels emitterKernels(const GridSource::Impl& grid, const RenderSettings
                 radiance[i] = Rgb{c.x(), c.y(), c.z()};
             }
         });
-        const EmitterLattices lattices = emitterLattices(*voxels.luminance, grid, settings, lod, refined, within);
+        within -= double(set.kernels.size());
+        const EmitterLattices lattices = emitterLattices(*voxels.luminance, grid, settings, lod, refined, within, progress);
         out.refinementLowered = out.refinementLowered || lattices.lowered;
         for (const auto& [n, sampled] : lattices.lattices) {
-            refineEmitters(set, radiance, *sampled, n, refined.alpha, progress, [&] {
+            refineEmitters(set, radiance, *sampled, n, alpha, progress, [&] {
                 return [acc = grid.temperature->field->getConstAccessor(), &model](const openvdb::Vec3d& p) mutable {
                     if (!inTemperatureCell(acc, p)) return LightSample{};
                     const double value = double(openvdb::tools::BoxSampler::sample(acc, p));

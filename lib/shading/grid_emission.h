@@ -13,6 +13,7 @@
 
 #include <vdb_ewa/render_settings.h>
 
+#include <cstdint>
 #include <limits>
 #include <optional>
 #include <vector>
@@ -84,9 +85,9 @@ private:
 /// become kernels with quasi-interpolating weights like the density's; the temperature grid's
 /// carry each voxel's mean blackbody luminance (of the trilinear temperature, over the voxel and
 /// the shell it spreads into); @c radiance is each kernel's colour per unit weight (the emission
-/// colour, or its voxel's blackbody colour). With @a lod, blocks merge where the density's do
-/// (LevelSource), so that emission and density keep the same kernel shapes. In
-/// the grid's index space.
+/// colour, or its voxel's blackbody colour; a refined sample's, its point's). With @a lod,
+/// blocks merge where the density's do (LevelSource), so that emission and density keep the
+/// same kernel shapes. In the grid's index space.
 struct EmitterKernels
 {
     KernelSet kernels;
@@ -97,22 +98,25 @@ struct EmitterKernels
     /// The refined emitters' lattice was coarsened to fit the budget.
     bool refinementLowered = false;
 };
-/// The density's refinement (refineKernels) as the emitters follow it: the voxels it sampled on
-/// the lattice of spacing 1/n, and the prefilter's alpha there.
+
+/// The density's refinement (refineKernels) as the emitters follow it: the lattice n and the
+/// voxels it sampled; and the kernels the renderer already holds (the density's), which the
+/// refined emitters' budget leaves room for.
 struct EmitterRefinement
 {
     int n = 1;
-    double alpha = 0.0;
     const openvdb::MaskGrid* sampled = nullptr;
+    std::uint64_t kernelsHeld = 0;
 };
 
-/// Refined emitters: the emitter kernels of the voxels the density's refinement sampled
-/// (@a refined), and of the voxels where the light is steep and the density thick, are replaced
-/// by the light itself sampled on a fine lattice (spacing 1/n, n up to the finer of --refine
-/// and --refine-emission, SplatOptions::refineEmission, and the pixels a voxel spans): the
-/// emission value, or the blackbody of the trilinear temperature, at each point, with its own
-/// colour (docs/lighting.md#emission-at-dense-hot-edges-and-refined-emitters). Within a quarter
-/// of @a budget (the finest lattice coarsened to fit).
+/// Refined emitters (with @a lod: the pixels a voxel spans): the emitter kernels of the voxels
+/// whose source function (light over density) is steep where the density is thick (on lattices
+/// up to --refine-emission, SplatOptions::refineEmission), and of the voxels the density's
+/// refinement sampled (@a refined; up to the finer of it and --refine-emission), are replaced by
+/// the light itself sampled every 1/n voxel: the emission value, or the blackbody of the
+/// trilinear temperature, at each point, with its own colour (docs/lighting.md#emission-at-dense-
+/// hot-edges-and-refined-emitters). Both grids' samples within a quarter of @a budget, the finest lattice coarsened
+/// to fit (refinementLowered).
 EmitterKernels emitterKernels(const GridSource::Impl& grid, const RenderSettings& settings, const LevelOfDetail* lod = nullptr,
     Progress* progress = nullptr, const MemoryBudget* budget = nullptr, const EmitterRefinement& refined = {});
 

@@ -13,7 +13,7 @@ namespace vdb_ewa {
 namespace detail {
 namespace {
 
-constexpr int kMaxSamples = kMaxRefinement + 2; // a voxel's n samples a side and one beyond each end
+constexpr int kMaxSamples = kMaxFine; // a cell's n samples a side and one beyond each end
 
 /// Relative spread below which a voxel's neighbourhood counts as uniform (not refined).
 constexpr float kUniformTolerance = 1e-3f;
@@ -52,11 +52,11 @@ struct FineAxis
     }
 };
 
-/// Append the kernels of the voxel @a ijk: the trilinear field of its 3^3 neighbourhood @a v
+/// Append the kernels of the cell @a ijk: the trilinear field of its 3^3 neighbourhood @a v
 /// sampled on the fine lattice (Eq. 8: one kernel a sample), samples below @a cutoff read as 0,
-/// weights prefiltered with @a alpha.
+/// times the sampled voxels' @a share (shareOf), weights prefiltered with @a alpha.
 void sampleVoxel(const openvdb::Coord& ijk, const float (&v)[3][3][3], const FineAxis& axis, double alpha, double cutoff,
-    std::vector<Kernel>& out)
+    const double (&share)[kMaxFine][kMaxFine][kMaxFine], std::vector<Kernel>& out)
 {
     const int n = axis.n, m = n + 2;
     // Separable trilinear interpolation: z, then y, then x.
@@ -73,11 +73,11 @@ void sampleVoxel(const openvdb::Coord& ijk, const float (&v)[3][3][3], const Fin
         for (int j = 0; j < m; ++j)
             for (int k = 0; k < m; ++k)
                 f[i][j][k] = b[0][j][k] * axis.weight[i][0] + b[1][j][k] * axis.weight[i][1] + b[2][j][k] * axis.weight[i][2];
-    // Samples below --cutoff read as 0, as the reference's and vdb_render's samples do.
+    // Samples below --cutoff read as 0, as the reference's and vdb_render's samples do; each
+    // carries the sampled voxels' share of the field.
     for (int i = 0; i < m; ++i)
         for (int j = 0; j < m; ++j)
-            for (int k = 0; k < m; ++k)
-                if (f[i][j][k] < cutoff) f[i][j][k] = 0.0;
+            for (int k = 0; k < m; ++k) f[i][j][k] = f[i][j][k] < cutoff ? 0.0 : f[i][j][k] * share[i][j][k];
     const float spacing = float(1.0 / n);
     for (int i = 1; i <= n; ++i)
         for (int j = 1; j <= n; ++j)
@@ -149,19 +149,24 @@ void voxelsToSample(const GridSource::Impl& grid, float cutoff, const KernelSet&
     for (const openvdb::Coord& c : modelled) acc.setValueOff(c);
 }
 
-/// The kernels of the voxels of @a sampled, one vector a leaf node (in tree order).
+/// The kernels of the cells around the voxels of @a sampled (cellsAround), one vector a leaf
+/// node of cells (in tree order).
 std::vector<std::vector<Kernel>> sampleVoxels(const GridSource::Impl& grid, const openvdb::MaskGrid& sampled, int n,
     double alpha, float cutoff, Progress* progress)
 {
     using MaskLeaf = openvdb::MaskTree::LeafNodeType;
+    const openvdb::MaskGrid::Ptr cells = cellsAround(sampled);
     std::vector<const MaskLeaf*> leaves;
-    leaves.reserve(sampled.tree().leafCount());
-    sampled.tree().getNodes(leaves);
+    leaves.reserve(cells->tree().leafCount());
+    cells->tree().getNodes(leaves);
     std::vector<std::vector<Kernel>> perLeaf(leaves.size());
     const FineAxis axis(n);
+    const FineTents tents(n);
     setUnits(progress, leaves.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size()), [&](const tbb::blocked_range<std::size_t>& range) {
         auto field = grid.field->getConstAccessor();
+        auto inSampled = sampled.getConstAccessor();
+        double share[kMaxFine][kMaxFine][kMaxFine];
         for (std::size_t l = range.begin(); l < range.end(); ++l) {
             std::vector<Kernel>& out = perLeaf[l];
             for (auto it = leaves[l]->cbeginValueOn(); it; ++it) {
@@ -174,7 +179,9 @@ std::vector<std::vector<Kernel>> sampleVoxels(const GridSource::Impl& grid, cons
                             v[x][y][z] = field.getValue(ijk.offsetBy(x - 1, y - 1, z - 1));
                             any = any || v[x][y][z] != 0.0f;
                         }
-                if (any) sampleVoxel(ijk, v, axis, alpha, cutoff, out);
+                if (!any) continue;
+                shareOf(inSampled, ijk, tents, share);
+                sampleVoxel(ijk, v, axis, alpha, cutoff, share, out);
             }
         }
         advance(progress, range.size());
@@ -183,6 +190,62 @@ std::vector<std::vector<Kernel>> sampleVoxels(const GridSource::Impl& grid, cons
 }
 
 } // namespace
+
+openvdb::MaskGrid::Ptr cellsAround(const openvdb::MaskGrid& sampled)
+{
+    auto cells = openvdb::MaskGrid::create(false);
+    auto acc = cells->getAccessor();
+    for (auto it = sampled.cbeginValueOn(); it; ++it) {
+        for (int corner = 0; corner < 8; ++corner) acc.setValueOn(it.getCoord().offsetBy(-(corner & 1), -((corner >> 1) & 1), -((corner >> 2) & 1)));
+    }
+    return cells;
+}
+
+FineTents::FineTents(int n_) : n(n_), m(n_ + 2)
+{
+    for (int i = 0; i < m; ++i)
+        for (int x = 0; x < 4; ++x) weight[i][x] = std::max(0.0, 1.0 - std::abs(double(i - 1) / double(n) - double(x - 1)));
+}
+
+void shareOf(const openvdb::MaskGrid::ConstAccessor& sampled, const openvdb::Coord& cell, const FineTents& tents,
+    double (&share)[kMaxFine][kMaxFine][kMaxFine])
+{
+    const int m = tents.m;
+    bool on[4][4][4];
+    bool all = true;
+    for (int x = 0; x < 4; ++x)
+        for (int y = 0; y < 4; ++y)
+            for (int z = 0; z < 4; ++z) {
+                on[x][y][z] = sampled.isValueOn(cell.offsetBy(x - 1, y - 1, z - 1));
+                all = all && on[x][y][z];
+            }
+    if (all) {
+        for (int i = 0; i < m; ++i)
+            for (int j = 0; j < m; ++j)
+                for (int k = 0; k < m; ++k) share[i][j][k] = 1.0;
+        return;
+    }
+    // Separably: z, then y, then x.
+    double a[4][4][kMaxFine], b[4][kMaxFine][kMaxFine];
+    for (int x = 0; x < 4; ++x)
+        for (int y = 0; y < 4; ++y)
+            for (int k = 0; k < m; ++k) {
+                a[x][y][k] = 0.0;
+                for (int z = 0; z < 4; ++z) a[x][y][k] += on[x][y][z] ? tents.weight[k][z] : 0.0;
+            }
+    for (int x = 0; x < 4; ++x)
+        for (int j = 0; j < m; ++j)
+            for (int k = 0; k < m; ++k) {
+                b[x][j][k] = 0.0;
+                for (int y = 0; y < 4; ++y) b[x][j][k] += a[x][y][k] * tents.weight[j][y];
+            }
+    for (int i = 0; i < m; ++i)
+        for (int j = 0; j < m; ++j)
+            for (int k = 0; k < m; ++k) {
+                share[i][j][k] = 0.0;
+                for (int x = 0; x < 4; ++x) share[i][j][k] += b[x][j][k] * tents.weight[i][x];
+            }
+}
 
 Refinement refineKernels(const GridSource::Impl& grid, int n, double alpha, float cutoff, const LevelOfDetail& scale,
     KernelSet& set, openvdb::MaskGrid& sampled, Progress* progress, double budget)
@@ -194,7 +257,7 @@ Refinement refineKernels(const GridSource::Impl& grid, int n, double alpha, floa
     for (n = std::min(n, kMaxRefinement); n > 1; --n) {
         choice = chooseRefined(grid, n, scale, set);
         voxelsToSample(grid, cutoff, set, choice, sampled);
-        if (double(sampled.activeVoxelCount()) * n * n * n <= budget) break;
+        if (double(cellsAround(sampled)->activeVoxelCount()) * n * n * n <= budget) break;
         sampled.clear();
         result.lowered = true;
     }

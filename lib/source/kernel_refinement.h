@@ -22,8 +22,34 @@ namespace detail {
 inline constexpr int kMaxRefinement = 4;
 
 /// Refined kernels cost n^3 a voxel: at most this many (about 10 GB through the pipeline, at
-/// kBytesPerKernel), and at most half the memory budget.
+/// kBytesPerKernel), and at most half the memory budget; refined emitters (grid_emission.h) as
+/// many again, within a quarter of it.
 inline constexpr double kRefinedKernelBudget = 4.0e7;
+
+/// Fine points a side of a cell with one beyond each end, at the finest refinement.
+inline constexpr int kMaxFine = kMaxRefinement + 2;
+
+/// The fine lattice's cells that refinement samples around the voxels of @a sampled: every cell
+/// (named by its lower corner, holding the points c + a / n, a = 0 .. n - 1 a side) with a
+/// corner in @a sampled.
+openvdb::MaskGrid::Ptr cellsAround(const openvdb::MaskGrid& sampled);
+
+/// The tent weights, along an axis, of a cell's 4 voxels (-1 .. 2 from its corner) at its n + 2
+/// fine points (-1/n .. 1 + 1/n).
+struct FineTents
+{
+    int n, m;
+    double weight[kMaxFine][4];
+    explicit FineTents(int n_);
+};
+
+/// The share of the trilinear partition of unity that the voxels of @a sampled hold at the fine
+/// points of @a cell and one beyond each side: 1 where every voxel whose tent reaches a point
+/// is sampled, falling to 0 across the cells where sampled voxels meet others. Refined samples
+/// carry it so that they and the kernels of the voxels not sampled add up to the field once
+/// (docs/numerics.md#refined-kernels).
+void shareOf(const openvdb::MaskGrid::ConstAccessor& sampled, const openvdb::Coord& cell, const FineTents& tents,
+    double (&share)[kMaxFine][kMaxFine][kMaxFine]);
 
 /// What refineKernels did.
 struct Refinement
@@ -36,13 +62,15 @@ struct Refinement
 /// Replace the unit kernels of @a set (voxels and spacing-1 tile kernels) of the leaf nodes
 /// whose voxels span @a n pixels or more (@a scale's voxelPixels), where the field is not
 /// uniform around them, by the samples of @a grid's trilinear field every 1/@a n voxel over
-/// their voxels and the one-voxel shell around them, weighted by the prefilter with @a alpha
-/// (in fine-lattice units; 0 = the samples' values). Voxels that other kernels model are not
-/// sampled: unrefined unit kernels, active voxels with values >= @a cutoff under tiles or
-/// merged blocks. @a sampled receives the voxels that were (quasiInterpolate puts no halo kernel
-/// there). Where n^3 kernels a sampled voxel would exceed @a budget, n is lowered until they fit
-/// (n = 1: @a set stays as it is). Deterministic order: the kernels kept in their order, then the
-/// samples in tree order. @a progress: one unit per leaf node sampled; throws Cancelled.
+/// their voxels and the one-voxel shell around them, each times the sampled voxels' share
+/// (shareOf, so that samples and the kernels left add up to the field once), weighted by the
+/// prefilter with @a alpha (in fine-lattice units; 0 = the samples' values). Voxels that other
+/// kernels model are not sampled: unrefined unit kernels, active voxels with values >= @a cutoff
+/// under tiles or merged blocks. @a sampled receives the voxels that were (quasiInterpolate puts
+/// no halo kernel there). Where n^3 kernels a cell around them (cellsAround) would exceed
+/// @a budget, n is lowered until they fit (n = 1: @a set stays as it is). Deterministic order:
+/// the kernels kept in their order, then the samples in tree order. @a progress: one unit per
+/// leaf node of cells; throws Cancelled.
 Refinement refineKernels(const GridSource::Impl& grid, int n, double alpha, float cutoff, const LevelOfDetail& scale,
     KernelSet& set, openvdb::MaskGrid& sampled, Progress* progress = nullptr, double budget = kRefinedKernelBudget);
 
