@@ -198,7 +198,7 @@ struct LightSample
 
 /// Replace the unit kernels of @a set (and their @a radiance) at the voxels of @a sampled by
 /// the light's samples on its fine lattice, the points c + a / n (a = 0 .. n - 1 a side) of every
-/// cell c with a sampled corner, the lattice refineKernels uses. A sample carries the sampled
+/// cell c of @a cells (cellsAround @a sampled), the lattice refineKernels uses. A sample carries the sampled
 /// voxels' share of the trilinear partition of unity at its point (1 inside, falling across the
 /// cells where sampled voxels meet kept ones), so that it and the kept voxels' kernels add up to
 /// the light once (docs/lighting.md#emission-at-dense-hot-edges-and-refined-emitters). Its weight
@@ -207,15 +207,14 @@ struct LightSample
 /// kept in their order, then the samples in the cells' tree order. @a progress: one unit a leaf
 /// node of cells, throws Cancelled.
 template <typename MakeLight>
-void refineEmitters(KernelSet& set, std::vector<Rgb>& radiance, const openvdb::MaskGrid& sampled, int n, double alpha, Progress* progress,
-    MakeLight&& makeLight)
+void refineEmitters(KernelSet& set, std::vector<Rgb>& radiance, const openvdb::MaskGrid& sampled, const openvdb::MaskGrid& cells, int n,
+    double alpha, Progress* progress, MakeLight&& makeLight)
 {
     if (n <= 1 || sampled.tree().empty()) return;
     const int m = n + 2;
-    const openvdb::MaskGrid::Ptr cells = cellsAround(sampled);
     using MaskLeaf = openvdb::MaskTree::LeafNodeType;
     std::vector<const MaskLeaf*> leaves;
-    cells->tree().getNodes(leaves);
+    cells.tree().getNodes(leaves);
     std::vector<std::vector<Kernel>> kernels(leaves.size());
     std::vector<std::vector<Rgb>> colours(leaves.size());
     setUnits(progress, leaves.size());
@@ -242,18 +241,11 @@ void refineEmitters(KernelSet& set, std::vector<Rgb>& radiance, const openvdb::M
                             any = any || s.weight > 0.0;
                         }
                 if (!any) continue;
-                for (int i = 1; i <= n; ++i)
-                    for (int j = 1; j <= n; ++j)
-                        for (int k = 1; k <= n; ++k) {
-                            const double c = at(i, j, k).weight;
-                            const double laplacian = 6.0 * c - at(i - 1, j, k).weight - at(i + 1, j, k).weight - at(i, j - 1, k).weight -
-                                                     at(i, j + 1, k).weight - at(i, j, k - 1).weight - at(i, j, k + 1).weight;
-                            const float w = float(c + alpha * laplacian);
-                            if (w == 0.0f) continue;
-                            const Vec3d p = Vec3d(cell.x(), cell.y(), cell.z()) + Vec3d(i - 1, j - 1, k - 1) / double(n);
-                            kernels[l].push_back({p, w, float(1.0 / n)});
-                            colours[l].push_back(at(i, j, k).colour);
-                        }
+                prefilterFineSamples(n, alpha, [&](int i, int j, int k) { return at(i, j, k).weight; }, [&](int i, int j, int k, float w) {
+                    const Vec3d p = Vec3d(cell.x(), cell.y(), cell.z()) + Vec3d(i - 1, j - 1, k - 1) / double(n);
+                    kernels[l].push_back({p, w, float(1.0 / n)});
+                    colours[l].push_back(at(i, j, k).colour);
+                });
             }
         }
         advance(progress, r.size());
@@ -300,8 +292,13 @@ constexpr double kThickVoxel = 0.5;
 /// checked for a cancel.
 struct EmitterLattices
 {
-    std::vector<std::pair<int, openvdb::MaskGrid::Ptr>> lattices; ///< (n, its voxels), n >= 2
-    double samples = 0.0;                                        ///< kernels they will make, at most
+    struct Lattice
+    {
+        int n;                                 ///< >= 2
+        openvdb::MaskGrid::Ptr voxels, cells; ///< its voxels and the cells around them (cellsAround)
+    };
+    std::vector<Lattice> lattices;
+    double samples = 0.0; ///< kernels they will make, at most
     bool lowered = false;
 };
 EmitterLattices emitterLattices(const openvdb::FloatGrid& light, const GridSource::Impl& grid, const RenderSettings& settings,
@@ -386,17 +383,19 @@ EmitterLattices emitterLattices(const openvdb::FloatGrid& light, const GridSourc
         add(*steep, steepFinest);
         if (refined.sampled) add(*refined.sampled, sampledFinest);
         double samples = 0.0;
+        std::vector<EmitterLattices::Lattice> lattices;
         for (int n = finest; n >= 2; --n) {
-            if (!masks[std::size_t(n)]) continue;
+            const openvdb::MaskGrid::Ptr& voxels = masks[std::size_t(n)];
+            if (!voxels) continue;
             for (int finer = n + 1; finer <= finest; ++finer) {
-                if (masks[std::size_t(finer)]) masks[std::size_t(n)]->tree().topologyDifference(masks[std::size_t(finer)]->tree());
+                if (masks[std::size_t(finer)]) voxels->tree().topologyDifference(masks[std::size_t(finer)]->tree());
             }
-            samples += double(cellsAround(*masks[std::size_t(n)])->activeVoxelCount()) * n * n * n;
+            if (voxels->tree().empty()) continue;
+            lattices.push_back({n, voxels, cellsAround(*voxels)});
+            samples += double(lattices.back().cells->activeVoxelCount()) * n * n * n;
         }
         if (samples <= within) {
-            for (int n = finest; n >= 2; --n) {
-                if (masks[std::size_t(n)] && !masks[std::size_t(n)]->tree().empty()) out.lattices.emplace_back(n, masks[std::size_t(n)]);
-            }
+            out.lattices = std::move(lattices);
             out.samples = samples;
             return out;
         }
@@ -418,22 +417,26 @@ EmitterKernels emitterKernels(const GridSource::Impl& grid, const RenderSettings
     // than the kernels already held leave (the renderer's check of them all).
     double within = std::min(kRefinedKernelBudget, budget ? budget->itemsWithin(0.25, kBytesPerKernel) : kRefinedKernelBudget);
     if (budget) within = std::min(within, budget->itemsWithin(1.0, kBytesPerKernel) - double(refined.kernelsHeld));
+    // Refine one grid's kernels where its per-voxel @a light asks for it, within what is left.
+    const auto refine = [&](KernelSet& set, std::vector<Rgb>& radiance, const openvdb::FloatGrid& light, const auto& makeLight) {
+        within -= double(set.kernels.size());
+        const EmitterLattices lattices = emitterLattices(light, grid, settings, lod, refined, within, progress);
+        within -= lattices.samples;
+        out.refinementLowered = out.refinementLowered || lattices.lowered;
+        for (const EmitterLattices::Lattice& lattice : lattices.lattices) {
+            refineEmitters(set, radiance, *lattice.voxels, *lattice.cells, lattice.n, alpha, progress, makeLight);
+        }
+    };
     if (grid.emission) {
         KernelSet set = kernelsOf(*grid.emission, grid, settings, lod, progress, budget);
         const Vec3d c = model.emitted(1.0);
         const Rgb colour{float(c.x), float(c.y), float(c.z)};
         std::vector<Rgb> radiance(set.kernels.size(), colour);
-        within -= double(set.kernels.size());
-        const EmitterLattices lattices = emitterLattices(*grid.emission->field, grid, settings, lod, refined, within, progress);
-        within -= lattices.samples;
-        out.refinementLowered = out.refinementLowered || lattices.lowered;
-        for (const auto& [n, sampled] : lattices.lattices) {
-            refineEmitters(set, radiance, *sampled, n, alpha, progress, [&] {
-                return [acc = grid.emission->field->getConstAccessor(), colour](const openvdb::Vec3d& p) mutable {
-                    return LightSample{std::max(double(openvdb::tools::BoxSampler::sample(acc, p)), 0.0), colour};
-                };
-            });
-        }
+        refine(set, radiance, *grid.emission->field, [&] {
+            return [acc = grid.emission->field->getConstAccessor(), colour](const openvdb::Vec3d& p) mutable {
+                return LightSample{std::max(double(openvdb::tools::BoxSampler::sample(acc, p)), 0.0), colour};
+            };
+        });
         append(out, set, radiance);
     }
     if (grid.temperature) {
@@ -455,19 +458,14 @@ EmitterKernels emitterKernels(const GridSource::Impl& grid, const RenderSettings
                 radiance[i] = Rgb{c.x(), c.y(), c.z()};
             }
         });
-        within -= double(set.kernels.size());
-        const EmitterLattices lattices = emitterLattices(*voxels.luminance, grid, settings, lod, refined, within, progress);
-        out.refinementLowered = out.refinementLowered || lattices.lowered;
-        for (const auto& [n, sampled] : lattices.lattices) {
-            refineEmitters(set, radiance, *sampled, n, alpha, progress, [&] {
-                return [acc = grid.temperature->field->getConstAccessor(), &model](const openvdb::Vec3d& p) mutable {
-                    if (!inTemperatureCell(acc, p)) return LightSample{};
-                    const double value = double(openvdb::tools::BoxSampler::sample(acc, p));
-                    const Vec3d c = model.blackbodyColour(value);
-                    return LightSample{model.blackbodyLuminance(value), Rgb{float(c.x), float(c.y), float(c.z)}};
-                };
-            });
-        }
+        refine(set, radiance, *voxels.luminance, [&] {
+            return [acc = grid.temperature->field->getConstAccessor(), &model](const openvdb::Vec3d& p) mutable {
+                if (!inTemperatureCell(acc, p)) return LightSample{};
+                const double value = double(openvdb::tools::BoxSampler::sample(acc, p));
+                const Vec3d c = model.blackbodyColour(value);
+                return LightSample{model.blackbodyLuminance(value), Rgb{float(c.x), float(c.y), float(c.z)}};
+            };
+        });
         append(out, set, radiance);
     }
     return out;

@@ -79,16 +79,9 @@ void sampleVoxel(const openvdb::Coord& ijk, const float (&v)[3][3][3], const Fin
         for (int j = 0; j < m; ++j)
             for (int k = 0; k < m; ++k) f[i][j][k] = f[i][j][k] < cutoff ? 0.0 : f[i][j][k] * share[i][j][k];
     const float spacing = float(1.0 / n);
-    for (int i = 1; i <= n; ++i)
-        for (int j = 1; j <= n; ++j)
-            for (int k = 1; k <= n; ++k) {
-                const double c = f[i][j][k];
-                const double laplacian = 6.0 * c - f[i - 1][j][k] - f[i + 1][j][k] - f[i][j - 1][k] - f[i][j + 1][k] -
-                                         f[i][j][k - 1] - f[i][j][k + 1];
-                const float w = float(c + alpha * laplacian); // quasi_interpolation.h on the fine lattice
-                if (w == 0.0f) continue;
-                out.push_back({Vec3d(ijk.x() + axis.offset[i], ijk.y() + axis.offset[j], ijk.z() + axis.offset[k]), w, spacing});
-            }
+    prefilterFineSamples(n, alpha, [&](int i, int j, int k) { return f[i][j][k]; }, [&](int i, int j, int k, float w) {
+        out.push_back({Vec3d(ijk.x() + axis.offset[i], ijk.y() + axis.offset[j], ijk.z() + axis.offset[k]), w, spacing});
+    });
 }
 
 /// Which unit kernels of @a set to refine at @a n (2) and which to keep (1; 0: not a unit
@@ -149,16 +142,15 @@ void voxelsToSample(const GridSource::Impl& grid, float cutoff, const KernelSet&
     for (const openvdb::Coord& c : modelled) acc.setValueOff(c);
 }
 
-/// The kernels of the cells around the voxels of @a sampled (cellsAround), one vector a leaf
-/// node of cells (in tree order).
-std::vector<std::vector<Kernel>> sampleVoxels(const GridSource::Impl& grid, const openvdb::MaskGrid& sampled, int n,
-    double alpha, float cutoff, Progress* progress)
+/// The kernels of @a cells, the cells around the voxels of @a sampled (cellsAround), one vector
+/// a leaf node of cells (in tree order).
+std::vector<std::vector<Kernel>> sampleVoxels(const GridSource::Impl& grid, const openvdb::MaskGrid& sampled,
+    const openvdb::MaskGrid& cells, int n, double alpha, float cutoff, Progress* progress)
 {
     using MaskLeaf = openvdb::MaskTree::LeafNodeType;
-    const openvdb::MaskGrid::Ptr cells = cellsAround(sampled);
     std::vector<const MaskLeaf*> leaves;
-    leaves.reserve(cells->tree().leafCount());
-    cells->tree().getNodes(leaves);
+    leaves.reserve(cells.tree().leafCount());
+    cells.tree().getNodes(leaves);
     std::vector<std::vector<Kernel>> perLeaf(leaves.size());
     const FineAxis axis(n);
     const FineTents tents(n);
@@ -253,18 +245,20 @@ Refinement refineKernels(const GridSource::Impl& grid, int n, double alpha, floa
     sampled.clear();
     Refinement result;
     std::vector<std::uint8_t> choice;
-    // The finest lattice whose kernels (at most n^3 a sampled voxel) fit the budget.
+    openvdb::MaskGrid::Ptr cells;
+    // The finest lattice whose kernels (at most n^3 a cell around the sampled voxels) fit the budget.
     for (n = std::min(n, kMaxRefinement); n > 1; --n) {
         choice = chooseRefined(grid, n, scale, set);
         voxelsToSample(grid, cutoff, set, choice, sampled);
-        if (double(cellsAround(sampled)->activeVoxelCount()) * n * n * n <= budget) break;
+        cells = cellsAround(sampled);
+        if (double(cells->activeVoxelCount()) * n * n * n <= budget) break;
         sampled.clear();
         result.lowered = true;
     }
     if (n <= 1 || sampled.tree().empty()) return result;
     result.n = n;
     result.sampledVoxels = sampled.activeVoxelCount();
-    std::vector<std::vector<Kernel>> samples = sampleVoxels(grid, sampled, n, alpha, cutoff, progress);
+    std::vector<std::vector<Kernel>> samples = sampleVoxels(grid, sampled, *cells, n, alpha, cutoff, progress);
 
     // The kernels that stay (in their order), then the samples (in the voxels' tree order).
     std::size_t total = 0;

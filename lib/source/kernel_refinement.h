@@ -51,6 +51,24 @@ struct FineTents
 void shareOf(const openvdb::MaskGrid::ConstAccessor& sampled, const openvdb::Coord& cell, const FineTents& tents,
     double (&share)[kMaxFine][kMaxFine][kMaxFine]);
 
+/// The prefiltered weights of a cell's fine samples (quasi_interpolation.h on the fine lattice:
+/// c + @a alpha x (6 c - its 6 neighbours)): @a value(i, j, k) reads the (n + 2)^3 sample values
+/// around the cell (index 0 and n + 1: one beyond each side); @a emit(i, j, k, w) receives each
+/// of its n^3 samples (i, j, k in 1 .. n) whose weight w is not 0.
+template <typename Value, typename Emit>
+void prefilterFineSamples(int n, double alpha, Value&& value, Emit&& emit)
+{
+    for (int i = 1; i <= n; ++i)
+        for (int j = 1; j <= n; ++j)
+            for (int k = 1; k <= n; ++k) {
+                const double c = value(i, j, k);
+                const double laplacian = 6.0 * c - value(i - 1, j, k) - value(i + 1, j, k) - value(i, j - 1, k) -
+                                         value(i, j + 1, k) - value(i, j, k - 1) - value(i, j, k + 1);
+                const float w = float(c + alpha * laplacian);
+                if (w != 0.0f) emit(i, j, k, w);
+            }
+}
+
 /// What refineKernels did.
 struct Refinement
 {
