@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Install the Debian 12 packages vdb_ewa needs to build, test and benchmark.
-# Idempotent: installs only what is missing. Uses sudo when not run as root. With --bench, also
+# Idempotent: installs only what is missing. Uses sudo when not run as root. With --test, also
+# what the Python module's and the Blender add-on's tests need (scripts/test.sh). With --bench, also
 # what bench/bench.py's image analyses need (numpy, pyopenvdb, OpenImageIO's Python module,
 # matplotlib) and bench/roofline (Google Benchmark, xsimd).
 set -euo pipefail
@@ -9,11 +10,17 @@ packages=(
   libopenvdb-dev libboost-iostreams-dev libopenexr-dev libimath-dev libtbb-dev libglm-dev
   libopencolorio-dev libopenimageio-dev
   libcli11-dev nlohmann-json3-dev libgtest-dev
+  pybind11-dev python3-dev python3-numpy  # the Python module (python/)
   libhwy-dev         # Highway: the SIMD rasteriser's per-target code and run-time dispatch
   libopenvdb-tools   # vdb_render: the peer the tests and benchmarks compare against
   openimageio-tools  # oiiotool: EXR -> PNG previews and image diffs
   clang libclang-rt-14-dev  # the sanitized test build and the libFuzzer harnesses (tests/fuzz)
 )
+if [ "${1:-}" = "--test" ]; then
+  # The Python module's test reads EXRs and writes VDBs with OpenVDB's own binding; the Blender
+  # add-on's test renders in Blender (plugins/blender).
+  packages+=(python3-openvdb python3-openimageio blender)
+fi
 if [ "${1:-}" = "--bench" ]; then
   packages+=(python3-numpy python3-openvdb python3-openimageio python3-matplotlib libbenchmark-dev libxsimd-dev)
 fi

@@ -5,7 +5,7 @@
 # in $VDB_EWA_ASSETS (default ../shared/grids) are used when present.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/install-deps.sh
+bash scripts/install-deps.sh --test
 cmake -S . -B build-tests -DCMAKE_BUILD_TYPE=Release -DVDB_EWA_BUILD_TESTS=ON -DVDB_EWA_WARNINGS_AS_ERRORS=ON
 cmake --build build-tests -j"$(nproc)"
 (cd build-tests && ctest --output-on-failure -j"$(nproc)")

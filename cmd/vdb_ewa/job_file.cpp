@@ -36,6 +36,33 @@ std::string word(const nlohmann::json& v, const std::string& where)
 
 } // namespace
 
+std::vector<std::string> optionArguments(const std::string& key, const nlohmann::json& value, bool flag, const std::string& where)
+{
+    if (flag) {
+        if (!value.is_boolean()) throw ValueError(where + ": expected true or false");
+        return value.get<bool>() ? std::vector<std::string>{"--" + key} : std::vector<std::string>{};
+    }
+    std::vector<std::string> args;
+    if (value.is_array()) {
+        if (value.empty()) throw ValueError(where + ": empty list");
+        // A list of lists repeats the option, once per inner list ("light": [[...], [...]]).
+        const bool repeated = value.front().is_array();
+        for (const auto& item : repeated ? value : nlohmann::json::array({value})) {
+            if (!item.is_array() || item.empty()) throw ValueError(where + ": expected a list of numbers or a list of such lists");
+            std::string joined;
+            for (const auto& element : item) {
+                if (element.is_array() || element.is_object()) throw ValueError(where + ": expected a list of numbers or a list of such lists");
+                joined += (joined.empty() ? "" : ",") + word(element, where);
+            }
+            args.push_back("--" + key);
+            args.push_back(joined);
+        }
+        return args;
+    }
+    if (value.is_object() || value.is_null()) throw ValueError(where + ": expected a string, number, true/false or list");
+    return {"--" + key, word(value, where)};
+}
+
 nlohmann::json readJsonObjectFile(const std::string& path, const std::string& kind, const std::string& entries)
 {
     std::error_code error;
@@ -72,30 +99,8 @@ std::vector<std::string> jobArguments(const std::string& path, const std::vector
         if (key == "job") throw ValueError(where + ": a job file cannot name another job file");
         if (!contains(knownOptions, key)) throw ValueError(path + ": unknown key '" + key + "' (keys are the long option names of vdb_ewa render --help)");
         if (contains(givenOnCommandLine, key)) continue;
-        if (contains(flags, key)) {
-            if (!value.is_boolean()) throw ValueError(where + ": expected true or false");
-            if (value.get<bool>()) args.push_back("--" + key);
-            continue;
-        }
-        if (value.is_array()) {
-            if (value.empty()) throw ValueError(where + ": empty list");
-            // A list of lists repeats the option, once per inner list ("light": [[...], [...]]).
-            const bool repeated = value.front().is_array();
-            for (const auto& item : repeated ? value : nlohmann::json::array({value})) {
-                if (!item.is_array() || item.empty()) throw ValueError(where + ": expected a list of numbers or a list of such lists");
-                std::string joined;
-                for (const auto& element : item) {
-                    if (element.is_array() || element.is_object()) throw ValueError(where + ": expected a list of numbers or a list of such lists");
-                    joined += (joined.empty() ? "" : ",") + word(element, where);
-                }
-                args.push_back("--" + key);
-                args.push_back(joined);
-            }
-            continue;
-        }
-        if (value.is_object() || value.is_null()) throw ValueError(where + ": expected a string, number, true/false or list");
-        args.push_back("--" + key);
-        args.push_back(word(value, where));
+        const std::vector<std::string> option = optionArguments(key, value, contains(flags, key), where);
+        args.insert(args.end(), option.begin(), option.end());
     }
     if (!positionalsGiven) {
         if (positionals[0].empty() || positionals[1].empty()) {

@@ -24,6 +24,12 @@ namespace vdb_ewa::cli {
 std::vector<std::string> jobArguments(const std::string& path, const std::vector<std::string>& knownOptions,
     const std::vector<std::string>& flags, const std::vector<std::string>& givenOnCommandLine, bool positionalsGiven);
 
+/// The command-line arguments of the option --@a key set to @a value (a job file's entry, or a
+/// Python keyword argument), by the rules above; @a flag: the option takes no value (true
+/// gives it, false leaves it out). @a where names the entry in errors.
+/// @throw ValueError for a value of the wrong kind.
+std::vector<std::string> optionArguments(const std::string& key, const nlohmann::json& value, bool flag, const std::string& where);
+
 /// The JSON object in the regular file @a path (a directory or a FIFO is refused before it is
 /// opened: a FIFO with no writer would block the open). @a kind names the file in errors ("job",
 /// "camera"), @a entries what its object holds ("option: value").

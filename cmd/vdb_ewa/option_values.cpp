@@ -6,6 +6,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
+#include <iomanip>
 #include <sstream>
 
 namespace vdb_ewa::cli {
@@ -41,6 +42,15 @@ double parseBytes(const std::string& option, const std::string& text)
     if (!suffix.empty()) v *= std::pow(1024.0, double(u + 1));
     return v;
 }
+
+std::string fmt(double v)
+{
+    std::ostringstream s;
+    s << std::setprecision(6) << v;
+    return s.str();
+}
+
+std::string fmt3(const Vec3d& v) { return fmt(v.x) + "," + fmt(v.y) + "," + fmt(v.z); }
 
 Vec3d parseVec3(const std::string& option, const std::string& text, bool allowBroadcast)
 {

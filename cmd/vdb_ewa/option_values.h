@@ -17,6 +17,11 @@ namespace vdb_ewa::cli {
 std::vector<double> parseNumbers(const std::string& option, const std::string& text);
 /// "X,Y,Z", or one number for all three (vdb_render's strToVec3d).
 Vec3d parseVec3(const std::string& option, const std::string& text, bool allowBroadcast);
+/// A number as -v and the EXR header print it (6 significant digits).
+std::string fmt(double v);
+/// "X,Y,Z" of fmt().
+std::string fmt3(const Vec3d& v);
+
 /// "WxH" or "W,H", both >= 1.
 void parseResolution(const std::string& text, int& width, int& height);
 

@@ -69,7 +69,8 @@ void OutputOptions::add(CLI::App* app)
 
 void OutputOptions::prepare(const std::string& output, const std::string& preview, std::vector<std::string>& warnings)
 {
-    const std::optional<ImageFormat> format = imageFormatOf(output);
+    // No output: the frame stays in memory (the Python module), as an EXR would hold it.
+    const std::optional<ImageFormat> format = output.empty() ? ImageFormat::Exr : imageFormatOf(output);
     if (!format) throw ValueError(output + ": unsupported output format (expected " + imageFormatExtensions() + ")");
     mFormat = *format;
     mExr.colorType = mExrType.empty() ? ExrPixelType::Half : parseChoice("exr-type", mExrType, kExrTypes);
@@ -146,7 +147,7 @@ void OutputOptions::prepare(const std::string& output, const std::string& previe
         throw ValueError("--display and --view choose the transform of 8-bit outputs (.png, .jpg, .tif, .ppm) and --preview; " +
                          output + " is scene-referred");
     }
-    checkOutputWritable(output);
+    if (!output.empty()) checkOutputWritable(output);
 }
 
 void OutputOptions::toWorkingSpace(RenderSettings& rs, std::vector<std::string>& warnings) const
@@ -239,18 +240,9 @@ void OutputOptions::write(Frame& frame, const Camera& camera, const std::string&
     if (!preview.empty()) writeImage(workingBeauty, preview, &*toDisplay, {mDisplaySpace, attributes});
 }
 
-void OutputOptions::writeExrInOutputSpace(Frame& frame, const Camera& camera, const std::string& output,
-    const Attributes& attributes) const
+void OutputOptions::toOutputSpace(Frame& frame) const
 {
     const ColorTransform toOutput = ColorTransform::between(*mConfig, mWorkingSpace, mOutputSpace);
-    ExrOptions exr = mExr;
-    exr.camera = &camera;
-    exr.attributes = attributes;
-    // The colour space by name, besides the chromaticities: OpenImageIO's attribute and the
-    // Color Interop Forum's identifier (docs/output.md#colour-management-opencolorio-21).
-    exr.attributes.emplace_back("oiio:ColorSpace", mOutputSpace);
-    const std::string interopId = colorInteropIdOf(*mConfig, mOutputSpace);
-    if (!interopId.empty()) exr.attributes.emplace_back("colorInteropID", interopId);
     if (mPasses.deep) {
         // Deep samples are premultiplied by their own alpha: convert each as a pixel.
         std::vector<float> rgba(frame.deep.samples.size() * 4);
@@ -266,7 +258,6 @@ void OutputOptions::writeExrInOutputSpace(Frame& frame, const Camera& camera, co
             d.g = rgba[4 * i + 1];
             d.b = rgba[4 * i + 2];
         }
-        writeDeepExr(frame.deep, output, exr);
         return;
     }
     const std::size_t pixels = frame.beauty.rgba.size() / 4;
@@ -282,7 +273,22 @@ void OutputOptions::writeExrInOutputSpace(Frame& frame, const Camera& camera, co
         for (std::size_t i = 0; i < pixels; ++i) std::copy_n(&rgba[4 * i], 3, &(*pass)[3 * i]);
     }
     toOutput.applyPremultiplied(frame.beauty.rgba.data(), pixels);
-    writeExr(frame, output, exr);
+}
+
+void OutputOptions::writeExrInOutputSpace(Frame& frame, const Camera& camera, const std::string& output,
+    const Attributes& attributes) const
+{
+    ExrOptions exr = mExr;
+    exr.camera = &camera;
+    exr.attributes = attributes;
+    // The colour space by name, besides the chromaticities: OpenImageIO's attribute and the
+    // Color Interop Forum's identifier (docs/output.md#colour-management-opencolorio-21).
+    exr.attributes.emplace_back("oiio:ColorSpace", mOutputSpace);
+    const std::string interopId = colorInteropIdOf(*mConfig, mOutputSpace);
+    if (!interopId.empty()) exr.attributes.emplace_back("colorInteropID", interopId);
+    toOutputSpace(frame);
+    if (mPasses.deep) writeDeepExr(frame.deep, output, exr);
+    else writeExr(frame, output, exr);
 }
 
 } // namespace vdb_ewa::cli

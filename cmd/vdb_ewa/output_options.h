@@ -25,8 +25,9 @@ public:
     void add(CLI::App* app);
 
     /// Everything that can fail before rendering: the config (warnings for fallbacks), the
-    /// colour spaces, display and view, the option words, the paths @a output and @a preview
-    /// (the first frame's; empty: no preview).
+    /// colour spaces, display and view, the option words, the paths @a output (empty: none,
+    /// the frame is kept in memory as an EXR would hold it) and @a preview (the first frame's;
+    /// empty: no preview).
     /// @throw ValueError or IoError naming the option or path.
     void prepare(const std::string& output, const std::string& preview, std::vector<std::string>& warnings);
 
@@ -54,6 +55,10 @@ public:
     /// link is the same file. Paths that do not exist yet are no input.
     /// @throw ValueError naming the output and the input.
     void refuseInputs(const std::string& output, const std::string& preview, std::vector<std::string> inputs) const;
+
+    /// Convert @a frame (the beauty, the shadow and emission passes, deep samples) from the
+    /// working space to --output-space in place, as an EXR holds it (after prepare).
+    void toOutputSpace(Frame& frame) const;
 
     /// Write @a frame to @a output in its format: an EXR (flat or deep) or .hdr converted from
     /// the working to the output space, an 8-bit image through --display and --view; then the

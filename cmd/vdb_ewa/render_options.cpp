@@ -1,0 +1,394 @@
+/// @file render_options.cpp
+#include "render_options.h"
+
+#include "camera_file_option.h"
+#include "frame_sequence.h"
+#include "option_values.h"
+
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
+#include <unistd.h>
+
+namespace vdb_ewa::cli {
+namespace {
+
+const Choices<Quality> kQualities = {{"draft", Quality::Draft}, {"default", Quality::Default}, {"high", Quality::High}, {"final", Quality::Final}};
+const Choices<Method> kMethods = {{"splat", Method::Splat}, {"raymarch", Method::RayMarch}, {"raymarch-gaussian", Method::RayMarchGaussian}};
+const Choices<AntiAliasing> kAntiAliasing = {{"ewa", AntiAliasing::Ewa}, {"floor", AntiAliasing::Floor}, {"swan", AntiAliasing::Swan}, {"none", AntiAliasing::None}};
+const Choices<ExpEvaluation> kExpEvaluations = {
+    {"incremental", ExpEvaluation::Incremental}, {"exact", ExpEvaluation::Exact}, {"table", ExpEvaluation::Table}};
+const Choices<bool> kOnOff = {{"on", true}, {"off", false}};
+const Choices<bool> kPrecisions = {{"double", true}, {"float", false}}; // doublePrecision
+const Choices<SurfaceShader> kShaders = {{"diffuse", SurfaceShader::Diffuse}, {"matte", SurfaceShader::Matte},
+    {"normal", SurfaceShader::Normal}, {"position", SurfaceShader::Position}};
+
+/// @a camera's settings with its orientation named (for the exact record): the default
+/// target made an explicit --lookat, looking down -z made --rotate 0,0,0, and a replaced
+/// --up made the axis Camera used.
+CameraSettings explicitCamera(const Camera& camera, const Vec3d& defaultTarget)
+{
+    CameraSettings s = camera.settings();
+    if (s.rotate || s.lookAt) return s;
+    if (camera.looksDownZByDefault()) {
+        s.rotate = Vec3d(0.0);
+        return s;
+    }
+    s.lookAt = defaultTarget;
+    if (camera.upReplacedByDefault()) {
+        const Mat3d& r = camera.cameraFromWorld(); // rows: right, down, forward
+        const Vec3d back = -Vec3d(r[0][2], r[1][2], r[2][2]);
+        s.up = std::abs(back.z) < 0.9 ? Vec3d(0, 0, back.y > 0.0 ? 1.0 : -1.0) : Vec3d(1, 0, 0);
+    }
+    return s;
+}
+
+std::string hostName()
+{
+    char name[256] = {};
+    return gethostname(name, sizeof name - 1) == 0 ? std::string(name) : std::string("unknown");
+}
+
+} // namespace
+
+void RenderOptions::add(CLI::App* app)
+{
+    mApp = app;
+    const RenderSettings rs;
+    const CameraSettings cs;
+    mApp->add_option("--name,--density-grid", mName,
+        "grid to render, as the density of a fog volume or a level set; --density-grid is the same option under the "
+        "name a pyro cache's user looks for (default: the first scalar float or double grid, as vdb_render)");
+    // Camera (vdb_render semantics).
+    mApp->add_option("--camera-file", mCameraFile,
+        "take the camera from a file: an .exr rendered by vdb_ewa (the same camera exactly) or by another renderer "
+        "(its worldToCamera), or a .json of camera options or a worldToCamera matrix (docs/output.md); the camera "
+        "options given here override its values");
+    mApp->add_option("--res", mRes, "image size in pixels, WxH, each in [1, 65536] and at most 2^27 pixels in all (16384x8192) (default: 1920x1080)");
+    mApp->add_option("-t,--translate", mTranslate, "camera position X,Y,Z in world units (default: 0,0,0)");
+    mApp->add_option("-r,--rotate", mRotate,
+        "camera rotation X,Y,Z in degrees, applied about x, then y, then z (default: look at the "
+        "centre of the grid's active voxels)");
+    mApp->add_option("--lookat", mLookAt, "aim the camera at the world point X,Y,Z");
+    mApp->add_option("--up", mUp, "world vector that points up after --lookat (default: 0,1,0)");
+    mApp->add_option("--camera", mCamera, "camera type: persp[ective] or ortho[graphic] (default: perspective)");
+    mApp->add_option("--fov", mFov, "horizontal field of view in degrees (default: " + fmt(cs.fieldOfView()) + ", from --focal and --aperture)");
+    mApp->add_option("--focal", mFocal, "perspective focal length in mm (default: " + fmt(cs.focal) + ")");
+    mApp->add_option("--aperture", mAperture, "perspective frame width in mm (default: " + fmt(cs.aperture) + ")");
+    mApp->add_option("--frame", mFrame, "orthographic frame width in world units (default: " + fmt(cs.frame) + ")");
+    mApp->add_option("--near", mNear, "near plane depth in world units (default: " + fmt(cs.near) + ")");
+    mApp->add_option("--far", mFar, "far plane depth in world units (default: " + fmt(cs.far) + ")");
+    // Optical model (vdb_render's dense-volume model).
+    mApp->add_option("--absorb", mAbsorb, "absorption R,G,B per unit density per voxel length, each in [0, 1e6] (default: " + fmt3(rs.medium.absorb) + ")");
+    mApp->add_option("--scatter", mScatter, "scattering R,G,B per unit density per voxel length, each in [0, 1e6] (default: " + fmt3(rs.medium.scatter) + ")");
+    mApp->add_option("--light", mLights,
+            "directional light: direction towards it X,Y,Z (any non-zero length)[,R,G,B] with optional colour, each in [0, 1e6]; "
+            "repeat for more lights (at most " + std::to_string(kMaxLights) + "), each with its own shadows; their light adds (default: one, " +
+                fmt3(rs.lights.front().direction) + "," + fmt3(rs.lights.front().color) + ")")
+        ->allow_extra_args(false);
+    mApp->add_option("--emission", mEmission,
+        "self-emission R,G,B per unit density per voxel length, each in [0, 1e6], added to the scattered light (default: " +
+            fmt3(rs.medium.emission) + ")");
+    mApp->add_option("--ambient", mAmbient,
+        "constant ambient (sky) light R,G,B, never shadowed, scattered like --light: a fill for fog volumes; each in "
+        "[0, 1e6], in --input-space (default: 0,0,0)");
+    mApp->add_option("--environment", mEnvironment,
+        "latitude-longitude environment image (.exr, .hdr; OpenEXR's and USD's orientation: +Y up, its centre facing +Z), RGB radiance in --input-space: "
+        "a low-order, shadowed fill, added to --light as --environment-lights directional lights (default: none)");
+    mApp->add_option("--environment-lights", mEnvironmentLights,
+        "lights the environment becomes, each from the part of the sphere nearest its direction, in [1, " +
+            std::to_string(kMaxLights) + "] (default: 16)");
+    mApp->add_option("--environment-intensity", mEnvironmentIntensity, "multiplies the environment's radiance, >= 0 (default: 1)");
+    mApp->add_option("--gain", mGain, "shadow-ray extinction falls as 1/(1 + gain * distance in voxels) (default: " + fmt(rs.shadow.gain) + ")");
+    mApp->add_option("--cutoff", mCutoff,
+        "density cutoff, and rays stop where |transmittance RGB|^2 < cutoff (default: " + fmt(rs.cutoff) + ")");
+    mApp->add_option("--shadowstep", mShadowStep, "shadow-ray step in voxels, >= 0.001; the light map's budget may raise it (docs/numerics.md) (default: " + fmt(rs.shadow.step) + ")");
+    mApp->add_option("--shadow-res", mShadowRes, "light map: shadow rays every N voxels across the light, interpolated in between; range [0.25, 16] (default: " + fmt(rs.shadow.resolution) + ")");
+    mApp->add_option("--step", mStep, "primary-ray step in voxels for --method raymarch (default: " + fmt(rs.step) + "); the splatter has no primary rays and ignores it");
+    mApp->add_option("--method", mMethod, "splat (EWA volume splatting), raymarch (the reference: ray-marches the trilinear field with a shadow ray per sample, as vdb_render; slow) or raymarch-gaussian (diagnostic: ray-marches the splatter's own Gaussian reconstruction and per-kernel shadows) (default: splat)");
+    // EWA splatting.
+    mApp->add_option("--kernel-sigma", mKernelSigma, "reconstruction kernel std. deviation in voxels, range [0.1, 4] (default: " + fmt(rs.splat.kernelSigma) + ")");
+    mApp->add_option("--surface-sigma", mSurfaceSigma, "level sets and --iso: surface kernel std. deviation along the surface in voxels, range [0.1, 4] (default: " + fmt(rs.surface.sigma) + ")");
+    mApp->add_option("--lowpass", mLowpass, "screen-space low-pass filter variance in pixels^2 (default: " + fmt(rs.splat.lowpass) + ")");
+    mApp->add_option("--aa", mAa, "anti-aliasing: floor (each footprint axis at least --lowpass wide), ewa (resampling filter, Eq. 33: always adds --lowpass), swan (uniform scaling) or none (default: floor)");
+    mApp->add_option("--cutoff-radius", mCutoffRadius, "footprint cut-off radius in std. deviations (default: " + fmt(rs.splat.cutoffRadius) + ")");
+    mApp->add_option("--slab", mSlab, "image-aligned slab thickness in voxel lengths (default: " + fmt(rs.splat.slab) + ")");
+    mApp->add_option("--quality", mQuality,
+        "preset of the speed/accuracy knobs: draft, default, high or final (refined kernels); explicit options override it "
+        "(values in docs/performance.md) (default: default)");
+    mApp->add_option("--exp", mExp, "footprint exp(-r/2): incremental (forward differencing), exact or table (default: incremental)");
+    mApp->add_option("--prefilter", mPrefilter, "on: quasi-interpolating kernel weights (the Gaussian sum keeps the trilinear field's sharpness; negative halo kernels at its faces); off: each kernel weighs its voxel's value (default: on)");
+    mApp->add_option("--renormalize", mRenormalize, "on: divide footprints by the mass kept inside --cutoff-radius; off: keep the truncated mass (default: on)");
+    mApp->add_option("--taper", mTaper, "on: footprints are the Gaussian less its value at --cutoff-radius, falling to 0 at their edge (no step to flicker as they move); off: truncated (default: off, draft on)");
+    mApp->add_option("--precision", mPrecision, "world-to-camera transform and covariances in double or float (default: double)");
+    mApp->add_option("--tile-spacing", mTileSpacing, "largest kernel spacing in voxels for active tiles, 1 to voxelise them (default: 4)");
+    mApp->add_option("--refine", mRefine, "where voxels span N pixels or more, their kernels on a lattice N times finer: the trilinear field sampled every 1/N voxel (emission and temperature grids too), kernels N times narrower, N^3 as many; range [1, 4], 1 = off (default: " + std::to_string(rs.splat.refine) + ")");
+    mApp->add_option("--refine-emission", mRefineEmission, "emission and temperature grids where their light does not go as the density (light over density changes several-fold between neighbouring voxels) in optically thick density: the light sampled every 1/n voxel, n up to N as the voxels span n pixels or more (2 at least); --refine refines the emitters too; range [1, 4], 1 = off (default: " + std::to_string(rs.splat.refineEmission) + "; draft 1, high and final 4)");
+    mApp->add_option("--lod", mLod, "level of detail, pixels in [0, 64]: fog volumes: blocks of 2, 4 or 8 voxels a side become one kernel where the block projects to at most this many pixels, each voxel shared between two block sizes continuously with distance (no popping); level sets: one surface kernel a 2^3 or 4^3 block of voxels (for each sheet through it) where the block projects to at most a quarter as many; 0 = off (default: " + fmt(rs.splat.lodPixels) + ")");
+    mApp->add_option("--lod-error", mLodError, "level of detail, fog volumes: a block wider than a pixel merges only where its values are smooth: the transmittance through any depth of it differs by at most this much between its columns; range [0, 1], 1 = by screen size alone (default: " + fmt(rs.splat.lodError) + ", draft 0.25)");
+    // Fog volumes with an iso-surface.
+    mApp->add_option("--iso", mIso,
+        "fog volumes: also render the iso-surface density = VALUE with flattened surface kernels, lit by "
+        "--light and composited with the volume (default: off)");
+    mApp->add_option("--iso-opacity", mIsoOpacity, "opacity of the --iso surface, 0..1 (default: 1)");
+    // Level sets (vdb_render's level-set options).
+    mApp->add_option("--isovalue", mIsovalue, "level sets: iso-surface to render, in world units (default: " + fmt(rs.surface.isovalue) + ")");
+    mApp->add_option("--shader", mShader,
+        "level sets: diffuse (|N.ray|, a light at the camera), matte (white), normal ((N+1)/2) or position "
+        "(world position in the active bounding box) (default: diffuse)");
+    mApp->add_option("--color", mColor,
+        "name of a vec3s grid in the input file with material colours, sampled trilinearly: level sets multiply "
+        "the shader by it, fog volumes the scattering albedo (and the --iso surface's colour) (default: white)");
+    // Emission from grids (pyro caches).
+    const GridEmission ge;
+    mApp->add_option("--emission-grid", mEmissionGrid,
+        "name of a float grid in the input file that emits light wherever it is, whatever the density (a pyro cache's "
+        "flame): radiance --emission-color x --emission-intensity x value per voxel length (default: none)");
+    mApp->add_option("--emission-color", mEmissionColor,
+        "colour R,G,B of --emission-grid, each in [0, 1e6], in --input-space (default: " + fmt3(ge.color) + ")");
+    mApp->add_option("--emission-intensity", mEmissionIntensity,
+        "multiplies --emission-color, in [0, 1e6] (default: " + fmt(ge.intensity) + ")");
+    mApp->add_option("--temperature", mTemperatureGrid,
+        "name of a float grid in the input file whose values are temperatures: blackbody emission of Planck's law "
+        "(CIE 1931 colour, luminance --blackbody-intensity x 1e-6 sigma T^4 / pi per voxel length, Blender's Principled "
+        "Volume) wherever it is, whatever the density (default: none)");
+    mApp->add_option("--temperature-scale", mKelvinScale,
+        "Kelvin per unit of --temperature's values: Kelvin = value x scale + offset (Blender: the node's Temperature; "
+        "Houdini: T1 - T0) (default: " + fmt(ge.kelvinScale) + ")");
+    mApp->add_option("--temperature-offset", mKelvinOffset,
+        "Kelvin at value 0 (Houdini: T0), within 1e6 (default: " + fmt(ge.kelvinOffset) + ")");
+    mApp->add_option("--blackbody-intensity", mBlackbodyIntensity,
+        "multiplies the blackbody's radiance, in [0, 1e6]; 1 is physically based (default: " + fmt(ge.blackbodyIntensity) + ")");
+    mApp->add_option("--samples", mSamples,
+        "level sets: vdb_render's rays per pixel; accepted for compatibility, the EWA filter anti-aliases "
+        "without extra samples (default: 1)");
+    mApp->add_option("--threads,--cpus", mThreads, "worker threads, 0 = all cores (default: 0)");
+    mApp->add_option("--simd", mSimd,
+        "on: the volume rasteriser uses the CPU's vector unit (AVX-512 or AVX2, detected at run time; images within "
+        "1e-5 of off); off: one pixel at a time, the reference it is tested against (default: on)");
+    mApp->add_option("--max-memory", mMaxMemory,
+        "memory budget of a frame in bytes, with an optional K, M, G or T suffix (powers of 1024), range [64M, 1e18]; "
+        "a frame that would need more stops before allocating it (exit 5) (default: 0 = 3/4 of the physical memory)");
+    mOutputOptions.add(mApp);
+}
+
+CameraSettings RenderOptions::cameraFor(std::optional<int> frame) const
+{
+    CameraSettings cam;
+    if (!mCameraFile.empty()) {
+        cam = readCameraFile(frame ? framePath(mCameraFile, *frame) : mCameraFile, frame.value_or(0));
+        // A rotation or a target given here replaces the file's, whichever it had.
+        if (!mRotate.empty()) cam.lookAt.reset();
+        if (!mLookAt.empty()) cam.rotate.reset();
+    }
+    if (!mRes.empty()) parseResolution(mRes, cam.width, cam.height);
+    if (!mTranslate.empty()) cam.translate = parseVec3("translate", mTranslate, true);
+    if (!mRotate.empty()) cam.rotate = parseVec3("rotate", mRotate, true);
+    if (!mLookAt.empty()) cam.lookAt = parseVec3("lookat", mLookAt, true);
+    if (!mUp.empty()) cam.up = parseVec3("up", mUp, true);
+    if (!mCamera.empty()) {
+        if (mCamera.rfind("persp", 0) == 0) cam.projection = Projection::Perspective;
+        else if (mCamera.rfind("ortho", 0) == 0) cam.projection = Projection::Orthographic;
+        else throw ValueError("--camera: expected perspective or orthographic, got '" + mCamera + "'");
+    }
+    if (mFov && mFocal) throw ValueError("specify --focal or --fov, but not both");
+    if (mAperture) cam.aperture = *mAperture;
+    if (mFocal) cam.focal = *mFocal;
+    if (mFov) cam.setFieldOfView(*mFov);
+    if (mFrame) cam.frame = *mFrame;
+    if (mNear) cam.near = *mNear;
+    if (mFar) cam.far = *mFar;
+    return cam;
+}
+
+void RenderOptions::resolve(std::optional<int> frame, CameraSettings& cam, RenderSettings& rs) const
+{
+    if (!mQuality.empty()) rs = RenderSettings::preset(parseChoice("quality", mQuality, kQualities));
+    cam = cameraFor(frame);
+    if (!mAbsorb.empty()) rs.medium.absorb = parseVec3("absorb", mAbsorb, true);
+    if (!mScatter.empty()) rs.medium.scatter = parseVec3("scatter", mScatter, true);
+    if (!mEmission.empty()) rs.medium.emission = parseVec3("emission", mEmission, true);
+    if (!mAmbient.empty()) rs.ambient = parseVec3("ambient", mAmbient, true);
+    if (!mLights.empty()) {
+        const Light defaults;
+        rs.lights.clear();
+        for (const std::string& text : mLights) {
+            const std::vector<double> v = parseNumbers("light", text);
+            if (v.size() != 3 && v.size() != 6) throw ValueError("--light: expected X,Y,Z or X,Y,Z,R,G,B, got '" + text + "'");
+            Light light = defaults;
+            light.direction = Vec3d(v[0], v[1], v[2]);
+            if (v.size() == 6) light.color = Vec3d(v[3], v[4], v[5]);
+            rs.lights.push_back(light);
+        }
+    }
+    if (!mEmissionColor.empty()) rs.gridEmission.color = parseVec3("emission-color", mEmissionColor, true);
+    if (mEmissionIntensity) rs.gridEmission.intensity = *mEmissionIntensity;
+    if (mKelvinScale) rs.gridEmission.kelvinScale = *mKelvinScale;
+    if (mKelvinOffset) rs.gridEmission.kelvinOffset = *mKelvinOffset;
+    if (mBlackbodyIntensity) rs.gridEmission.blackbodyIntensity = *mBlackbodyIntensity;
+    mEnvironmentLightCount = 0;
+    if (!mEnvironment.empty()) {
+        // Read once: validate() and run() both resolve.
+        if (!mEnvironmentFill) mEnvironmentFill = environmentLights(readLatLongImage(mEnvironment), mEnvironmentLights, mEnvironmentIntensity);
+        const std::vector<Light>& fill = *mEnvironmentFill;
+        if (rs.lights.size() + fill.size() > kMaxLights) {
+            throw ValueError("--environment-lights: " + std::to_string(fill.size()) + " environment lights and " + std::to_string(rs.lights.size()) +
+                             " --light options exceed " + std::to_string(kMaxLights) + " lights");
+        }
+        rs.lights.insert(rs.lights.end(), fill.begin(), fill.end());
+        mEnvironmentLightCount = fill.size();
+    }
+    if (mGain) rs.shadow.gain = *mGain;
+    if (mCutoff) rs.cutoff = *mCutoff;
+    if (mShadowStep) rs.shadow.step = *mShadowStep;
+    if (mShadowRes) rs.shadow.resolution = *mShadowRes;
+    if (mStep) rs.step = *mStep;
+    if (!mMethod.empty()) rs.method = parseChoice("method", mMethod, kMethods);
+    if (mKernelSigma) rs.splat.kernelSigma = *mKernelSigma;
+    if (mSurfaceSigma) rs.surface.sigma = *mSurfaceSigma;
+    if (mLowpass) rs.splat.lowpass = *mLowpass;
+    if (!mAa.empty()) rs.splat.antiAliasing = parseChoice("aa", mAa, kAntiAliasing);
+    if (mCutoffRadius) rs.splat.cutoffRadius = *mCutoffRadius;
+    if (!mExp.empty()) rs.splat.expEvaluation = parseChoice("exp", mExp, kExpEvaluations);
+    if (!mRenormalize.empty()) rs.splat.renormalize = parseChoice("renormalize", mRenormalize, kOnOff);
+    if (!mTaper.empty()) rs.splat.taper = parseChoice("taper", mTaper, kOnOff);
+    if (!mPrefilter.empty()) rs.splat.prefilter = parseChoice("prefilter", mPrefilter, kOnOff);
+    if (mTileSpacing) rs.splat.tileKernelSpacing = *mTileSpacing;
+    if (mRefine) rs.splat.refine = *mRefine;
+    if (mRefineEmission) rs.splat.refineEmission = *mRefineEmission;
+    if (!mPrecision.empty()) rs.splat.doublePrecision = parseChoice("precision", mPrecision, kPrecisions);
+    if (mSlab) rs.splat.slab = *mSlab;
+    if (mLod) rs.splat.lodPixels = *mLod;
+    if (mLodError) rs.splat.lodError = *mLodError;
+    if (mIsovalue) rs.surface.isovalue = *mIsovalue;
+    if (mIso) rs.surface.iso = *mIso;
+    if (mIsoOpacity) rs.surface.isoOpacity = *mIsoOpacity;
+    if (!mShader.empty()) rs.surface.shader = parseChoice("shader", mShader, kShaders);
+    if (mSamples && *mSamples < 1) throw ValueError("--samples must be >= 1");
+    rs.threads = mThreads;
+    if (!mSimd.empty()) rs.simd = parseChoice("simd", mSimd, kOnOff);
+    if (!mMaxMemory.empty()) rs.maxMemory = parseBytes("max-memory", mMaxMemory);
+}
+
+RenderSettings RenderOptions::prepare(const std::string& output, const std::string& preview, const RenderSettings& given,
+    std::vector<std::string>& warnings)
+{
+    mOutputOptions.prepare(output, preview, warnings); // colour config, spaces, output paths
+    RenderSettings working = given;
+    mOutputOptions.toWorkingSpace(working, warnings);
+    ignoredOptionWarnings(warnings);
+    if (!mTemperatureGrid.empty() && !mOutputOptions.hasLinearRec709()) {
+        warnings.push_back("--temperature: the OCIO config has no linear Rec.709 space, so the blackbody's Rec.709 colours are taken as "
+                           "working-space values (--ocio-config)");
+    }
+    return working;
+}
+
+GridSource RenderOptions::open(const std::string& path) const { return withExtraGrids(GridSource::open(path, mName)); }
+
+GridSource RenderOptions::withExtraGrids(const GridSource& opened) const
+{
+    GridSource grid = mColor.empty() ? opened : opened.withColorGrid(mColor);
+    if (!mEmissionGrid.empty()) grid = grid.withEmissionGrid(mEmissionGrid);
+    if (!mTemperatureGrid.empty()) grid = grid.withTemperatureGrid(mTemperatureGrid);
+    return grid;
+}
+
+Attributes RenderOptions::headerAttributes(const GridSource& grid, const Camera& camera, const RenderSettings& settings,
+    const std::string& input, double renderSeconds, std::optional<int> frame) const
+{
+    // What a lighter looks for in a file: the version, preset, host and render time.
+    Attributes attributes{{"software", std::string("vdb_ewa ") + versionString()}, {"vdb_ewa/input", input},
+        {"vdb_ewa/grid", grid.name()}, {"vdb_ewa/quality", mQuality.empty() ? "default" : mQuality}, {"vdb_ewa/host", hostName()},
+        {"vdb_ewa/render-seconds", fmt(std::round(renderSeconds * 1000.0) / 1000.0)}};
+    if (frame) attributes.emplace_back("vdb_ewa/frame", std::to_string(*frame));
+    attributes.emplace_back("vdb_ewa/camera-record", cameraRecord(explicitCamera(camera, grid.worldCentre())));
+    for (const Attributes& group : resolvedOptions(grid, camera, settings))
+        for (const auto& [key, value] : group) {
+            // The thread count never changes the image; leaving it out keeps the headers of
+            // two thread counts the same (but for the render time).
+            if (key != "threads") attributes.emplace_back("vdb_ewa/" + key, value);
+        }
+    return attributes;
+}
+
+std::vector<Attributes> RenderOptions::resolvedOptions(const GridSource& grid, const Camera& camera, const RenderSettings& rs) const
+{
+    const CameraSettings& c = camera.settings();
+    Attributes cameraGroup{{"camera", c.projection == Projection::Perspective ? "perspective" : "orthographic"},
+        {"res", std::to_string(c.width) + "x" + std::to_string(c.height)}, {"translate", fmt3(c.translate)}};
+    if (c.rotate) {
+        cameraGroup.emplace_back("rotate", fmt3(*c.rotate));
+    } else {
+        cameraGroup.emplace_back("lookat", fmt3(c.lookAt ? *c.lookAt : grid.worldCentre()));
+        cameraGroup.emplace_back("up", fmt3(c.up));
+    }
+    for (const auto& [k, v] : Attributes{{"focal", fmt(c.focal)}, {"aperture", fmt(c.aperture)}, {"fov", fmt(c.fieldOfView())},
+             {"frame", fmt(c.frame)}, {"near", fmt(c.near)}, {"far", fmt(c.far)}})
+        cameraGroup.emplace_back(k, v);
+    Attributes model{{"absorb", fmt3(rs.medium.absorb)}, {"scatter", fmt3(rs.medium.scatter)}, {"emission", fmt3(rs.medium.emission)},
+        {"light", lightsText({rs.lights.begin(), rs.lights.end() - std::ptrdiff_t(mEnvironmentLightCount)})}, {"ambient", fmt3(rs.ambient)}, {"gain", fmt(rs.shadow.gain)}, {"cutoff", fmt(rs.cutoff)},
+        {"shadowstep", fmt(rs.shadow.step)}, {"shadow-res", fmt(rs.shadow.resolution)}};
+    if (grid.hasColorGrid()) model.emplace_back("color", mColor);
+    if (!mEnvironment.empty()) {
+        model.emplace_back("environment", mEnvironment);
+        model.emplace_back("environment-lights", std::to_string(mEnvironmentLights));
+        model.emplace_back("environment-intensity", fmt(mEnvironmentIntensity));
+    }
+    if (grid.hasEmissionGrid()) {
+        model.emplace_back("emission-grid", mEmissionGrid);
+        model.emplace_back("emission-color", fmt3(rs.gridEmission.color));
+        model.emplace_back("emission-intensity", fmt(rs.gridEmission.intensity));
+    }
+    if (grid.hasTemperatureGrid()) {
+        model.emplace_back("temperature", mTemperatureGrid);
+        model.emplace_back("temperature-scale", fmt(rs.gridEmission.kelvinScale));
+        model.emplace_back("temperature-offset", fmt(rs.gridEmission.kelvinOffset));
+        model.emplace_back("blackbody-intensity", fmt(rs.gridEmission.blackbodyIntensity));
+    }
+    Attributes method{{"method", choiceName(rs.method, kMethods)}};
+    if (rs.method != Method::Splat) method.emplace_back("step", fmt(rs.step));
+    if (!grid.isLevelSet() && !std::isnan(rs.surface.iso)) {
+        method.emplace_back("iso", fmt(rs.surface.iso));
+        method.emplace_back("iso-opacity", fmt(rs.surface.isoOpacity));
+        method.emplace_back("surface-sigma", fmt(rs.surface.sigma));
+    }
+    if (grid.isLevelSet()) {
+        method.emplace_back("isovalue", fmt(rs.surface.isovalue));
+        method.emplace_back("shader", choiceName(rs.surface.shader, kShaders));
+        method.emplace_back("surface-sigma", fmt(rs.surface.sigma));
+    }
+    for (const auto& [k, v] : Attributes{{"kernel-sigma", fmt(rs.splat.kernelSigma)}, {"prefilter", choiceName(rs.splat.prefilter, kOnOff)}, {"lowpass", fmt(rs.splat.lowpass)},
+             {"aa", choiceName(rs.splat.antiAliasing, kAntiAliasing)}, {"cutoff-radius", fmt(rs.splat.cutoffRadius)},
+             {"renormalize", choiceName(rs.splat.renormalize, kOnOff)}, {"taper", choiceName(rs.splat.taper, kOnOff)}, {"exp", choiceName(rs.splat.expEvaluation, kExpEvaluations)},
+             {"precision", choiceName(rs.splat.doublePrecision, kPrecisions)}, {"slab", fmt(rs.splat.slab)},
+             {"tile-spacing", std::to_string(rs.splat.tileKernelSpacing)}, {"refine", std::to_string(rs.splat.refine)}, {"refine-emission", std::to_string(rs.splat.refineEmission)}, {"lod", fmt(rs.splat.lodPixels)}, {"lod-error", fmt(rs.splat.lodError)},
+             {"threads", std::to_string(rs.threads)}, {"simd", choiceName(rs.simd, kOnOff)}})
+        method.emplace_back(k, v);
+    return {cameraGroup, model, method, mOutputOptions.resolved()};
+}
+
+void RenderOptions::ignoredOptionWarnings(std::vector<std::string>& warnings) const
+{
+    const auto given = [&](const char* name) { return mApp->get_option(name)->count() > 0; };
+    const std::pair<const char*, std::vector<const char*>> groups[] = {
+        {"--emission-grid", {"--emission-color", "--emission-intensity"}},
+        {"--temperature", {"--temperature-scale", "--temperature-offset", "--blackbody-intensity"}},
+        {"--environment", {"--environment-lights", "--environment-intensity"}}};
+    for (const auto& [main, qualifiers] : groups) {
+        if (given(main)) continue;
+        for (const char* q : qualifiers) {
+            if (given(q)) warnings.push_back(std::string(q) + " changes nothing without " + main);
+        }
+    }
+}
+
+std::string RenderOptions::lightsText(const std::vector<Light>& lights, const std::string& separator)
+{
+    std::string out;
+    for (const Light& l : lights) out += (out.empty() ? "" : separator) + fmt3(l.direction) + "," + fmt3(l.color);
+    return out.empty() ? "none" : out;
+}
+
+} // namespace vdb_ewa::cli

@@ -1,0 +1,92 @@
+/// @file render_options.h
+/// @brief The options of one frame, shared by the CLI's render command and the Python module
+///        (python/): registered on a CLI11 app under vdb_render's names and defaults, then
+///        resolved to the camera, the render settings in the working space, the grid's extra
+///        grids, the output stage and the EXR header. The render command adds what belongs to
+///        a batch job (input, output, --frames, --job, verbosity).
+#pragma once
+
+#include "output_options.h"
+
+#include <vdb_ewa/vdb_ewa.h>
+
+#include <CLI/CLI.hpp>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace vdb_ewa::cli {
+
+class RenderOptions
+{
+public:
+    /// Register every option of one frame on @a app: the grid's names, the camera, the optical
+    /// model, splatting, execution and the output stage (OutputOptions::add).
+    void add(CLI::App* app);
+
+    /// The camera and render settings as given (colours in --input-space): --quality's preset,
+    /// then each option given. @a frame: the frame of a sequence (it picks --camera-file's file
+    /// and keyframe); none outside a sequence. @throw ValueError naming the option.
+    void resolve(std::optional<int> frame, CameraSettings& camera, RenderSettings& settings) const;
+    /// The camera of @a frame (as resolve()).
+    CameraSettings cameraFor(std::optional<int> frame) const;
+
+    /// Everything that can fail before rendering (OutputOptions::prepare; @a output empty: an
+    /// image kept in memory), then @a given's colours in the working space: the settings to
+    /// render with. Warnings (fallbacks, options that change nothing) go to @a warnings.
+    RenderSettings prepare(const std::string& output, const std::string& preview, const RenderSettings& given,
+        std::vector<std::string>& warnings);
+
+    /// The grid to render, @a path's --name grid (default: the first scalar floating-point grid).
+    GridSource open(const std::string& path) const;
+    /// @a grid with the --color, --emission-grid and --temperature grids of its file.
+    GridSource withExtraGrids(const GridSource& grid) const;
+    /// The --name given (empty: vdb_render's rule).
+    const std::string& gridName() const { return mName; }
+
+    /// The EXR header of a frame rendered from @a input (empty for a host's grid) in
+    /// @a renderSeconds: the software, input, grid, preset, host, time, @a frame (of a
+    /// sequence), the camera's exact record and every resolved option as vdb_ewa/NAME.
+    Attributes headerAttributes(const GridSource& grid, const Camera& camera, const RenderSettings& settings,
+        const std::string& input, double renderSeconds, std::optional<int> frame) const;
+    /// The resolved options in groups (camera, optical model, method and splatting, output),
+    /// as (option, value): printed by -v and written to the EXR header.
+    std::vector<Attributes> resolvedOptions(const GridSource& grid, const Camera& camera, const RenderSettings& settings) const;
+
+    /// --camera-file and --environment as given (empty: none): inputs an output must not overwrite.
+    const std::string& cameraFile() const { return mCameraFile; }
+    const std::string& environment() const { return mEnvironment; }
+    OutputOptions& output() { return mOutputOptions; }
+    const OutputOptions& output() const { return mOutputOptions; }
+
+    /// The lights as --light takes them, X,Y,Z,R,G,B each, separated by @a separator ("none"
+    /// without).
+    static std::string lightsText(const std::vector<Light>& lights, const std::string& separator = "; ");
+
+private:
+    /// A line for each option given without the one it qualifies: it would change nothing.
+    void ignoredOptionWarnings(std::vector<std::string>& warnings) const;
+
+    CLI::App* mApp = nullptr;
+    std::string mCameraFile, mName, mRes, mTranslate, mRotate, mLookAt, mUp, mCamera;
+    std::vector<std::string> mLights;
+    std::string mAbsorb, mScatter, mEmission, mAmbient, mAa, mMethod, mQuality, mExp, mRenormalize, mTaper, mPrefilter, mPrecision;
+    std::optional<int> mTileSpacing, mRefine, mRefineEmission, mSamples;
+    std::optional<double> mShadowRes;
+    std::optional<double> mIsovalue, mIso, mIsoOpacity;
+    std::string mShader, mColor, mEmissionGrid, mTemperatureGrid, mEmissionColor, mEnvironment;
+    int mEnvironmentLights = 16;
+    double mEnvironmentIntensity = 1.0;
+    mutable std::size_t mEnvironmentLightCount = 0; ///< the last lights of the settings come from --environment
+    mutable std::optional<std::vector<Light>> mEnvironmentFill; ///< --environment's lights, once read
+    std::optional<double> mEmissionIntensity, mKelvinScale, mKelvinOffset, mBlackbodyIntensity;
+    std::optional<double> mFov, mFocal, mAperture, mFrame, mNear, mFar, mGain, mCutoff, mShadowStep, mStep, mLod, mLodError;
+    std::optional<double> mKernelSigma, mSurfaceSigma, mLowpass, mCutoffRadius, mSlab;
+    int mThreads = 0;
+    std::string mSimd;
+    std::string mMaxMemory;
+    OutputOptions mOutputOptions;
+};
+
+} // namespace vdb_ewa::cli

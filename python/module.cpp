@@ -1,0 +1,284 @@
+/// @file module.cpp
+/// @brief The Python module vdb_ewa (pybind11): grids from .vdb files or numpy arrays, render()
+///        with vdb_ewa render's options as keyword arguments, frames as numpy arrays, EXR output
+///        through the library, and the library's exceptions as Python exceptions. docs/python.md.
+#include "array_grid.h"
+#include "error_messages.h"
+#include "render_call.h"
+
+#include <vdb_ewa/vdb_ewa.h>
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <sstream>
+
+namespace py = pybind11;
+using namespace vdb_ewa;
+using namespace vdb_ewa::python;
+
+namespace {
+
+/// The module's exception classes (owned by the module's dict).
+struct ExceptionTypes
+{
+    PyObject* error = nullptr;
+    PyObject* ioError = nullptr;
+    PyObject* inputError = nullptr;
+    PyObject* valueError = nullptr;
+    PyObject* budgetError = nullptr;
+    PyObject* cancelled = nullptr;
+} gTypes;
+
+PyObject* addException(py::module_& m, const char* name, py::tuple bases, const char* doc)
+{
+    const std::string qualified = std::string("vdb_ewa.") + name;
+    PyObject* type = PyErr_NewExceptionWithDoc(qualified.c_str(), doc, bases.ptr(), nullptr);
+    if (!type) throw py::error_already_set();
+    m.add_object(name, py::handle(type)); // the module keeps the reference
+    return type;
+}
+
+void registerExceptions(py::module_& m)
+{
+    const py::handle error = gTypes.error = addException(m, "Error", py::make_tuple(py::handle(PyExc_RuntimeError)),
+        "Base of every error vdb_ewa raises; the message is the one line the CLI prints after 'vdb_ewa: '.");
+    gTypes.ioError = addException(m, "IoError", py::make_tuple(error, py::handle(PyExc_OSError)),
+        "A file could not be read or written (missing, unreadable, truncated, unwritable).");
+    gTypes.inputError = addException(m, "InputError", py::make_tuple(error),
+        "The input is readable but unusable (no such grid, unsupported grid type).");
+    gTypes.valueError = addException(m, "ValueError", py::make_tuple(error, py::handle(PyExc_ValueError)),
+        "An argument or option is out of range or inconsistent (unknown keyword, impossible camera...).");
+    gTypes.budgetError = addException(m, "BudgetError", py::make_tuple(error, py::handle(PyExc_MemoryError)),
+        "The render would need more memory than max_memory allows (found before anything is allocated).");
+    gTypes.cancelled = addException(m, "Cancelled", py::make_tuple(error),
+        "The render was cancelled (CancelToken.cancel, progress returning True, or Ctrl+C); nothing was written.");
+    py::register_exception_translator([](std::exception_ptr p) {
+        const auto raise = [](PyObject* type, const std::exception& e) { PyErr_SetString(type, cli::errorLine(e.what()).c_str()); };
+        try {
+            if (p) std::rethrow_exception(p);
+        } catch (const Cancelled& e) {
+            raise(gTypes.cancelled, e);
+        } catch (const vdb_ewa::ValueError& e) {
+            raise(gTypes.valueError, e);
+        } catch (const BudgetError& e) {
+            raise(gTypes.budgetError, e);
+        } catch (const IoError& e) {
+            raise(gTypes.ioError, e);
+        } catch (const InputError& e) {
+            raise(gTypes.inputError, e);
+        } catch (const vdb_ewa::Error& e) {
+            raise(gTypes.error, e);
+        }
+    });
+}
+
+/// A read-only (rows, columns[, channels]) float32 view of @a data, keeping @a owner alive.
+py::object view(const std::vector<float>& data, int width, int height, int channels, const py::object& owner)
+{
+    if (data.empty()) return py::none();
+    std::vector<py::ssize_t> shape{height, width}, strides{py::ssize_t(width) * channels * 4, py::ssize_t(channels) * 4};
+    if (channels > 1) {
+        shape.push_back(channels);
+        strides.push_back(4);
+    }
+    py::array a(py::dtype::of<float>(), shape, strides, data.data(), owner);
+    py::detail::array_proxy(a.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+    return a;
+}
+
+py::dict aovs(const py::object& self)
+{
+    const auto& f = self.cast<const RenderedFrame&>().output;
+    const int w = f.beauty.width, h = f.beauty.height;
+    py::dict d;
+    if (!f.depth.empty()) d["depth"] = view(f.depth, w, h, 1, self);
+    if (!f.transmittance.empty()) d["transmittance"] = view(f.transmittance, w, h, 3, self);
+    if (!f.shadow.empty()) d["shadow"] = view(f.shadow, w, h, 3, self);
+    if (!f.emission.empty()) d["emission"] = view(f.emission, w, h, 3, self);
+    return d;
+}
+
+py::dict statsOf(const RenderStats& s)
+{
+    py::dict d;
+    d["kernel_seconds"] = s.kernelSeconds;
+    d["shadow_seconds"] = s.shadowSeconds;
+    d["project_seconds"] = s.projectSeconds;
+    d["raster_seconds"] = s.rasterSeconds;
+    d["active_voxels"] = s.activeVoxels;
+    d["active_tiles"] = s.activeTiles;
+    d["kernels"] = s.kernels;
+    d["halo_kernels"] = s.haloKernels;
+    d["emitter_kernels"] = s.emitterKernels;
+    d["refined_voxels"] = s.refinedVoxels;
+    d["kernels_skipped"] = s.kernelsSkipped;
+    d["voxels_merged"] = s.voxelsMerged;
+    d["merged_kernels"] = s.mergedKernels;
+    d["kernels_culled"] = s.kernelsCulled;
+    d["splats"] = s.splats;
+    d["raster_backend"] = s.rasterBackend;
+    return d;
+}
+
+/// render()'s docstring: the calling convention, then every option with --help's text.
+std::string renderDoc()
+{
+    std::ostringstream doc;
+    doc << "Render a grid with EWA volume splatting, as `vdb_ewa render` would.\n\n"
+           "The options are vdb_ewa render's long options with - spelled _ (refine_emission=4), with the same\n"
+           "defaults, checks and error messages; None leaves an option at its default. Values: numbers, strings,\n"
+           "True/False (flags and on/off switches), sequences for X,Y,Z options (translate=(0, 0, 5)), a sequence\n"
+           "of sequences to repeat an option (light=[(1, 1, 0), (-1, 0.5, 0, 0.2, 0.3, 0.6)]).\n\n"
+           "Args:\n"
+           "    grid: a vdb_ewa.Grid (vdb_ewa.open, vdb_ewa.from_array), or the path of a .vdb file, whose grids\n"
+           "        name, color, emission_grid and temperature then pick.\n"
+           "    progress: None, or a callable f(percent) called on this thread as the render advances (0 to 100,\n"
+           "        rising; 100 when done). Returning True cancels; an exception it raises cancels and propagates.\n"
+           "    cancel: None, or a vdb_ewa.CancelToken: token.cancel() from any thread stops the render.\n"
+           "    **options: see below.\n\n"
+           "The GIL is released while rendering; Ctrl+C cancels. Warnings (clamped settings, fallbacks) are\n"
+           "issued as vdb_ewa.RenderWarning and kept in Frame.warnings.\n\n"
+           "Returns:\n"
+           "    A vdb_ewa.Frame: beauty, a (height, width, 4) float32 array (premultiplied RGBA in output_space,\n"
+           "    what the EXR holds); aovs: depth, and the passes asked for by aov=; write(path).\n\n"
+           "Raises:\n"
+           "    vdb_ewa.ValueError (options), vdb_ewa.IoError, vdb_ewa.InputError (the grid), vdb_ewa.BudgetError\n"
+           "    (max_memory), vdb_ewa.Cancelled.\n\n"
+           "Options:\n";
+    for (const KeywordInfo& k : renderKeywords()) doc << "    " << k.keyword << " (" << k.type << "): " << k.description << "\n";
+    return doc.str();
+}
+
+} // namespace
+
+PYBIND11_MODULE(vdb_ewa, m)
+{
+    m.doc() = "EWA volume splatting of OpenVDB grids (Zwicker et al. 2002): vdb_ewa's library in Python.\n\n"
+              "    import vdb_ewa\n"
+              "    grid = vdb_ewa.open('smoke.vdb')                  # or vdb_ewa.from_array(array, index_to_world)\n"
+              "    frame = vdb_ewa.render(grid, res='960x540', translate=(0, 0, 5), quality='high')\n"
+              "    frame.beauty                                      # (540, 960, 4) float32\n"
+              "    frame.write('smoke.exr')\n\n"
+              "help(vdb_ewa.render) lists every option (vdb_ewa render's, - spelled _). docs/python.md.";
+    m.attr("__version__") = versionString();
+    registerExceptions(m);
+    m.attr("RenderWarning") = py::reinterpret_steal<py::object>(
+        PyErr_NewExceptionWithDoc("vdb_ewa.RenderWarning", "A setting was clamped or a fallback taken (the CLI's 'warning:' lines).",
+            PyExc_UserWarning, nullptr));
+
+    py::class_<GridSource>(m, "Grid",
+        "A scalar volume to render: a fog volume or a level set, from a .vdb file (vdb_ewa.open) or a numpy array "
+        "(vdb_ewa.from_array).")
+        .def_property_readonly("name", &GridSource::name, "The grid's name.")
+        .def_property_readonly("path", &GridSource::path, "The file the grid came from; '' for an array.")
+        .def_property_readonly("stored_type", &GridSource::storedType, "'float' or 'double': the value type in the file.")
+        .def_property_readonly("is_level_set", &GridSource::isLevelSet, "True for a level set (rendered as its iso-surface).")
+        .def_property_readonly("active_voxel_count", &GridSource::activeVoxelCount, "Active voxels.")
+        .def_property_readonly("active_tile_count", &GridSource::activeTileCount, "Active tiles.")
+        .def_property_readonly("world_centre", [](const GridSource& g) {
+            const Vec3d c = g.worldCentre();
+            return py::make_tuple(c.x, c.y, c.z);
+        }, "Centre of the active voxels' bounding box in world space: the camera's default target.")
+        .def("__repr__", [](const GridSource& g) {
+            return "<vdb_ewa.Grid '" + g.name() + "'" + (g.path().empty() ? std::string(" (array)") : " from " + g.path()) + ", " +
+                   std::to_string(g.activeVoxelCount()) + " active voxels" + (g.isLevelSet() ? ", level set>" : ">");
+        });
+
+    m.def("open", [](const py::object& path, const std::string& name) {
+        const std::string p = py::module_::import("os").attr("fspath")(path).cast<std::string>();
+        py::gil_scoped_release release;
+        return GridSource::open(p, name);
+    }, py::arg("path"), py::arg("name") = "",
+        "Open the grid called name in the .vdb file path (default: the first scalar float or double grid, as\n"
+        "vdb_render). Raises vdb_ewa.IoError (missing, unreadable, truncated file) or vdb_ewa.InputError (no such\n"
+        "grid, not a scalar floating-point grid).");
+    m.def("from_array", [](const py::array& array, const py::object& indexToWorld, const std::string& name, const py::object& emission,
+              const py::object& temperature) {
+        GridSource grid = gridFromArray(array, indexToWorld, name);
+        if (!emission.is_none()) grid = withArrayEmitter(grid, emission.cast<py::array>(), indexToWorld, "emission");
+        if (!temperature.is_none()) grid = withArrayEmitter(grid, temperature.cast<py::array>(), indexToWorld, "temperature");
+        return grid;
+    }, py::arg("array"), py::arg("index_to_world") = py::none(), py::arg("name") = "density", py::kw_only(),
+        py::arg("emission") = py::none(), py::arg("temperature") = py::none(),
+        "A fog volume from a 3D numpy array: voxel (i, j, k) holds array[i, j, k] (pyopenvdb's copyFromArray\n"
+        "layout); values equal to 0 are inactive.\n\n"
+        "Args:\n"
+        "    array: 3D array of numbers (converted to float32).\n"
+        "    index_to_world: 4x4 matrix, column vectors: world = M @ (i, j, k, 1) (numpy's and Blender's\n"
+        "        convention; OpenVDB's row-vector matrix is its transpose); affine and invertible. None: identity.\n"
+        "    name: the grid's name.\n"
+        "    emission: None, or an array of the same layout: an emission grid (render's emission_color and\n"
+        "        emission_intensity), as --emission-grid.\n"
+        "    temperature: None, or an array of temperatures: blackbody emission, as --temperature.\n\n"
+        "Raises vdb_ewa.ValueError for a wrong shape or matrix.");
+
+    py::class_<CancelToken, std::shared_ptr<CancelToken>>(m, "CancelToken",
+        "Cancels a render from any thread: pass it as render(..., cancel=token), call token.cancel().")
+        .def(py::init<>())
+        .def("cancel", [](CancelToken& t) { t.cancelled.store(true); }, "Stop the render that holds this token (any thread).")
+        .def("reset", [](CancelToken& t) { t.cancelled.store(false); }, "Clear the cancellation, to use the token again.")
+        .def_property_readonly("cancelled", [](const CancelToken& t) { return t.cancelled.load(); }, "True once cancel() was called.");
+
+    py::class_<RenderedFrame, std::shared_ptr<RenderedFrame>>(m, "Frame",
+        "A rendered frame. Arrays are read-only float32 views in output_space, as the EXR holds them (at float "
+        "precision: exr_type only affects write()).")
+        .def_property_readonly("width", [](const RenderedFrame& f) { return f.output.beauty.width; })
+        .def_property_readonly("height", [](const RenderedFrame& f) { return f.output.beauty.height; })
+        .def_property_readonly("beauty", [](const py::object& self) {
+            const auto& f = self.cast<const RenderedFrame&>().output.beauty;
+            return view(f.rgba, f.width, f.height, 4, self);
+        }, "(height, width, 4) float32: premultiplied RGBA, row 0 at the top, black background.")
+        .def_property_readonly("aovs", &aovs,
+            "Dict of the passes by name: 'depth' (height, width): camera depth where alpha reaches 0.5, inf where it "
+            "never does; 'transmittance', 'shadow', 'emission' (height, width, 3) when asked for by aov= "
+            "(docs/output.md).")
+        .def("aov", [](const py::object& self, const std::string& name) {
+            const py::dict d = aovs(self);
+            if (!d.contains(name)) {
+                std::string names;
+                for (const auto& [k, v] : d) names += (names.empty() ? "" : ", ") + k.cast<std::string>();
+                throw vdb_ewa::ValueError("aov: '" + name + "' was not rendered (this frame has " + names + "; aov= asks for passes)");
+            }
+            return py::object(d[py::str(name)]); // not the accessor: it would outlive d
+        }, py::arg("name"), "The pass called name (see aovs); vdb_ewa.ValueError if it was not rendered.")
+        .def_property_readonly("stats", [](const RenderedFrame& f) { return statsOf(f.stats); }, "Counts and stage timings (seconds).")
+        .def_property_readonly("warnings", [](const RenderedFrame& f) { return f.warnings; }, "The render's warnings, one line each.")
+        .def_property_readonly("render_seconds", [](const RenderedFrame& f) { return f.seconds; }, "From the call to the frame, seconds.")
+        .def_property_readonly("metadata", [](const RenderedFrame& f) {
+            py::dict d;
+            for (const auto& [k, v] : f.metadata()) d[py::str(k)] = v;
+            return d;
+        }, "The EXR header's attributes: every resolved option as vdb_ewa/NAME, the camera record, the software.")
+        .def("write", [](const RenderedFrame& f, const py::object& path) {
+            const std::string p = py::module_::import("os").attr("fspath")(path).cast<std::string>();
+            py::gil_scoped_release release;
+            f.write(p);
+        }, py::arg("path"),
+            "Write the frame as vdb_ewa render would: the format by the extension (.exr with Z and the passes, .png,\n"
+            ".jpg, .tif, .ppm through display and view, .hdr), exr_type, compression and preview from the render's\n"
+            "options, the same header; written whole or not at all. Raises vdb_ewa.IoError or vdb_ewa.ValueError.")
+        .def("__repr__", [](const RenderedFrame& f) {
+            return "<vdb_ewa.Frame " + std::to_string(f.output.beauty.width) + "x" + std::to_string(f.output.beauty.height) + ">";
+        });
+
+    m.def("render", [](const py::object& grid, const py::object& progress, const py::object& cancel, const py::kwargs& kwargs) {
+        std::shared_ptr<CancelToken> token;
+        if (!cancel.is_none()) {
+            if (!py::isinstance<CancelToken>(cancel)) throw vdb_ewa::ValueError("cancel: expected a vdb_ewa.CancelToken or None");
+            token = cancel.cast<std::shared_ptr<CancelToken>>();
+        }
+        std::shared_ptr<RenderedFrame> frame = render(grid, progress, token, kwargs);
+        const py::object warn = py::module_::import("warnings").attr("warn");
+        const py::object category = py::module_::import("vdb_ewa").attr("RenderWarning");
+        for (const std::string& w : frame->warnings) warn(w, category, 2);
+        return frame;
+    }, py::arg("grid"), py::kw_only(), py::arg("progress") = py::none(), py::arg("cancel") = py::none(), renderDoc().c_str());
+
+    m.def("_keywords", [] {
+        py::list out;
+        for (const KeywordInfo& k : renderKeywords()) out.append(py::make_tuple(k.keyword, k.option, k.type, k.description));
+        return out;
+    }, "render()'s option keywords as (keyword, option, type, description): python/make_stub.py writes vdb_ewa.pyi from them.");
+}

@@ -1,0 +1,308 @@
+/// @file render_call.cpp
+#include "render_call.h"
+
+#include "error_messages.h"
+#include "job_file.h"
+
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <condition_variable>
+#include <exception>
+#include <map>
+#include <mutex>
+#include <thread>
+
+namespace py = pybind11;
+
+namespace vdb_ewa::python {
+
+/// The options of one render on their own CLI11 app (pinned: the app holds pointers into them).
+struct ParsedOptions
+{
+    CLI::App app{"vdb_ewa.render", "vdb_ewa.render"};
+    cli::RenderOptions options;
+
+    ParsedOptions()
+    {
+        app.set_help_flag(); // no --help keyword
+        options.add(&app);
+    }
+
+    /// Parse @a arguments (command-line words). @throw ValueError in the CLI's words.
+    void parse(std::vector<std::string> arguments)
+    {
+        std::reverse(arguments.begin(), arguments.end()); // CLI11 takes a reversed vector
+        try {
+            app.parse(arguments);
+        } catch (const CLI::ParseError& e) {
+            throw ValueError(cli::inOurWords(e));
+        }
+    }
+};
+
+namespace {
+
+std::string keywordOf(const std::string& longName)
+{
+    std::string k = longName;
+    std::replace(k.begin(), k.end(), '-', '_');
+    return k;
+}
+
+/// A Python value as a job file's JSON value (cli::optionArguments' rules).
+nlohmann::json toJson(const py::handle& value, const std::string& where)
+{
+    if (py::isinstance<py::bool_>(value)) return value.cast<bool>();
+    if (py::isinstance<py::int_>(value)) return value.cast<long long>();
+    if (py::isinstance<py::float_>(value)) return value.cast<double>();
+    if (py::isinstance<py::str>(value)) return value.cast<std::string>();
+    if (py::hasattr(value, "__fspath__")) return py::module_::import("os").attr("fspath")(value).cast<std::string>();
+    if (py::isinstance<py::array>(value)) return toJson(value.attr("tolist")(), where);
+    if (py::hasattr(value, "item") && py::hasattr(value, "dtype")) return toJson(value.attr("item")(), where); // numpy scalars
+    if (py::isinstance<py::sequence>(value)) {
+        nlohmann::json list = nlohmann::json::array();
+        for (const py::handle item : value) list.push_back(toJson(item, where));
+        return list;
+    }
+    throw ValueError(where + ": expected a string, number, True/False or a sequence of numbers, got " +
+                     std::string(py::str(value.get_type().attr("__name__"))));
+}
+
+/// @a kwargs as vdb_ewa render's command-line arguments.
+std::vector<std::string> argumentsOf(const py::kwargs& kwargs, bool gridIsPath)
+{
+    ParsedOptions names;
+    std::map<std::string, std::pair<std::string, bool>> byKeyword; // keyword -> (long name, flag)
+    for (const CLI::Option* opt : names.app.get_options()) {
+        for (const std::string& n : opt->get_lnames()) byKeyword[keywordOf(n)] = {n, opt->get_expected_min() == 0};
+    }
+    std::vector<std::string> arguments;
+    for (const auto& [key, value] : kwargs) {
+        const std::string keyword = key.cast<std::string>();
+        const auto it = byKeyword.find(keyword);
+        if (it == byKeyword.end()) {
+            throw ValueError("unknown keyword argument '" + keyword + "' (vdb_ewa render's long options, - spelled _: help(vdb_ewa.render))");
+        }
+        if (value.is_none()) continue; // None: the default
+        if (!gridIsPath && (it->second.first == "name" || it->second.first == "density-grid")) {
+            throw ValueError(keyword + ": the grid is already open; name it in vdb_ewa.open(path, name)");
+        }
+        const std::vector<std::string> words =
+            cli::optionArguments(it->second.first, toJson(value, keyword), it->second.second, keyword);
+        arguments.insert(arguments.end(), words.begin(), words.end());
+    }
+    return arguments;
+}
+
+/// Progress from the render's worker threads to the caller's thread; cancellation back.
+class CallInterrupter : public Interrupter
+{
+public:
+    explicit CallInterrupter(std::shared_ptr<CancelToken> token) : mToken(std::move(token)) {}
+
+    bool wasInterrupted(int percent) override
+    {
+        {
+            const std::lock_guard<std::mutex> lock(mMutex);
+            mPercent = percent;
+        }
+        mChanged.notify_all();
+        return mToken && mToken->cancelled.load(std::memory_order_relaxed);
+    }
+
+    /// The render finished (or failed): wake the caller.
+    void finish(std::exception_ptr error)
+    {
+        {
+            const std::lock_guard<std::mutex> lock(mMutex);
+            mDone = true;
+            mError = std::move(error);
+        }
+        mChanged.notify_all();
+    }
+
+    /// Wait (without the GIL) up to @a timeout for news; @return the percent, and whether it is done.
+    std::pair<int, bool> wait(int reported, std::chrono::milliseconds timeout)
+    {
+        py::gil_scoped_release release;
+        std::unique_lock<std::mutex> lock(mMutex);
+        mChanged.wait_for(lock, timeout, [&] { return mDone || mPercent != reported; });
+        return {mPercent, mDone};
+    }
+
+    std::exception_ptr error() const
+    {
+        const std::lock_guard<std::mutex> lock(mMutex);
+        return mError;
+    }
+
+private:
+    std::shared_ptr<CancelToken> mToken;
+    mutable std::mutex mMutex;
+    std::condition_variable mChanged;
+    int mPercent = -1;
+    bool mDone = false;
+    std::exception_ptr mError;
+};
+
+/// Joins the render's thread whatever happens on the caller's (cancelling it first if the
+/// caller is leaving early), without the GIL: the thread that would cancel may need it.
+class WorkerGuard
+{
+public:
+    WorkerGuard(std::thread& thread, CallInterrupter& interrupter) : mThread(thread), mInterrupter(interrupter) {}
+    ~WorkerGuard()
+    {
+        if (!mThread.joinable()) return;
+        mInterrupter.cancel();
+        py::gil_scoped_release release;
+        mThread.join();
+    }
+    void join()
+    {
+        py::gil_scoped_release release;
+        mThread.join();
+    }
+
+private:
+    std::thread& mThread;
+    CallInterrupter& mInterrupter;
+};
+
+/// Run @a renderer on a worker thread; serve @a progress and Python's signals (Ctrl+C) here.
+Frame renderOnWorker(const Renderer& renderer, const GridSource& grid, const Camera& camera, const PassRequest& passes,
+    RenderStats& stats, const py::object& progress, const std::shared_ptr<CancelToken>& cancel)
+{
+    CallInterrupter interrupter(cancel);
+    Frame frame;
+    std::thread thread([&] {
+        try {
+            frame = renderer.renderFrame(grid, camera, passes, &stats, &interrupter);
+            interrupter.finish(nullptr);
+        } catch (...) {
+            interrupter.finish(std::current_exception());
+        }
+    });
+    WorkerGuard guard(thread, interrupter);
+    int reported = -1;
+    for (bool done = false; !done;) {
+        int percent = 0;
+        std::tie(percent, done) = interrupter.wait(reported, std::chrono::milliseconds(50));
+        if (PyErr_CheckSignals() != 0) throw py::error_already_set(); // the guard cancels and joins
+        if (done && !interrupter.error()) percent = 100;
+        if (!progress.is_none() && percent != reported && percent >= 0) {
+            reported = percent;
+            if (py::bool_(progress(percent))) interrupter.cancel(); // an exception: the guard cancels
+        }
+    }
+    guard.join();
+    if (const std::exception_ptr error = interrupter.error()) std::rethrow_exception(error);
+    return frame;
+}
+
+} // namespace
+
+std::vector<KeywordInfo> renderKeywords()
+{
+    ParsedOptions names;
+    std::vector<KeywordInfo> keywords;
+    for (const CLI::Option* opt : names.app.get_options()) {
+        if (opt->get_lnames().empty()) continue;
+        const std::string type = opt->get_expected_min() == 0 ? "bool"
+            : opt->get_type_name() == "INT"                   ? "int"
+            : opt->get_type_name() == "FLOAT"                 ? "float"
+                                                              : "str";
+        for (const std::string& n : opt->get_lnames()) keywords.push_back({keywordOf(n), "--" + n, type, opt->get_description()});
+    }
+    return keywords;
+}
+
+std::unique_ptr<ParsedOptions> RenderedFrame::prepared(const std::string& path) const
+{
+    // The options again, prepared for @a path (its format, the preview) as the CLI prepares them.
+    auto parsed = std::make_unique<ParsedOptions>();
+    parsed->parse(arguments);
+    CameraSettings cam;
+    RenderSettings rs;
+    parsed->options.resolve(std::nullopt, cam, rs);
+    std::vector<std::string> ignored; // render() reported them
+    parsed->options.prepare(path, path.empty() ? "" : parsed->options.output().previewOption(), rs, ignored);
+    return parsed;
+}
+
+cli::Attributes RenderedFrame::metadata() const
+{
+    return prepared("")->options.headerAttributes(grid, camera, given, input, seconds, std::nullopt);
+}
+
+void RenderedFrame::write(const std::string& path) const
+{
+    const std::unique_ptr<ParsedOptions> parsed = prepared(path);
+    const cli::RenderOptions& options = parsed->options;
+    const std::string& preview = options.output().previewOption();
+    options.output().refuseInputs(path, preview, {input, options.environment(), options.cameraFile()});
+    Frame copy = working; // write() converts in place
+    options.output().write(copy, camera, path, preview, options.headerAttributes(grid, camera, given, input, seconds, std::nullopt));
+}
+
+std::shared_ptr<RenderedFrame> render(const py::object& gridOrPath, const py::object& progress,
+    const std::shared_ptr<CancelToken>& cancel, const py::kwargs& kwargs)
+{
+    const auto t0 = std::chrono::steady_clock::now();
+    const bool isPath = py::isinstance<py::str>(gridOrPath) || py::hasattr(gridOrPath, "__fspath__");
+    if (!isPath && !py::isinstance<GridSource>(gridOrPath)) {
+        throw ValueError("grid: expected a vdb_ewa.Grid or the path of a .vdb file");
+    }
+    if (!progress.is_none() && !PyCallable_Check(progress.ptr())) throw ValueError("progress: expected a callable taking the percent");
+    const std::vector<std::string> arguments = argumentsOf(kwargs, isPath);
+    ParsedOptions parsed;
+    parsed.parse(arguments);
+    CameraSettings cam;
+    RenderSettings given;
+    parsed.options.resolve(std::nullopt, cam, given);
+    const Renderer validated(given); // the settings are checked before any file is read
+    std::vector<std::string> warnings;
+    const RenderSettings working = parsed.options.prepare("", "", given, warnings);
+
+    std::string input;
+    std::optional<GridSource> grid;
+    if (isPath) {
+        input = py::module_::import("os").attr("fspath")(gridOrPath).cast<std::string>();
+        py::gil_scoped_release release;
+        grid = parsed.options.open(input);
+    } else {
+        const GridSource& opened = gridOrPath.cast<const GridSource&>();
+        input = opened.path();
+        for (const char* keyword : {"color", "emission_grid", "temperature"}) {
+            if (opened.path().empty() && kwargs.contains(keyword) && !kwargs[keyword].is_none()) {
+                throw ValueError(std::string(keyword) + ": the grid came from an array, with no file to read grids from (from_array takes "
+                                 "emission= and temperature= arrays)");
+            }
+        }
+        grid = parsed.options.withExtraGrids(opened);
+    }
+    const Camera camera(cam, grid->worldCentre());
+    const std::string what = input.empty() ? grid->name() : input;
+    if (camera.looksDownZByDefault()) {
+        warnings.push_back(what + ": the eye is at the grid's centre, the default target: looking down -z (translate or lookat frame it)");
+    }
+    if (camera.upReplacedByDefault()) {
+        warnings.push_back(what + ": the grid's centre lies along up from the eye: another world axis is the image's up (up, translate or lookat frame it)");
+    }
+
+    auto result = std::make_shared<RenderedFrame>(*grid, camera);
+    result->arguments = arguments;
+    result->input = input;
+    result->given = given;
+    const Renderer renderer(working);
+    result->working = renderOnWorker(renderer, *grid, camera, parsed.options.output().passes(), result->stats, progress, cancel);
+    for (const std::string& w : result->stats.warnings) warnings.push_back(what + ": " + w);
+    result->output = result->working;
+    parsed.options.output().toOutputSpace(result->output);
+    result->warnings = std::move(warnings);
+    result->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return result;
+}
+
+} // namespace vdb_ewa::python

@@ -1,0 +1,297 @@
+"""Type stub of the vdb_ewa extension module (written by python/make_stub.py; do not edit)."""
+import builtins
+from os import PathLike
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+Number = Union[int, float]
+OptionValue = Union[str, Number, bool, Sequence[Number], Sequence[Sequence[Number]], None]
+
+class Error(RuntimeError): ...
+class IoError(Error, OSError): ...
+class InputError(Error): ...
+class ValueError(Error, builtins.ValueError): ...
+class BudgetError(Error, MemoryError): ...
+class Cancelled(Error): ...
+class RenderWarning(UserWarning): ...
+
+class Grid:
+    """A scalar volume to render: a fog volume or a level set, from a .vdb file (vdb_ewa.open) or a numpy array (vdb_ewa.from_array)."""
+    @property
+    def name(self) -> str: ...
+    @property
+    def path(self) -> str: ...
+    @property
+    def stored_type(self) -> str: ...
+    @property
+    def is_level_set(self) -> bool: ...
+    @property
+    def active_voxel_count(self) -> int: ...
+    @property
+    def active_tile_count(self) -> int: ...
+    @property
+    def world_centre(self) -> Tuple[float, float, float]: ...
+
+class CancelToken:
+    """Cancels a render from any thread: pass it as render(..., cancel=token), call token.cancel()."""
+    def __init__(self) -> None: ...
+    def cancel(self) -> None: ...
+    def reset(self) -> None: ...
+    @property
+    def cancelled(self) -> bool: ...
+
+class Frame:
+    """A rendered frame. Arrays are read-only float32 views in output_space, as the EXR holds them (at float precision: exr_type only affects write())."""
+    @property
+    def width(self) -> int: ...
+    @property
+    def height(self) -> int: ...
+    @property
+    def beauty(self) -> npt.NDArray[np.float32]: ...
+    @property
+    def aovs(self) -> Dict[str, npt.NDArray[np.float32]]: ...
+    def aov(self, name: str) -> npt.NDArray[np.float32]: ...
+    @property
+    def stats(self) -> Dict[str, Any]: ...
+    @property
+    def warnings(self) -> List[str]: ...
+    @property
+    def render_seconds(self) -> float: ...
+    @property
+    def metadata(self) -> Dict[str, str]: ...
+    def write(self, path: Union[str, PathLike]) -> None: ...
+
+def open(path: Union[str, PathLike], name: str = "") -> Grid: ...
+def from_array(array: npt.ArrayLike, index_to_world: Optional[npt.ArrayLike] = None, name: str = "density", *,
+               emission: Optional[npt.ArrayLike] = None, temperature: Optional[npt.ArrayLike] = None) -> Grid: ...
+def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int], Optional[bool]]] = None,
+           cancel: Optional[CancelToken] = None,
+           name: OptionValue = None,
+           density_grid: OptionValue = None,
+           camera_file: OptionValue = None,
+           res: OptionValue = None,
+           translate: OptionValue = None,
+           rotate: OptionValue = None,
+           lookat: OptionValue = None,
+           up: OptionValue = None,
+           camera: OptionValue = None,
+           fov: Optional[Number] = None,
+           focal: Optional[Number] = None,
+           aperture: Optional[Number] = None,
+           frame: Optional[Number] = None,
+           near: Optional[Number] = None,
+           far: Optional[Number] = None,
+           absorb: OptionValue = None,
+           scatter: OptionValue = None,
+           light: OptionValue = None,
+           emission: OptionValue = None,
+           ambient: OptionValue = None,
+           environment: OptionValue = None,
+           environment_lights: Optional[int] = None,
+           environment_intensity: Optional[Number] = None,
+           gain: Optional[Number] = None,
+           cutoff: Optional[Number] = None,
+           shadowstep: Optional[Number] = None,
+           shadow_res: Optional[Number] = None,
+           step: Optional[Number] = None,
+           method: OptionValue = None,
+           kernel_sigma: Optional[Number] = None,
+           surface_sigma: Optional[Number] = None,
+           lowpass: Optional[Number] = None,
+           aa: OptionValue = None,
+           cutoff_radius: Optional[Number] = None,
+           slab: Optional[Number] = None,
+           quality: OptionValue = None,
+           exp: OptionValue = None,
+           prefilter: OptionValue = None,
+           renormalize: OptionValue = None,
+           taper: OptionValue = None,
+           precision: OptionValue = None,
+           tile_spacing: Optional[int] = None,
+           refine: Optional[int] = None,
+           refine_emission: Optional[int] = None,
+           lod: Optional[Number] = None,
+           lod_error: Optional[Number] = None,
+           iso: Optional[Number] = None,
+           iso_opacity: Optional[Number] = None,
+           isovalue: Optional[Number] = None,
+           shader: OptionValue = None,
+           color: OptionValue = None,
+           emission_grid: OptionValue = None,
+           emission_color: OptionValue = None,
+           emission_intensity: Optional[Number] = None,
+           temperature: OptionValue = None,
+           temperature_scale: Optional[Number] = None,
+           temperature_offset: Optional[Number] = None,
+           blackbody_intensity: Optional[Number] = None,
+           samples: Optional[int] = None,
+           threads: Optional[int] = None,
+           cpus: Optional[int] = None,
+           simd: OptionValue = None,
+           max_memory: OptionValue = None,
+           ocio_config: OptionValue = None,
+           input_space: OptionValue = None,
+           working_space: OptionValue = None,
+           output_space: OptionValue = None,
+           preview: OptionValue = None,
+           display: OptionValue = None,
+           view: OptionValue = None,
+           exr_type: OptionValue = None,
+           compression: OptionValue = None,
+           aov: OptionValue = None,
+           deep: Optional[bool] = None,
+           ) -> Frame:
+    """Render a grid as `vdb_ewa render` would; the keywords are its options (help(vdb_ewa.render)):
+
+    name (--name): grid to render, as the density of a fog volume or a level set; --density-grid is the
+        same option under the name a pyro cache's user looks for (default: the first scalar float or
+        double grid, as vdb_render)
+    density_grid (--density-grid): grid to render, as the density of a fog volume or a level set;
+        --density-grid is the same option under the name a pyro cache's user looks for (default: the
+        first scalar float or double grid, as vdb_render)
+    camera_file (--camera-file): take the camera from a file: an .exr rendered by vdb_ewa (the same
+        camera exactly) or by another renderer (its worldToCamera), or a .json of camera options or a
+        worldToCamera matrix (docs/output.md); the camera options given here override its values
+    res (--res): image size in pixels, WxH, each in [1, 65536] and at most 2^27 pixels in all
+        (16384x8192) (default: 1920x1080)
+    translate (--translate): camera position X,Y,Z in world units (default: 0,0,0)
+    rotate (--rotate): camera rotation X,Y,Z in degrees, applied about x, then y, then z (default: look
+        at the centre of the grid's active voxels)
+    lookat (--lookat): aim the camera at the world point X,Y,Z
+    up (--up): world vector that points up after --lookat (default: 0,1,0)
+    camera (--camera): camera type: persp[ective] or ortho[graphic] (default: perspective)
+    fov (--fov): horizontal field of view in degrees (default: 44.7966, from --focal and --aperture)
+    focal (--focal): perspective focal length in mm (default: 50)
+    aperture (--aperture): perspective frame width in mm (default: 41.2136)
+    frame (--frame): orthographic frame width in world units (default: 1)
+    near (--near): near plane depth in world units (default: 0.001)
+    far (--far): far plane depth in world units (default: 3.40282e+38)
+    absorb (--absorb): absorption R,G,B per unit density per voxel length, each in [0, 1e6] (default:
+        0.1,0.1,0.1)
+    scatter (--scatter): scattering R,G,B per unit density per voxel length, each in [0, 1e6] (default:
+        1.5,1.5,1.5)
+    light (--light): directional light: direction towards it X,Y,Z (any non-zero length)[,R,G,B] with
+        optional colour, each in [0, 1e6]; repeat for more lights (at most 64), each with its own
+        shadows; their light adds (default: one, 0.3,0.3,0,0.7,0.7,0.7)
+    emission (--emission): self-emission R,G,B per unit density per voxel length, each in [0, 1e6],
+        added to the scattered light (default: 0,0,0)
+    ambient (--ambient): constant ambient (sky) light R,G,B, never shadowed, scattered like --light: a
+        fill for fog volumes; each in [0, 1e6], in --input-space (default: 0,0,0)
+    environment (--environment): latitude-longitude environment image (.exr, .hdr; OpenEXR's and USD's
+        orientation: +Y up, its centre facing +Z), RGB radiance in --input-space: a low-order, shadowed
+        fill, added to --light as --environment-lights directional lights (default: none)
+    environment_lights (--environment-lights): lights the environment becomes, each from the part of the
+        sphere nearest its direction, in [1, 64] (default: 16)
+    environment_intensity (--environment-intensity): multiplies the environment's radiance, >= 0
+        (default: 1)
+    gain (--gain): shadow-ray extinction falls as 1/(1 + gain * distance in voxels) (default: 0.2)
+    cutoff (--cutoff): density cutoff, and rays stop where |transmittance RGB|^2 < cutoff (default:
+        0.005)
+    shadowstep (--shadowstep): shadow-ray step in voxels, >= 0.001; the light map's budget may raise it
+        (docs/numerics.md) (default: 0.5)
+    shadow_res (--shadow-res): light map: shadow rays every N voxels across the light, interpolated in
+        between; range [0.25, 16] (default: 1)
+    step (--step): primary-ray step in voxels for --method raymarch (default: 1); the splatter has no
+        primary rays and ignores it
+    method (--method): splat (EWA volume splatting), raymarch (the reference: ray-marches the trilinear
+        field with a shadow ray per sample, as vdb_render; slow) or raymarch-gaussian (diagnostic: ray-
+        marches the splatter's own Gaussian reconstruction and per-kernel shadows) (default: splat)
+    kernel_sigma (--kernel-sigma): reconstruction kernel std. deviation in voxels, range [0.1, 4]
+        (default: 0.5)
+    surface_sigma (--surface-sigma): level sets and --iso: surface kernel std. deviation along the
+        surface in voxels, range [0.1, 4] (default: 0.55)
+    lowpass (--lowpass): screen-space low-pass filter variance in pixels^2 (default: 1)
+    aa (--aa): anti-aliasing: floor (each footprint axis at least --lowpass wide), ewa (resampling
+        filter, Eq. 33: always adds --lowpass), swan (uniform scaling) or none (default: floor)
+    cutoff_radius (--cutoff-radius): footprint cut-off radius in std. deviations (default: 3)
+    slab (--slab): image-aligned slab thickness in voxel lengths (default: 2)
+    quality (--quality): preset of the speed/accuracy knobs: draft, default, high or final (refined
+        kernels); explicit options override it (values in docs/performance.md) (default: default)
+    exp (--exp): footprint exp(-r/2): incremental (forward differencing), exact or table (default:
+        incremental)
+    prefilter (--prefilter): on: quasi-interpolating kernel weights (the Gaussian sum keeps the
+        trilinear field's sharpness; negative halo kernels at its faces); off: each kernel weighs its
+        voxel's value (default: on)
+    renormalize (--renormalize): on: divide footprints by the mass kept inside --cutoff-radius; off:
+        keep the truncated mass (default: on)
+    taper (--taper): on: footprints are the Gaussian less its value at --cutoff-radius, falling to 0 at
+        their edge (no step to flicker as they move); off: truncated (default: off, draft on)
+    precision (--precision): world-to-camera transform and covariances in double or float (default:
+        double)
+    tile_spacing (--tile-spacing): largest kernel spacing in voxels for active tiles, 1 to voxelise them
+        (default: 4)
+    refine (--refine): where voxels span N pixels or more, their kernels on a lattice N times finer: the
+        trilinear field sampled every 1/N voxel (emission and temperature grids too), kernels N times
+        narrower, N^3 as many; range [1, 4], 1 = off (default: 1)
+    refine_emission (--refine-emission): emission and temperature grids where their light does not go as
+        the density (light over density changes several-fold between neighbouring voxels) in optically
+        thick density: the light sampled every 1/n voxel, n up to N as the voxels span n pixels or more
+        (2 at least); --refine refines the emitters too; range [1, 4], 1 = off (default: 2; draft 1,
+        high and final 4)
+    lod (--lod): level of detail, pixels in [0, 64]: fog volumes: blocks of 2, 4 or 8 voxels a side
+        become one kernel where the block projects to at most this many pixels, each voxel shared
+        between two block sizes continuously with distance (no popping); level sets: one surface kernel
+        a 2^3 or 4^3 block of voxels (for each sheet through it) where the block projects to at most a
+        quarter as many; 0 = off (default: 2)
+    lod_error (--lod-error): level of detail, fog volumes: a block wider than a pixel merges only where
+        its values are smooth: the transmittance through any depth of it differs by at most this much
+        between its columns; range [0, 1], 1 = by screen size alone (default: 0.05, draft 0.25)
+    iso (--iso): fog volumes: also render the iso-surface density = VALUE with flattened surface
+        kernels, lit by --light and composited with the volume (default: off)
+    iso_opacity (--iso-opacity): opacity of the --iso surface, 0..1 (default: 1)
+    isovalue (--isovalue): level sets: iso-surface to render, in world units (default: 0)
+    shader (--shader): level sets: diffuse (|N.ray|, a light at the camera), matte (white), normal
+        ((N+1)/2) or position (world position in the active bounding box) (default: diffuse)
+    color (--color): name of a vec3s grid in the input file with material colours, sampled trilinearly:
+        level sets multiply the shader by it, fog volumes the scattering albedo (and the --iso surface's
+        colour) (default: white)
+    emission_grid (--emission-grid): name of a float grid in the input file that emits light wherever it
+        is, whatever the density (a pyro cache's flame): radiance --emission-color x --emission-
+        intensity x value per voxel length (default: none)
+    emission_color (--emission-color): colour R,G,B of --emission-grid, each in [0, 1e6], in --input-
+        space (default: 1,1,1)
+    emission_intensity (--emission-intensity): multiplies --emission-color, in [0, 1e6] (default: 1)
+    temperature (--temperature): name of a float grid in the input file whose values are temperatures:
+        blackbody emission of Planck's law (CIE 1931 colour, luminance --blackbody-intensity x 1e-6
+        sigma T^4 / pi per voxel length, Blender's Principled Volume) wherever it is, whatever the
+        density (default: none)
+    temperature_scale (--temperature-scale): Kelvin per unit of --temperature's values: Kelvin = value x
+        scale + offset (Blender: the node's Temperature; Houdini: T1 - T0) (default: 1)
+    temperature_offset (--temperature-offset): Kelvin at value 0 (Houdini: T0), within 1e6 (default: 0)
+    blackbody_intensity (--blackbody-intensity): multiplies the blackbody's radiance, in [0, 1e6]; 1 is
+        physically based (default: 1)
+    samples (--samples): level sets: vdb_render's rays per pixel; accepted for compatibility, the EWA
+        filter anti-aliases without extra samples (default: 1)
+    threads (--threads): worker threads, 0 = all cores (default: 0)
+    cpus (--cpus): worker threads, 0 = all cores (default: 0)
+    simd (--simd): on: the volume rasteriser uses the CPU's vector unit (AVX-512 or AVX2, detected at
+        run time; images within 1e-5 of off); off: one pixel at a time, the reference it is tested
+        against (default: on)
+    max_memory (--max-memory): memory budget of a frame in bytes, with an optional K, M, G or T suffix
+        (powers of 1024), range [64M, 1e18]; a frame that would need more stops before allocating it
+        (exit 5) (default: 0 = 3/4 of the physical memory)
+    ocio_config (--ocio-config): OpenColorIO config file (default: $OCIO, else vdb_ewa's shipped ACES
+        config); an unusable config is a warning and falls back to the next
+    input_space (--input-space): colour space of the colour values given on the command line and in job
+        files (--light colour, --ambient, --absorb, --scatter, --emission): converted to the working
+        space (default: lin_rec709, linear sRGB, what vdb_render's values mean)
+    working_space (--working-space): colour space the render is computed in (default: the config's
+        scene_linear role; ACEScg in the shipped config)
+    output_space (--output-space): colour space of .exr and .hdr outputs (default: the working space)
+    preview (--preview): also write an 8-bit display-referred PNG of the beauty over black
+    display (--display): display of 8-bit outputs (.png, .jpg, .tif, .ppm) and --preview (default: the
+        config's default display)
+    view (--view): view of 8-bit outputs and --preview (default: the display's default view)
+    exr_type (--exr-type): pixel type of the colour channels: half or float; Z is always float (default:
+        half)
+    compression (--compression): EXR compression: none, rle, zip, zips, piz, dwaa or dwab; other formats
+        ignore it (a warning); --deep files take none, rle or zips (default: zip, zips for --deep)
+    aov (--aov): extra passes as layer.R/G/B channels, comma-separated: transmittance, shadow, emission
+        (alpha and Z are always written; definitions in docs/output.md)
+    deep (--deep): write a deep scanline EXR: one sample per non-empty slab (R, G, B, A premultiplied,
+        Z, ZBack; tidy)
+    """

@@ -1,0 +1,296 @@
+"""The Python module against the CLI: numpy array in, image out, equal to vdb_ewa render's image
+bit for bit; progress, cancellation and the GIL; bad arguments as Python exceptions.
+
+Run by ctest (tests/CMakeLists.txt) as /usr/bin/python3 -m unittest, with PYTHONPATH at the
+built module and VDB_EWA_CLI at the CLI.
+"""
+import os
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+import unittest
+import warnings
+
+import numpy as np
+
+import vdb_ewa
+
+CLI = os.environ.get("VDB_EWA_CLI", "vdb_ewa")
+
+try:
+    import pyopenvdb
+except ImportError:  # Debian's python3-openvdb; scripts/install-deps.sh --test installs it
+    pyopenvdb = None
+try:
+    import OpenImageIO as oiio
+except ImportError:
+    oiio = None
+
+
+def read_exr(path):
+    """The EXR's channels as float32 (height, width, channels) and its channel names."""
+    image = oiio.ImageInput.open(path)
+    pixels = np.asarray(image.read_image(format="float"))
+    names = image.spec().channelnames
+    image.close()
+    return pixels, names
+
+
+def cli(*args):
+    """Run the CLI; return (exit code, stderr)."""
+    done = subprocess.run([CLI, *map(str, args)], capture_output=True, text=True, timeout=600)
+    return done.returncode, done.stderr
+
+
+def smoke_block(shape=(20, 24, 28), seed=1):
+    """A lumpy block of density inside an empty border."""
+    rng = np.random.default_rng(seed)
+    a = np.zeros(shape, np.float32)
+    a[3:-3, 4:-4, 5:-3] = rng.random((shape[0] - 6, shape[1] - 8, shape[2] - 8))
+    return a
+
+
+# A sheared, scaled, translated index-to-world map in column-vector form.
+MATRIX = np.array([[0.1, 0.02, 0.0, 1.0], [0.0, 0.12, 0.0, -0.5], [0.01, 0.0, 0.09, 0.3], [0.0, 0.0, 0.0, 1.0]])
+OPTIONS = dict(res="96x64", translate=(2, 1, 6), lookat=(2, 0.9, 1.5), light=[(1, 1, 0), (-1, 0.5, 0, 0.2, 0.3, 0.6)],
+               absorb=(0.1, 0.2, 0.3), scatter=1.2)
+CLI_OPTIONS = ["--res", "96x64", "--translate", "2,1,6", "--lookat", "2,0.9,1.5", "--light", "1,1,0", "--light",
+               "-1,0.5,0,0.2,0.3,0.6", "--absorb", "0.1,0.2,0.3", "--scatter", "1.2"]
+
+
+class Module(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.tmp = tempfile.TemporaryDirectory()
+        cls.dir = cls.tmp.name
+        cls.cloud = os.path.join(cls.dir, "cloud.vdb")
+        code, err = cli("make-grid", "cloud", cls.cloud)
+        assert code == 0, err
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.tmp.cleanup()
+
+    def path(self, name):
+        return os.path.join(self.dir, name)
+
+    # --- images equal to the CLI's ---
+
+    @unittest.skipIf(pyopenvdb is None or oiio is None, "needs Debian's python3-openvdb and python3-openimageio")
+    def test_array_renders_as_the_cli_renders_the_same_grid_from_a_file(self):
+        a = smoke_block()
+        # The same grid written by pyopenvdb, OpenVDB's own binding: its matrix is the transpose.
+        g = pyopenvdb.FloatGrid()
+        g.copyFromArray(a)
+        g.transform = pyopenvdb.createLinearTransform(MATRIX.T.tolist())
+        g.name = "density"
+        pyopenvdb.write(self.path("block.vdb"), grids=[g])
+        code, err = cli(self.path("block.vdb"), self.path("block_cli.exr"), *CLI_OPTIONS, "--exr-type", "float", "-q")
+        self.assertEqual(code, 0, err)
+        expected, names = read_exr(self.path("block_cli.exr"))
+        frame = vdb_ewa.render(vdb_ewa.from_array(a, MATRIX), **OPTIONS)
+        self.assertEqual(frame.beauty.shape, (64, 96, 4))
+        self.assertEqual(frame.beauty.dtype, np.float32)
+        self.assertGreater(frame.beauty[..., 3].max(), 0.5)  # not an empty frame
+        np.testing.assert_array_equal(frame.beauty, expected[..., :4])
+        np.testing.assert_array_equal(frame.aovs["depth"], expected[..., names.index("Z")])
+        # A transposed (row-vector) matrix is refused, not silently misplaced.
+        with self.assertRaisesRegex(vdb_ewa.ValueError, "last row must be 0, 0, 0, 1"):
+            vdb_ewa.from_array(a, MATRIX.T)
+
+    @unittest.skipIf(oiio is None, "needs Debian's python3-openimageio")
+    def test_file_renders_and_writes_as_the_cli(self):
+        args = ["--res", "80x60", "--translate", "1.5,0.8,4.5", "--aov", "shadow,emission", "--emission", "0.2",
+                "--exr-type", "float"]
+        code, err = cli(self.cloud, self.path("cloud_cli.exr"), *args, "-q")
+        self.assertEqual(code, 0, err)
+        expected, names = read_exr(self.path("cloud_cli.exr"))
+        frame = vdb_ewa.render(self.cloud, res="80x60", translate=(1.5, 0.8, 4.5), aov=["shadow", "emission"], emission=0.2,
+                               exr_type="float")
+        np.testing.assert_array_equal(frame.beauty, expected[..., :4])
+        self.assertEqual(sorted(frame.aovs), ["depth", "emission", "shadow"])
+        for layer in ("shadow", "emission"):
+            columns = [names.index("%s.%s" % (layer, c)) for c in "RGB"]
+            np.testing.assert_array_equal(frame.aov(layer), expected[..., columns])
+        self.assertGreater(frame.aov("emission").max(), 0.0)
+        # write(): the same pixels and the same header (but for the time and the input's spelling).
+        frame.write(self.path("cloud_py.exr"))
+        written, written_names = read_exr(self.path("cloud_py.exr"))
+        self.assertEqual(written_names, names)
+        np.testing.assert_array_equal(written, expected)
+        spec = lambda p: {a.name: a.value for a in oiio.ImageInput.open(p).spec().extra_attribs
+                          if a.name.startswith("vdb_ewa/") and a.name != "vdb_ewa/render-seconds"}
+        self.assertEqual(spec(self.path("cloud_py.exr")), spec(self.path("cloud_cli.exr")))
+        self.assertEqual(frame.metadata["vdb_ewa/exr-type"], "float")
+
+    def test_index_to_world_places_a_voxel_where_the_matrix_says(self):
+        # One voxel at index (3, 5, 7) of a 2x-scaled grid translated by (10, 20, 30): world (16, 30, 44).
+        a = np.zeros((8, 8, 8), np.float32)
+        a[3, 5, 7] = 1.0
+        m = np.array([[2, 0, 0, 10], [0, 2, 0, 20], [0, 0, 2, 30], [0, 0, 0, 1]], float)
+        grid = vdb_ewa.from_array(a, m)
+        np.testing.assert_allclose(grid.world_centre, (16, 30, 44))
+        frame = vdb_ewa.render(grid, res="41x41", camera="ortho", frame=8, translate=(16, 30, 54), lookat=(16, 30, 44))
+        alpha = frame.beauty[..., 3]
+        self.assertGreater(alpha[20, 20], 0.1)
+        rows, columns = np.mgrid[0:41, 0:41]
+        # The alpha's centroid at the image centre (pixel 20: 8 / 41 world units a pixel).
+        self.assertAlmostEqual(float((alpha * rows).sum() / alpha.sum()), 20.0, delta=0.1)
+        self.assertAlmostEqual(float((alpha * columns).sum() / alpha.sum()), 20.0, delta=0.1)
+        # Half the voxel's depth (2 units) is in front of its centre: the depth is 10 less up to a voxel.
+        self.assertGreater(float(frame.aovs["depth"][20, 20]), 8.0)
+        self.assertLess(float(frame.aovs["depth"][20, 20]), 10.5)
+
+    # --- progress, cancellation, the GIL ---
+
+    def long_render(self, **kw):
+        return vdb_ewa.render(vdb_ewa.from_array(smoke_block((96, 96, 96), 2)), res="960x540", translate=(48, 48, 150),
+                              quality="high", threads=2, **kw)
+
+    def test_progress_rises_to_100_on_the_calling_thread(self):
+        calls = []
+        frame = self.long_render(progress=lambda p: calls.append((p, threading.get_ident())))
+        percents = [p for p, _ in calls]
+        self.assertGreater(len(percents), 2, percents)
+        self.assertEqual(percents, sorted(percents))
+        self.assertEqual(percents[-1], 100)
+        self.assertEqual({t for _, t in calls}, {threading.get_ident()})
+        self.assertGreater(frame.beauty[..., 3].max(), 0.1)
+
+    def test_cancel_from_another_thread(self):
+        token = vdb_ewa.CancelToken()
+        t0 = time.monotonic()
+        threading.Timer(0.2, token.cancel).start()
+        with self.assertRaises(vdb_ewa.Cancelled):
+            self.long_render(cancel=token)
+        self.assertLess(time.monotonic() - t0, 0.2 + 1.0)
+        self.assertTrue(token.cancelled)
+
+    def test_progress_returning_true_cancels_and_its_exceptions_propagate(self):
+        with self.assertRaises(vdb_ewa.Cancelled):
+            self.long_render(progress=lambda p: p >= 0)
+        def fails(p):
+            raise ZeroDivisionError("from the callback")
+        with self.assertRaisesRegex(ZeroDivisionError, "from the callback"):
+            self.long_render(progress=fails)
+
+    def test_the_gil_is_released_while_rendering(self):
+        counts = {"n": 0}
+        stop = threading.Event()
+        def count():
+            while not stop.is_set():
+                counts["n"] += 1
+        thread = threading.Thread(target=count)
+        thread.start()
+        try:
+            t0 = time.monotonic()
+            self.long_render()
+            seconds = time.monotonic() - t0
+        finally:
+            stop.set()
+            thread.join()
+        # Holding the GIL, the render would leave the counter only its 5 ms switch intervals' worth.
+        self.assertGreater(seconds, 0.2)
+        self.assertGreater(counts["n"], 20000 * seconds, counts)
+
+    # --- bad arguments ---
+
+    def cli_message(self, *args):
+        code, err = cli(self.cloud, self.path("never.exr"), *args)
+        self.assertNotEqual(code, 0)
+        line = err.strip().splitlines()[-1]
+        self.assertTrue(line.startswith("vdb_ewa: "), line)
+        return line[len("vdb_ewa: "):].replace(" (see vdb_ewa --help)", "")
+
+    def test_bad_options_raise_the_cli_messages(self):
+        for kw, args in [(dict(refine="x"), ["--refine", "x"]), (dict(refine=9), ["--refine", "9"]),
+                         (dict(res="0x10"), ["--res", "0x10"]), (dict(aa="blur"), ["--aa", "blur"]),
+                         (dict(light=(1, 2)), ["--light", "1,2"]), (dict(focal=30, fov=40), ["--focal", "30", "--fov", "40"])]:
+            with self.subTest(kw=kw):
+                with self.assertRaises(vdb_ewa.ValueError) as raised:
+                    vdb_ewa.render(self.cloud, **kw)
+                self.assertIsInstance(raised.exception, ValueError)  # the built-in too
+                self.assertIsInstance(raised.exception, vdb_ewa.Error)
+                self.assertEqual(str(raised.exception), self.cli_message(*args))
+        with self.assertRaisesRegex(vdb_ewa.ValueError, "unknown keyword argument 'colour'"):
+            vdb_ewa.render(self.cloud, colour="Cd")
+        with self.assertRaisesRegex(vdb_ewa.ValueError, "progress: expected a callable"):
+            vdb_ewa.render(self.cloud, progress=3)
+        with self.assertRaisesRegex(vdb_ewa.ValueError, "cancel: expected a vdb_ewa.CancelToken"):
+            vdb_ewa.render(self.cloud, cancel=True)
+        with self.assertRaisesRegex(vdb_ewa.ValueError, "grid: expected a vdb_ewa.Grid"):
+            vdb_ewa.render(42)
+        with self.assertRaisesRegex(vdb_ewa.ValueError, "translate: expected a string, number"):
+            vdb_ewa.render(self.cloud, translate={"x": 1})
+
+    def test_bad_inputs_raise_typed_exceptions(self):
+        with self.assertRaises(vdb_ewa.IoError) as raised:
+            vdb_ewa.open(self.path("missing.vdb"))
+        self.assertIsInstance(raised.exception, OSError)
+        self.assertIn("missing.vdb", str(raised.exception))
+        with open(self.path("truncated.vdb"), "wb") as f:
+            with open(self.cloud, "rb") as whole:
+                f.write(whole.read()[:200])
+        with self.assertRaises(vdb_ewa.IoError):
+            vdb_ewa.render(self.path("truncated.vdb"))
+        with self.assertRaisesRegex(vdb_ewa.InputError, "nosuchgrid"):
+            vdb_ewa.open(self.cloud, "nosuchgrid")
+        for bad, message in [(np.zeros((4, 4)), "expected a 3D array"), (np.zeros((0, 4, 4)), "empty")]:
+            with self.assertRaisesRegex(vdb_ewa.ValueError, message):
+                vdb_ewa.from_array(bad)
+        for m, message in [(np.eye(3), "4x4"), (np.zeros((4, 4)), "last row"), (np.diag([1, 1, 0, 1]), "singular"),
+                           (np.diag([np.nan, 1, 1, 1]), "not finite")]:
+            with self.assertRaisesRegex(vdb_ewa.ValueError, message):
+                vdb_ewa.from_array(np.ones((2, 2, 2)), m)
+        with self.assertRaisesRegex(vdb_ewa.ValueError, "emission_grid: the grid came from an array"):
+            vdb_ewa.render(vdb_ewa.from_array(np.ones((2, 2, 2))), emission_grid="flame")
+        with self.assertRaises(vdb_ewa.BudgetError) as raised:
+            dense = np.random.default_rng(3).random((128, 128, 128), np.float32) + 0.1  # 2M voxels, no tiles
+            vdb_ewa.render(vdb_ewa.from_array(dense), max_memory="64M", res="64x64", translate=(64, 64, 300))
+        self.assertIsInstance(raised.exception, MemoryError)
+
+    def test_write_refuses_what_the_cli_refuses(self):
+        frame = vdb_ewa.render(self.cloud, res="32x24", translate=(1.5, 0.8, 4.5))
+        os.symlink(self.cloud, self.path("cloud_link.exr"))
+        with self.assertRaisesRegex(vdb_ewa.ValueError, "same file as the input"):
+            frame.write(self.path("cloud_link.exr"))
+        self.assertEqual(os.path.getsize(self.cloud), os.path.getsize(self.path("cloud.vdb")))
+        with self.assertRaises(vdb_ewa.IoError):
+            frame.write(os.path.join(self.dir, "no", "such", "folder", "out.exr"))
+        with self.assertRaisesRegex(vdb_ewa.ValueError, "unsupported output format"):
+            frame.write(self.path("out.xyz"))
+        frame.write(self.path("out.png"))  # 8-bit through the display transform, as the CLI
+        self.assertTrue(os.path.getsize(self.path("out.png")) > 0)
+        with self.assertRaisesRegex(vdb_ewa.ValueError, "was not rendered"):
+            frame.aov("shadow")
+
+    def test_warnings_reach_python(self):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            frame = vdb_ewa.render(self.cloud, res="16x16", translate=(1.5, 0.8, 4.5), emission_color=(1, 0, 0))
+        self.assertTrue(any(issubclass(w.category, vdb_ewa.RenderWarning) and "--emission-color changes nothing" in str(w.message)
+                            for w in caught), [str(w.message) for w in caught])
+        self.assertTrue(any("--emission-color" in w for w in frame.warnings))
+
+    # --- documentation ---
+
+    def test_help_documents_every_keyword(self):
+        doc = vdb_ewa.render.__doc__
+        keywords = vdb_ewa._keywords()
+        self.assertGreater(len(keywords), 60)
+        for keyword, option, kind, description in keywords:
+            self.assertIn("    %s (%s): " % (keyword, kind), doc)
+            self.assertTrue(description, keyword)
+        for name in ("refine_emission", "lod_error", "max_memory", "exr_type", "quality", "translate"):
+            self.assertIn(name, [k[0] for k in keywords])
+
+    def test_stub_matches_the_module(self):
+        stub = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "python", "make_stub.py")
+        done = subprocess.run([sys.executable, stub, "--check"], capture_output=True, text=True)
+        self.assertEqual(done.returncode, 0, done.stdout + done.stderr)
+
+
+if __name__ == "__main__":
+    unittest.main()
