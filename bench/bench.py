@@ -37,6 +37,10 @@
                                                          vdb_render's hit mask (-shader matte), level
                                                          sets from far, default, ortho, close-up and
                                                          grazing cameras, and the time of both
+  bench/bench.py python [--scene smoke] [--res 960x540] [--repeat 7]
+                                                         issue 19: the Python module against the CLI on the
+                                                         same settings (import to array, and with the EXR
+                                                         written), vdb_render in the same rounds
   bench/bench.py output [--scene smoke] [--res 1920x1080] [--repeat 3]
                                                          issue 4's output stage: EXR pixel types,
                                                          compressions, passes and deep files, with
@@ -429,6 +433,37 @@ def cmd_targets(args):
               f"{psnr[0]} | {psnr[1]} |", flush=True)
 
 
+def cmd_python(args):
+    label, path, camera = next(s for s in SCENES if s[0] == args.scene)
+    pythonpath = os.environ.get("VDB_EWA_PYTHONPATH", os.path.join(os.path.dirname(os.path.dirname(EWA)), "python"))
+    cam = camera.split()
+    keywords = ", ".join("%s=%r" % (cam[i][1:], tuple(float(x) for x in cam[i + 1].split(","))) for i in range(0, len(cam), 2))
+    with tempfile.TemporaryDirectory() as tmp:
+        out = os.path.join(tmp, "out.exr")
+        script = ("import time; t0 = time.perf_counter(); import vdb_ewa; frame = vdb_ewa.render(%r, res=%r, exr_type='float', %s); "
+                  "a = frame.beauty; t1 = time.perf_counter(); %s print(t1 - t0)") % (
+                      path, args.res, keywords, "frame.write(%r);" % out if args.write else "")
+        python = ["/usr/bin/python3", "-c", script]
+        cli = EWA_RENDER + [path, out, "--res", args.res] + cam
+        peer = ["vdb_render", path, out, "-res", args.res] + cam
+        env = dict(os.environ, PYTHONPATH=pythonpath)
+        rows = {"vdb_render": [], "vdb_ewa CLI": [], "python process": [], "python import to array": []}
+        for _ in range(args.repeat):  # interleaved rounds: the machine's drift hits all alike
+            rows["vdb_render"].append(run(peer)[0])
+            rows["vdb_ewa CLI"].append(run(cli)[0])
+            t0 = time.perf_counter()
+            p = subprocess.run(python, capture_output=True, text=True, env=env)
+            rows["python process"].append(time.perf_counter() - t0)
+            if p.returncode != 0:
+                sys.exit(p.stderr)
+            rows["python import to array"].append(float(p.stdout.split()[-1]))
+    med = {k: statistics.median(v) for k, v in rows.items()}
+    print(f"{label} at {args.res}, median of {args.repeat} interleaved rounds{' (python writes the EXR too)' if args.write else ''}:")
+    print(f"{'':26s} {'seconds':>8s} {'/ CLI':>7s} {'/ vdb_render':>13s}")
+    for k, v in med.items():
+        print(f"{k:26s} {v:8.3f} {v / med['vdb_ewa CLI']:7.3f} {v / med['vdb_render']:13.3f}")
+
+
 def cmd_output(args):
     """The output stage's cost: pixel types, compressions, passes, deep files and the preview,
     interleaved with vdb_render's defaults; total time, the write stage (-v) and file size."""
@@ -815,6 +850,11 @@ def main():
     sx.add_argument("--res", default="1920x1080")
     sx.add_argument("--repeat", type=int, default=5)
     sx.add_argument("--cache", required=True, help="folder holding the tradeoff run's reference images")
+    sy = sub.add_parser("python")
+    sy.add_argument("--scene", default="smoke")
+    sy.add_argument("--res", default="960x540")
+    sy.add_argument("--repeat", type=int, default=7)
+    sy.add_argument("--write", action="store_true", help="the Python process writes the EXR too, as the CLI does")
     so = sub.add_parser("output")
     so.add_argument("--scene", default="smoke")
     so.add_argument("--res", default="1920x1080")
@@ -861,7 +901,7 @@ def main():
     {"speed": cmd_speed, "sigma": cmd_sigma, "tradeoff": cmd_tradeoff, "targets": cmd_targets,
      "output": cmd_output, "surfaces": cmd_surfaces, "holes": cmd_holes, "plot": cmd_plot, "ladder": cmd_ladder,
      "analytic": cmd_analytic, "roofline": cmd_roofline, "scaling": cmd_scaling,
-     "stability": cmd_stability}[a.cmd](a)
+     "stability": cmd_stability, "python": cmd_python}[a.cmd](a)
 
 
 if __name__ == "__main__":

@@ -62,6 +62,17 @@ openvdb::FloatGrid::Ptr floatGrid(const py::array& values, const py::object& ind
 
 } // namespace
 
+Mat4d objectToWorld(const py::object& matrix)
+{
+    if (matrix.is_none()) return Mat4d(1.0);
+    const auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(matrix);
+    if (!a || a.ndim() != 2 || a.shape(0) != 4 || a.shape(1) != 4) throw ValueError("object_to_world: expected a 4x4 matrix");
+    Mat4d m;
+    for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c) m[c][r] = a.at(r, c); // GLM: m[column][row]
+    return m;
+}
+
 GridSource gridFromArray(const py::array& values, const py::object& indexToWorld, const std::string& name)
 {
     openvdb::initialize();

@@ -181,6 +181,14 @@ PYBIND11_MODULE(vdb_ewa, m)
             const Vec3d c = g.worldCentre();
             return py::make_tuple(c.x, c.y, c.z);
         }, "Centre of the active voxels' bounding box in world space: the camera's default target.")
+        .def_property_readonly("voxel_length", &GridSource::voxelLength,
+            "The length densities are per (absorb, scatter, emission): cbrt |det| of the index-to-world map's linear "
+            "part, in world units.")
+        .def("transformed", [](const GridSource& g, const py::object& matrix) { return g.transformed(objectToWorld(matrix)); },
+            py::arg("object_to_world"),
+            "The same grid moved by a 4x4 object-to-world matrix, column vectors: world = M @ (x, y, z, 1) (Blender's\n"
+            "matrix_world); its colour and emission grids move with it, also those the render attaches by name.\n"
+            "Raises vdb_ewa.ValueError for a matrix that is not 4x4, finite, affine and invertible.")
         .def("__repr__", [](const GridSource& g) {
             return "<vdb_ewa.Grid '" + g.name() + "'" + (g.path().empty() ? std::string(" (array)") : " from " + g.path()) + ", " +
                    std::to_string(g.activeVoxelCount()) + " active voxels" + (g.isLevelSet() ? ", level set>" : ">");

@@ -500,3 +500,61 @@ TEST(GridSource, StreamsWithoutOffsetsAreWalkedToo)
     EXPECT_NE(openMessage(file, truncated, "density").find(file + ": damaged VDB file: "), std::string::npos)
         << openMessage(file, truncated, "density");
 }
+
+TEST(GridSource, TransformedMovesTheGridAndTheGridsAttachedBeforeOrAfter)
+{
+    // A lumpy density and a flame grid, moved by a rotation, a non-uniform scale, a shear and a
+    // translation (a DCC object's transform), against the same grids written with the moved map.
+    TempDir dir;
+    const auto lumpy = [](const openvdb::Coord& c) { return 0.2f + 0.1f * float((c.x() * 7 + c.y() * 3 + c.z()) % 5); };
+    auto density = makeFogGrid(openvdb::Coord(0), openvdb::Coord(11, 7, 9), lumpy, 0.1);
+    auto flame = makeFogGrid(openvdb::Coord(3), openvdb::Coord(8, 5, 7), [](const openvdb::Coord& c) { return 0.5f + 0.1f * float(c.x()); }, 0.1);
+    flame->setName("flame");
+    const std::string original = dir.file("original.vdb"), premoved = dir.file("moved.vdb");
+    {
+        openvdb::io::File file(original);
+        file.write({density, flame});
+    }
+    Mat4d m(1.0); // columns
+    const double a = 0.5;
+    m[0] = glm::dvec4(2.0 * std::cos(a), 0.0, -2.0 * std::sin(a), 0.0); // x scaled 2, rotated about y
+    m[1] = glm::dvec4(0.3, 1.0, 0.0, 0.0);                             // y sheared into x
+    m[2] = glm::dvec4(0.5 * std::sin(a), 0.0, 0.5 * std::cos(a), 0.0); // z scaled 0.5
+    m[3] = glm::dvec4(1.0, 2.0, 3.0, 1.0);
+    openvdb::Mat4d composite = density->transform().baseMap()->getAffineMap()->getMat4(); // row vectors
+    openvdb::Mat4d rowM;
+    for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c) rowM(r, c) = m[r][c];
+    composite = composite * rowM; // index -> file world -> moved world
+    for (auto grid : {density, flame}) grid->setTransform(openvdb::math::Transform::createLinearTransform(composite));
+    {
+        openvdb::io::File file(premoved);
+        file.write({density, flame});
+    }
+
+    const GridSource expected = GridSource::open(premoved).withEmissionGrid("flame");
+    const GridSource movedThenAttached = GridSource::open(original).transformed(m).withEmissionGrid("flame");
+    const GridSource attachedThenMoved = GridSource::open(original).withEmissionGrid("flame").transformed(m);
+    const Vec3d c0 = GridSource::open(original).worldCentre();
+    const Vec3d c1 = Vec3d(m * glm::dvec4(c0, 1.0));
+    for (const GridSource* g : {&movedThenAttached, &attachedThenMoved}) {
+        EXPECT_NEAR(glm::length(g->worldCentre() - c1), 0.0, 1e-9);
+        EXPECT_NEAR(glm::length(g->worldCentre() - expected.worldCentre()), 0.0, 1e-9);
+    }
+    RenderSettings rs;
+    const Camera camera(lookAtCamera(c1 + Vec3d(0.5, 1.0, 4.0), c1, 96, 64), c1);
+    const Image want = Renderer(rs).render(expected, camera);
+    ASSERT_GT(alphaSum(want), 50.0);
+    EXPECT_LT(maxAbsDiff(Renderer(rs).render(movedThenAttached, camera), want), 1e-4);
+    EXPECT_LT(maxAbsDiff(Renderer(rs).render(attachedThenMoved, camera), want), 1e-4);
+    // Unmoved, the image is another.
+    EXPECT_GT(maxAbsDiff(Renderer(rs).render(GridSource::open(original).withEmissionGrid("flame"), camera), want), 0.1);
+
+    Mat4d projective = m;
+    projective[0][3] = 0.1;
+    EXPECT_NE(messageOf<ValueError>([&] { GridSource::open(original).transformed(projective); }).find("last row must be 0, 0, 0, 1"),
+        std::string::npos);
+    Mat4d flat = m;
+    flat[2] = glm::dvec4(0.0);
+    EXPECT_NE(messageOf<ValueError>([&] { GridSource::open(original).transformed(flat); }).find("singular"), std::string::npos);
+}

@@ -41,6 +41,13 @@ public:
     bool hasEmissionGrid() const;
     bool hasTemperatureGrid() const;
 
+    /// The same grid moved by @a objectToWorld (column vectors: world = M (x, y, z, 1); a DCC
+    /// object's transform, e.g. Blender's matrix_world): its index-to-world map is followed by
+    /// M, for its colour and emission grids too, and for those attached to the result later.
+    /// Affine: the last row 0, 0, 0, 1; any invertible linear part (scales, shears).
+    /// @throw ValueError for a non-finite, non-affine or singular matrix.
+    GridSource transformed(const Mat4d& objectToWorld) const;
+
     const std::string& name() const;
     /// File the grid came from, empty for a host grid.
     const std::string& path() const;
@@ -53,6 +60,9 @@ public:
     std::uint64_t activeTileCount() const;
     /// Centre of the active voxel bounding box in world space (vdb_render's default target).
     Vec3d worldCentre() const;
+    /// The length densities are "per" (--absorb, --scatter, --emission): cbrt |det| of the
+    /// index-to-world map's linear part (at the centre, for a non-linear map), in world units.
+    double voxelLength() const;
 
     struct Impl;
     explicit GridSource(std::shared_ptr<const Impl> impl) : mImpl(std::move(impl)) {}

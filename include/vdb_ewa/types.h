@@ -13,6 +13,7 @@ using Vec2d = glm::dvec2;
 using Vec3d = glm::dvec3;
 using Mat2d = glm::dmat2;
 using Mat3d = glm::dmat3;
+using Mat4d = glm::dmat4;
 
 /// Build a 3x3 matrix from its rows (GLM constructors take columns).
 inline Mat3d mat3FromRows(const Vec3d& r0, const Vec3d& r1, const Vec3d& r2)

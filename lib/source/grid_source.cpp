@@ -213,6 +213,51 @@ openvdb::GridBase::Ptr readGrid(const std::string& path, std::string name, bool 
     }
 }
 
+/// @a transform followed by @a m (column vectors). @throw ValueError
+openvdb::math::Transform::Ptr followedBy(const openvdb::math::Transform& transform, const Mat4d& m)
+{
+    openvdb::Mat4d rowVector; // OpenVDB's convention: the transpose; GLM's m[column][row]
+    for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c) rowVector(r, c) = m[r][c];
+    openvdb::math::Transform::Ptr moved = transform.copy();
+    try {
+        moved->postMult(rowVector);
+    } catch (const std::exception& e) {
+        throw ValueError("transformed: the grid's transform cannot be moved (" + std::string(e.what()) + ")");
+    }
+    return moved;
+}
+
+/// @a grid read from a file, moved by @a placement (GridSource::transformed).
+openvdb::GridBase::Ptr placed(openvdb::GridBase::Ptr grid, const Mat4d& placement)
+{
+    if (placement != Mat4d(1.0)) grid->setTransform(followedBy(grid->transform(), placement));
+    return grid;
+}
+
+/// A grid sharing @a grid's tree, moved by @a m.
+template <typename GridT>
+typename GridT::ConstPtr moved(const typename GridT::ConstPtr& grid, const Mat4d& m)
+{
+    if (!grid) return grid;
+    typename GridT::Ptr copy = openvdb::ConstPtrCast<GridT>(grid)->copy(); // the tree is shared, never written
+    copy->setTransform(followedBy(grid->transform(), m));
+    return copy;
+}
+
+/// @a impl and its colour and emission grids moved by @a m.
+std::shared_ptr<GridSource::Impl> movedImpl(const GridSource::Impl& impl, const Mat4d& m)
+{
+    auto copy = std::make_shared<GridSource::Impl>(impl);
+    copy->grid = moved<openvdb::FloatGrid>(impl.grid, m);
+    copy->color = moved<openvdb::Vec3SGrid>(impl.color, m);
+    if (impl.emission) copy->emission = movedImpl(*impl.emission, m);
+    if (impl.temperature) copy->temperature = movedImpl(*impl.temperature, m);
+    copy->placement = m * impl.placement;
+    copy->derive();
+    return copy;
+}
+
 GridSource attachColor(const GridSource::Impl& impl, const openvdb::GridBase::ConstPtr& grid, const std::string& where)
 {
     if (!grid) throw InputError(where + ": null colour grid");
@@ -267,7 +312,8 @@ GridSource GridSource::open(const std::string& path, const std::string& gridName
 GridSource GridSource::withColorGrid(const std::string& colorName) const
 {
     if (mImpl->path.empty()) throw InputError("host grid: withColorGrid needs a file; use vdb_ewa::withColorGrid with the host's grid");
-    return attachColor(*mImpl, readGrid(mImpl->path, colorName, [](const std::string&) { return false; }, "colour"), mImpl->path);
+    return attachColor(*mImpl, placed(readGrid(mImpl->path, colorName, [](const std::string&) { return false; }, "colour"), mImpl->placement),
+        mImpl->path);
 }
 
 bool GridSource::hasColorGrid() const { return bool(mImpl->color); }
@@ -275,13 +321,30 @@ bool GridSource::hasColorGrid() const { return bool(mImpl->color); }
 GridSource GridSource::withEmissionGrid(const std::string& emissionName) const
 {
     if (mImpl->path.empty()) throw InputError("host grid: withEmissionGrid needs a file; use vdb_ewa::withEmissionGrid with the host's grid");
-    return attachEmitter(*mImpl, readGrid(mImpl->path, emissionName, isScalarFloatType, "scalar floating-point"), mImpl->path, false);
+    return attachEmitter(*mImpl, placed(readGrid(mImpl->path, emissionName, isScalarFloatType, "scalar floating-point"), mImpl->placement),
+        mImpl->path, false);
 }
 
 GridSource GridSource::withTemperatureGrid(const std::string& temperatureName) const
 {
     if (mImpl->path.empty()) throw InputError("host grid: withTemperatureGrid needs a file; use vdb_ewa::withTemperatureGrid with the host's grid");
-    return attachEmitter(*mImpl, readGrid(mImpl->path, temperatureName, isScalarFloatType, "scalar floating-point"), mImpl->path, true);
+    return attachEmitter(*mImpl, placed(readGrid(mImpl->path, temperatureName, isScalarFloatType, "scalar floating-point"), mImpl->placement),
+        mImpl->path, true);
+}
+
+double GridSource::voxelLength() const { return mImpl->voxelLength; }
+
+GridSource GridSource::transformed(const Mat4d& m) const
+{
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r) {
+            if (!std::isfinite(m[c][r])) throw ValueError("transformed: a matrix element is not finite");
+        }
+    if (m[0][3] != 0.0 || m[1][3] != 0.0 || m[2][3] != 0.0 || m[3][3] != 1.0) {
+        throw ValueError("transformed: the matrix's last row must be 0, 0, 0, 1 (column vectors: world = M (x, y, z, 1))");
+    }
+    if (!(std::abs(glm::determinant(Mat3d(m))) > 1e-300)) throw ValueError("transformed: the matrix is singular");
+    return GridSource(movedImpl(*mImpl, m));
 }
 
 bool GridSource::hasEmissionGrid() const { return bool(mImpl->emission); }

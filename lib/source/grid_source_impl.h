@@ -39,6 +39,8 @@ struct VDB_EWA_LOCAL GridSource::Impl
     /// same pointer as @c grid when no value needs that (fog volumes as written by DCCs) and for
     /// level sets.
     openvdb::FloatGrid::ConstPtr field;
+    /// The moves of transformed(), composed (column vectors): applied to grids read later.
+    Mat4d placement{1.0};
 
     /// Fill the derived fields from @a grid.
     void derive();

@@ -143,6 +143,26 @@ class Module(unittest.TestCase):
         self.assertGreater(float(frame.aovs["depth"][20, 20]), 8.0)
         self.assertLess(float(frame.aovs["depth"][20, 20]), 10.5)
 
+    def test_transformed_moves_the_grid_as_its_matrix_would(self):
+        # An object's transform (rotation, uneven scale, move) after the grid's own map: the same
+        # grid as the one whose map is the product.
+        a = smoke_block()
+        move = np.array([[0, -1.2, 0, 2], [1, 0, 0, -1], [0, 0, 0.7, 0.5], [0, 0, 0, 1]], float)
+        moved = vdb_ewa.from_array(a, MATRIX).transformed(move)
+        direct = vdb_ewa.from_array(a, move @ MATRIX)
+        np.testing.assert_allclose(moved.world_centre, direct.world_centre, atol=1e-9)
+        self.assertAlmostEqual(moved.voxel_length, abs(np.linalg.det((move @ MATRIX)[:3, :3])) ** (1 / 3), places=12)
+        options = dict(res="64x48", lookat=direct.world_centre, translate=np.add(direct.world_centre, (1, 2, 5)))
+        expected = vdb_ewa.render(direct, **options).beauty
+        self.assertGreater(expected[..., 3].max(), 0.3)
+        np.testing.assert_allclose(vdb_ewa.render(moved, **options).beauty, expected, atol=1e-4)
+        unmoved = vdb_ewa.render(vdb_ewa.from_array(a, MATRIX), **options).beauty
+        self.assertGreater(np.abs(unmoved - expected).max(), 0.1)
+        with self.assertRaisesRegex(vdb_ewa.ValueError, "last row must be 0, 0, 0, 1"):
+            moved.transformed(move.T)
+        with self.assertRaisesRegex(vdb_ewa.ValueError, "4x4"):
+            moved.transformed(np.eye(3))
+
     # --- progress, cancellation, the GIL ---
 
     def long_render(self, **kw):

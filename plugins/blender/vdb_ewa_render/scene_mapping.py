@@ -1,0 +1,165 @@
+"""A Blender scene as vdb_ewa.render() options: the camera, the sun lights, each volume object's
+grid, transform and Principled Volume (docs/blender.md has the table). Pure functions of bpy
+data; __init__.py renders with them."""
+import math
+import os
+
+import bpy
+
+FOUR_PI = 4.0 * math.pi
+
+
+class Volume:
+    """One volume object to render: its grid's file, grid names, transform and material options."""
+
+    def __init__(self, name, path, object_to_world, density_grid, options, depth):
+        self.name = name
+        self.path = path
+        self.object_to_world = object_to_world  # 4x4 nested lists, column vectors
+        self.density_grid = density_grid
+        self.options = options  # material options; scatter/absorb/blackbody per grid value per *world* unit
+        self.depth = depth  # of its centre from the camera, to composite several front to back
+
+
+def resolution(scene):
+    """The render's size in pixels: Blender's resolution times its percentage."""
+    r = scene.render
+    return max(1, int(r.resolution_x * r.resolution_percentage / 100)), max(1, int(r.resolution_y * r.resolution_percentage / 100))
+
+
+def camera_options(scene, warnings):
+    """The scene camera as translate, rotate (degrees, about x then y then z: Blender's XYZ Euler;
+    both cameras look down their local -z with +y up), the lens and the clip range."""
+    cam = scene.camera
+    if cam is None or cam.type != 'CAMERA':
+        raise ValueError("the scene has no camera")
+    width, height = resolution(scene)
+    location, rotation, _ = cam.matrix_world.decompose()
+    euler = rotation.to_euler('XYZ')
+    data = cam.data
+    options = dict(res="%dx%d" % (width, height), translate=tuple(location), rotate=tuple(math.degrees(a) for a in euler),
+                   near=data.clip_start, far=data.clip_end)
+    aspect = width / height
+    # Which image side the sensor (or orthographic scale) spans: Blender's sensor fit.
+    fit = data.sensor_fit
+    horizontal = fit == 'HORIZONTAL' or (fit == 'AUTO' and width >= height)
+    if data.type == 'ORTHO':
+        options["camera"] = "ortho"
+        options["frame"] = data.ortho_scale if horizontal else data.ortho_scale * aspect
+    elif data.type == 'PERSP':
+        sensor = data.sensor_width if fit != 'VERTICAL' else data.sensor_height
+        options["focal"] = data.lens
+        options["aperture"] = sensor if horizontal else sensor * aspect
+    else:
+        raise ValueError("camera %s: %s cameras are not supported (perspective and orthographic are)" % (cam.name, data.type))
+    if data.shift_x or data.shift_y:
+        warnings.append("camera %s: lens shift is ignored" % cam.name)
+    if scene.render.pixel_aspect_x != scene.render.pixel_aspect_y:
+        warnings.append("non-square pixels are ignored")
+    if data.dof.use_dof:
+        warnings.append("camera %s: depth of field is ignored" % cam.name)
+    return options
+
+
+def light_options(depsgraph, warnings):
+    """Sun lights as --light X,Y,Z,R,G,B: the direction towards the sun (its local +z) and colour
+    x strength / 4 pi (a sun of irradiance E lights an isotropic medium as vdb_ewa's light of E / 4 pi)."""
+    lights = []
+    for instance in depsgraph.object_instances:
+        obj = instance.object
+        if obj.type != 'LIGHT':
+            continue
+        light = obj.data
+        if light.type != 'SUN':
+            warnings.append("light %s: %s lights are not supported (sun lights are)" % (obj.name, light.type.lower()))
+            continue
+        m = instance.matrix_world.to_3x3()
+        d = (m[0][2], m[1][2], m[2][2])
+        norm = math.sqrt(sum(c * c for c in d))
+        if norm == 0.0:
+            continue
+        scale = light.energy / FOUR_PI
+        lights.append(tuple(c / norm for c in d) + tuple(c * scale for c in light.color))
+    return lights
+
+
+def _principled(material):
+    """The Principled Volume node feeding the material's volume output, or None."""
+    if material is None or not material.use_nodes:
+        return None
+    for node in material.node_tree.nodes:
+        if node.type == 'OUTPUT_MATERIAL' and node.is_active_output:
+            links = node.inputs['Volume'].links
+            if links and links[0].from_node.type == 'PRINCIPLED_VOLUME':
+                return links[0].from_node
+    return None
+
+
+def _value(node, name, warnings, where):
+    socket = node.inputs[name]
+    if socket.is_linked:
+        warnings.append("%s: the Principled Volume's %s is linked to other nodes; its own value is used" % (where, name))
+    value = socket.default_value
+    return tuple(value)[:3] if socket.type == 'RGBA' else value
+
+
+def material_options(obj, warnings):
+    """The object's Principled Volume as vdb_ewa options, per grid value per world unit (render()
+    multiplies them by the voxel length): Cycles' coefficients, scattering = Color x Density,
+    absorption = (1 - Color) x (1 - sqrt(Absorption Color)) x Density; blackbody from the
+    Temperature Attribute with the node's Temperature as its scale. Returns (density grid, options)."""
+    material = obj.active_material
+    node = _principled(material)
+    where = "volume %s" % obj.name
+    if node is None:
+        warnings.append("%s: no Principled Volume; rendered with Blender's default volume (density 1, grey 0.5)" % where)
+        return "density", dict(scatter=(0.5, 0.5, 0.5), absorb=(0.5, 0.5, 0.5))
+    density = _value(node, "Density", warnings, where)
+    color = _value(node, "Color", warnings, where)
+    absorption = _value(node, "Absorption Color", warnings, where)
+    scatter = tuple(c * density for c in color)
+    absorb = tuple(max(1.0 - c, 0.0) * max(1.0 - math.sqrt(max(a, 0.0)), 0.0) * density for c, a in zip(color, absorption))
+    options = dict(scatter=scatter, absorb=absorb)
+    grid = _value(node, "Density Attribute", warnings, where) or "density"
+    if _value(node, "Color Attribute", warnings, where):
+        options["color_grid"] = _value(node, "Color Attribute", warnings, where)
+    if abs(_value(node, "Anisotropy", warnings, where)) > 1e-6:
+        warnings.append("%s: anisotropy is ignored (vdb_ewa scatters isotropically)" % where)
+    if _value(node, "Emission Strength", warnings, where) > 0.0:
+        warnings.append("%s: Emission Strength is ignored (Blender's emission does not follow the density; use a "
+                        "temperature or flame grid)" % where)
+    intensity = _value(node, "Blackbody Intensity", warnings, where)
+    if intensity > 0.0:
+        options["temperature"] = _value(node, "Temperature Attribute", warnings, where) or "temperature"
+        options["temperature_scale"] = _value(node, "Temperature", warnings, where)
+        options["blackbody_intensity"] = intensity
+        if tuple(_value(node, "Blackbody Tint", warnings, where)) != (1.0, 1.0, 1.0):
+            warnings.append("%s: Blackbody Tint is ignored" % where)
+        if abs(intensity - 1.0) > 1e-6:
+            warnings.append("%s: Blackbody Intensity %g scales the emission; Cycles mixes 1 and T^4 by it (docs/lighting.md)"
+                            % (where, intensity))
+    return grid, options
+
+
+def volumes(depsgraph, camera_location, warnings):
+    """Every visible volume object with an OpenVDB file, nearest first."""
+    found = []
+    for instance in depsgraph.object_instances:
+        obj = instance.object
+        if obj.type != 'VOLUME':
+            continue
+        data = obj.data
+        path = bpy.path.abspath(data.filepath, library=data.library)
+        if data.is_sequence:
+            path = bpy.path.abspath(data.grids.frame_filepath, library=data.library) or path
+        if not path or not os.path.isfile(path):
+            warnings.append("volume %s: no OpenVDB file (%s); skipped" % (obj.name, path or "none"))
+            continue
+        grid, options = material_options(obj, warnings)
+        m = instance.matrix_world
+        object_to_world = [[m[r][c] for c in range(4)] for r in range(4)]
+        centre = m.translation
+        depth = (centre - camera_location).length
+        found.append(Volume(obj.name, path, object_to_world, grid, options, depth))
+    found.sort(key=lambda v: v.depth)
+    return found

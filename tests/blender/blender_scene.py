@@ -1,0 +1,83 @@
+"""Run inside Blender (blender -b --factory-startup --python blender_scene.py -- PARAMS.json): build
+the test scene from PARAMS (a volume object loading a .vdb file with a transform and a Principled
+Volume, a camera aimed at a point, a sun), render it with PARAMS["engine"] and save Blender's own
+render result as a float EXR and as a PNG (Standard view)."""
+import json
+import math
+import sys
+import time
+
+import bpy
+import mathutils
+
+params = json.load(open(sys.argv[sys.argv.index("--") + 1]))
+
+bpy.ops.wm.read_factory_settings(use_empty=True)
+scene = bpy.context.scene
+if params["engine"] == "VDB_EWA":
+    sys.path.insert(0, params["addon_dir"])
+    import vdb_ewa_render
+    vdb_ewa_render.register()
+    scene.vdb_ewa.quality = params.get("quality", "default")
+scene.render.engine = params["engine"]
+scene.render.resolution_x, scene.render.resolution_y = params["res"]
+scene.render.resolution_percentage = 100
+scene.render.film_transparent = True
+scene.view_settings.view_transform = "Standard"
+scene.view_settings.look = "None"
+if params["engine"] == "CYCLES":
+    scene.cycles.samples = params["cycles_samples"]
+    scene.cycles.seed = params.get("cycles_seed", 0)
+    scene.cycles.use_denoising = False
+    scene.cycles.volume_bounces = 0  # single scattering, as vdb_ewa's
+    scene.cycles.volume_step_rate = params.get("cycles_step_rate", 1.0)
+    scene.cycles.device = "CPU"
+    scene.render.threads_mode = "FIXED"
+    scene.render.threads = 2
+
+volume = bpy.data.volumes.new("asset")
+volume.filepath = params["asset"]
+obj = bpy.data.objects.new("asset", volume)
+scene.collection.objects.link(obj)
+obj.matrix_world = mathutils.Matrix(params["object_to_world"])
+material = bpy.data.materials.new("volume")
+material.use_nodes = True
+nodes = material.node_tree.nodes
+for node in list(nodes):
+    if node.type != "OUTPUT_MATERIAL":
+        nodes.remove(node)
+principled = nodes.new("ShaderNodeVolumePrincipled")
+principled.inputs["Density"].default_value = params["density"]
+principled.inputs["Color"].default_value = (*params["color"], 1.0)
+principled.inputs["Absorption Color"].default_value = (*params["absorption_color"], 1.0)
+principled.inputs["Density Attribute"].default_value = params["grid"]
+output = next(n for n in nodes if n.type == "OUTPUT_MATERIAL")
+material.node_tree.links.new(principled.outputs["Volume"], output.inputs["Volume"])
+volume.materials.append(material)
+
+camera_data = bpy.data.cameras.new("camera")
+camera_data.lens = params["focal"]
+camera_data.sensor_width = params["sensor"]
+camera_data.clip_start, camera_data.clip_end = params["clip"]
+camera = bpy.data.objects.new("camera", camera_data)
+scene.collection.objects.link(camera)
+eye, target = mathutils.Vector(params["eye"]), mathutils.Vector(params["target"])
+camera.matrix_world = mathutils.Matrix.LocRotScale(eye, (target - eye).to_track_quat("-Z", "Y"), None)
+scene.camera = camera
+
+sun_data = bpy.data.lights.new("sun", "SUN")
+sun_data.energy = params["sun_strength"]
+sun_data.color = params["sun_color"]
+sun = bpy.data.objects.new("sun", sun_data)
+scene.collection.objects.link(sun)
+sun.matrix_world = mathutils.Matrix.LocRotScale(None, mathutils.Vector(params["sun_direction"]).to_track_quat("Z", "Y"), None)
+
+t0 = time.monotonic()
+bpy.ops.render.render()
+print("blender_scene: %s rendered in %.3f s" % (params["engine"], time.monotonic() - t0))
+result = bpy.data.images["Render Result"]
+settings = scene.render.image_settings
+settings.file_format, settings.color_depth, settings.color_mode = "OPEN_EXR", "32", "RGBA"
+result.save_render(params["exr"])
+settings.file_format, settings.color_depth, settings.color_mode = "PNG", "8", "RGBA"
+result.save_render(params["png"])

@@ -1,0 +1,169 @@
+"""The Blender add-on in the real client: blender -b builds a scene (a volume object loading a
+.vdb file, moved by a rotation, a non-uniform scale and a translation, with a Principled Volume; a
+camera aimed at a point; a sun), renders it through the vdb_ewa engine in-process, and saves
+Blender's render result. The CLI renders the same scene from options this script derives on its
+own (the grid rewritten with the moved transform by pyopenvdb, --lookat for the camera, the
+material and sun by docs/blender.md's formulas); the two must agree to 40 dB PSNR.
+
+Exit 77 (ctest's skip) with a message where Blender, pyopenvdb or OpenImageIO is missing.
+
+    python3 run_blender_test.py --cli build/cmd/vdb_ewa/vdb_ewa --module-dir build/python \
+        --addon-dir plugins/blender --out OUTDIR [--engine CYCLES --samples 64]  (figures)
+"""
+import argparse
+import json
+import math
+import os
+import shutil
+import subprocess
+import sys
+import time
+
+SKIP = 77
+
+
+def skip(message):
+    print("SKIP: " + message)
+    sys.exit(SKIP)
+
+
+try:
+    import numpy as np
+    import OpenImageIO as oiio
+    import pyopenvdb
+except ImportError as e:
+    skip("needs numpy, OpenImageIO and pyopenvdb for Python (python3-openimageio, python3-openvdb): %s" % e)
+
+
+def read_rgba(path):
+    image = oiio.ImageInput.open(path)
+    if image is None:
+        sys.exit("FAIL: cannot read %s (%s)" % (path, oiio.geterror()))
+    spec = image.spec()
+    pixels = np.asarray(image.read_image(format="float")).reshape(spec.height, spec.width, spec.nchannels)
+    names = list(spec.channelnames)
+    image.close()
+    return np.stack([pixels[..., names.index(c)] for c in "RGBA"], axis=-1)
+
+
+def psnr(a, b):
+    mse = float(np.mean((a.astype(np.float64) - b.astype(np.float64)) ** 2))
+    return math.inf if mse == 0.0 else 10.0 * math.log10(1.0 / mse)
+
+
+def matrix_of(transform):
+    """A linear pyopenvdb transform as a 4x4 column-vector matrix (from its images of the axes)."""
+    o = np.array(transform.indexToWorld((0, 0, 0)))
+    m = np.eye(4)
+    for axis in range(3):
+        e = [0, 0, 0]
+        e[axis] = 1
+        m[:3, axis] = np.array(transform.indexToWorld(tuple(e))) - o
+    m[:3, 3] = o
+    return m
+
+
+def rotation_z(degrees):
+    c, s = math.cos(math.radians(degrees)), math.sin(math.radians(degrees))
+    return np.array([[c, -s, 0, 0], [s, c, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]])
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--cli", required=True)
+    parser.add_argument("--module-dir", required=True)
+    parser.add_argument("--addon-dir", required=True)
+    parser.add_argument("--out", required=True)
+    parser.add_argument("--default-assets", default="", help="the assets' folder where $VDB_EWA_ASSETS is not set")
+    parser.add_argument("--res", default="320x180")
+    parser.add_argument("--engine", default="VDB_EWA", help="VDB_EWA (the test) or CYCLES (a figure)")
+    parser.add_argument("--samples", type=int, default=64, help="Cycles samples (--engine CYCLES)")
+    parser.add_argument("--seed", type=int, default=0, help="Cycles' seed (--engine CYCLES)")
+    parser.add_argument("--quality", default="default")
+    args = parser.parse_args()
+
+    blender = shutil.which("blender")
+    if blender is None:
+        skip("Blender is not installed (Debian's blender; scripts/install-deps.sh --test installs it)")
+    os.makedirs(args.out, exist_ok=True)
+    out = lambda name: os.path.join(args.out, name)
+
+    # The asset: the shared pyro when present, else the sample cloud.
+    assets = os.environ.get("VDB_EWA_ASSETS", args.default_assets)
+    asset = os.path.join(assets, "pyro.vdb") if assets else ""
+    if not os.path.isfile(asset):
+        asset = out("cloud.vdb")
+        subprocess.run([args.cli, "make-grid", "cloud", asset], check=True, capture_output=True)
+    grid = pyopenvdb.readAll(asset)[0][0]
+    file_map = matrix_of(grid.transform)
+    centre = file_map @ np.array([*(np.add(*grid.evalActiveVoxelBoundingBox()) / 2.0), 1.0])
+
+    # The object's transform: scaled unevenly in its own axes, rotated, moved (loc/rot/scale hold no shear).
+    object_to_world = rotation_z(20) @ np.diag([1.5, 1.0, 0.8, 1.0])
+    object_to_world[:3, 3] = (1.0, -0.5, 0.3)
+    target = (object_to_world @ centre)[:3]
+    extent = np.linalg.norm(file_map[:3, :3] @ (np.array(grid.evalActiveVoxelBoundingBox()[1]) - grid.evalActiveVoxelBoundingBox()[0]))
+    eye = target + extent * np.array([0.25, -0.9, 0.35])
+    width, height = map(int, args.res.split("x"))
+    params = dict(engine=args.engine, addon_dir=os.path.abspath(args.addon_dir), asset=os.path.abspath(asset), grid=grid.name,
+                  res=[width, height], object_to_world=object_to_world.tolist(), density=2.0, color=[0.9, 0.7, 0.5],
+                  absorption_color=[0.3, 0.2, 0.6], focal=35.0, sensor=36.0, clip=[0.01, 1000.0], eye=eye.tolist(),
+                  target=target.tolist(), sun_strength=4.0, sun_color=[1.0, 0.9, 0.8],
+                  sun_direction=(np.array([0.4, -0.3, 0.8]) / np.linalg.norm([0.4, -0.3, 0.8])).tolist(),
+                  cycles_samples=args.samples, cycles_seed=args.seed, quality=args.quality, exr=out("blender.exr"), png=out("blender.png"))
+    with open(out("params.json"), "w") as f:
+        json.dump(params, f, indent=1)
+    env = dict(os.environ, VDB_EWA_PYTHONPATH=os.path.abspath(args.module_dir))
+    t0 = time.monotonic()
+    done = subprocess.run([blender, "-b", "--factory-startup", "--python-exit-code", "1", "--python",
+                           os.path.join(os.path.dirname(os.path.abspath(__file__)), "blender_scene.py"), "--", out("params.json")],
+                          capture_output=True, text=True, env=env, timeout=1800)
+    blender_seconds = time.monotonic() - t0
+    log = done.stdout + done.stderr
+    with open(out("blender.log"), "w") as f:
+        f.write(log)
+    if done.returncode != 0 or not os.path.isfile(out("blender.exr")):
+        sys.exit("FAIL: blender exited %d; its log ends:\n%s" % (done.returncode, log[-3000:]))
+    errors = [line for line in log.splitlines() if "vdb_ewa:" in line and "Error" in line]
+    if errors:
+        sys.exit("FAIL: the engine reported:\n" + "\n".join(errors))
+    print("blender: %.2f s from start to saved result (%s)" % (blender_seconds, args.engine))
+    print([line for line in log.splitlines() if line.startswith("blender_scene:")][-1])
+    if args.engine != "VDB_EWA":
+        return 0
+
+    # The CLI's image of the same scene, from this script's own derivation.
+    moved = pyopenvdb.readAll(asset)[0][0]
+    composite = object_to_world @ file_map
+    moved.transform = pyopenvdb.createLinearTransform(composite.T.tolist())  # OpenVDB: row vectors
+    pyopenvdb.write(out("moved.vdb"), grids=[moved])
+    voxel = abs(np.linalg.det(composite[:3, :3])) ** (1.0 / 3.0)
+    color, absorption, density = np.array(params["color"]), np.array(params["absorption_color"]), params["density"]
+    scatter = color * density * voxel
+    absorb = np.maximum(1 - color, 0) * np.maximum(1 - np.sqrt(absorption), 0) * density * voxel
+    light = list(params["sun_direction"]) + list(np.array(params["sun_color"]) * params["sun_strength"] / (4 * math.pi))
+    join = lambda v: ",".join("%.17g" % x for x in v)
+    cli = [args.cli, out("moved.vdb"), out("cli.exr"), "--name", grid.name, "--res", args.res, "--translate", join(eye),
+           "--lookat", join(target), "--up", "0,0,1", "--focal", "35", "--aperture", "36", "--near", "0.01", "--far", "1000",
+           "--light", join(light), "--scatter", join(scatter), "--absorb", join(absorb), "--quality", args.quality,
+           "--working-space", "lin_rec709", "--output-space", "lin_rec709", "--exr-type", "float", "-q"]
+    done = subprocess.run(cli, capture_output=True, text=True)
+    if done.returncode != 0:
+        sys.exit("FAIL: the CLI exited %d: %s" % (done.returncode, done.stderr))
+    engine, reference = read_rgba(out("blender.exr")), read_rgba(out("cli.exr"))
+    if engine.shape != reference.shape:
+        sys.exit("FAIL: Blender's image is %s, the CLI's %s" % (engine.shape, reference.shape))
+    value = psnr(engine, reference)
+    coverage = float((reference[..., 3] > 0.05).mean())
+    print("engine against the CLI: %.1f dB PSNR (RGBA); alpha max %.3f (CLI %.3f), %.0f %% of pixels covered"
+          % (value, engine[..., 3].max(), reference[..., 3].max(), 100 * coverage))
+    if coverage < 0.05:
+        sys.exit("FAIL: the CLI's image is nearly empty: the test scene does not frame the grid")
+    if value < 40.0:
+        sys.exit("FAIL: %.1f dB < 40 dB: the engine's scene conversion differs from the CLI's" % value)
+    print("PASS")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
