@@ -435,14 +435,14 @@ def cmd_targets(args):
 
 def cmd_python(args):
     label, path, camera = next(s for s in SCENES if s[0] == args.scene)
-    pythonpath = os.environ.get("VDB_EWA_PYTHONPATH", os.path.join(os.path.dirname(os.path.dirname(EWA)), "python"))
+    pythonpath = os.environ.get("VDB_EWA_PYTHONPATH", os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(EWA))), "python"))
     cam = camera.split()
     keywords = ", ".join("%s=%r" % (cam[i][1:], tuple(float(x) for x in cam[i + 1].split(","))) for i in range(0, len(cam), 2))
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "out.exr")
         script = ("import time; t0 = time.perf_counter(); import vdb_ewa; frame = vdb_ewa.render(%r, res=%r, exr_type='float', %s); "
                   "a = frame.beauty; t1 = time.perf_counter(); %s print(t1 - t0)") % (
-                      path, args.res, keywords, "frame.write(%r);" % out if args.write else "")
+                      path, args.res, keywords, "vdb_ewa.set_exr_threads(0); frame.write(%r);" % out if args.write else "")
         python = ["/usr/bin/python3", "-c", script]
         cli = EWA_RENDER + [path, out, "--res", args.res] + cam
         peer = ["vdb_render", path, out, "-res", args.res] + cam

@@ -284,6 +284,10 @@ PYBIND11_MODULE(vdb_ewa, m)
         return frame;
     }, py::arg("grid"), py::kw_only(), py::arg("progress") = py::none(), py::arg("cancel") = py::none(), renderDoc().c_str());
 
+    m.def("set_exr_threads", &setExrThreadsProcessWide, py::arg("threads") = 0,
+        "Let OpenEXR compress written files with this many threads (0: all cores), as the CLI does. Process-wide\n"
+        "(OpenEXR's global thread pool): for standalone scripts, not inside a DCC whose own EXR I/O shares it.\n"
+        "Without it, Frame.write() compresses on OpenEXR's default pool (none: one thread).");
     m.def("_keywords", [] {
         py::list out;
         for (const KeywordInfo& k : renderKeywords()) out.append(py::make_tuple(k.keyword, k.option, k.type, k.description));

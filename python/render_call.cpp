@@ -191,10 +191,9 @@ Frame renderOnWorker(const Renderer& renderer, const GridSource& grid, const Cam
         std::tie(percent, done) = interrupter.wait(reported, std::chrono::milliseconds(50));
         if (PyErr_CheckSignals() != 0) throw py::error_already_set(); // the guard cancels and joins
         if (done && !interrupter.error()) percent = 100;
-        if (!progress.is_none() && percent != reported && percent >= 0) {
-            reported = percent;
-            if (py::bool_(progress(percent))) interrupter.cancel(); // an exception: the guard cancels
-        }
+        if (percent == reported) continue; // the 50 ms passed with no news
+        reported = percent; // also without a callback, or the wait would return at once from now on
+        if (!progress.is_none() && percent >= 0 && py::bool_(progress(percent))) interrupter.cancel(); // an exception: the guard cancels
     }
     guard.join();
     if (const std::exception_ptr error = interrupter.error()) std::rethrow_exception(error);

@@ -44,6 +44,16 @@ done
 echo "== installed CLI"
 "$prefix/bin/vdb_ewa" --version
 
+# The Python module, where the build has one: imported from the prefix alone (its RPATH finds
+# libvdb_ewa.so there), its stub beside it.
+module=$(find "$prefix" -name 'vdb_ewa.cpython-*.so' -print -quit)
+if [ -n "$module" ]; then
+  echo "== installed Python module $module"
+  [ -f "$(dirname "$module")/vdb_ewa.pyi" ] || { echo "FAIL: vdb_ewa.pyi is not installed beside the module" >&2; exit 1; }
+  (cd "$work" && PYTHONPATH="$(dirname "$module")" LD_LIBRARY_PATH= /usr/bin/python3 -c \
+    'import vdb_ewa, sys; assert vdb_ewa.__file__.startswith(sys.argv[1]), vdb_ewa.__file__; print("vdb_ewa", vdb_ewa.__version__)' "$prefix")
+fi
+
 echo "== consumer project"
 # No build type (-O0): the OpenVDB headers compile a third faster, and the rendering runs in the
 # installed, optimised library anyway.
