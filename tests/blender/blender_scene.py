@@ -81,3 +81,36 @@ settings.file_format, settings.color_depth, settings.color_mode = "OPEN_EXR", "3
 result.save_render(params["exr"])
 settings.file_format, settings.color_depth, settings.color_mode = "PNG", "8", "RGBA"
 result.save_render(params["png"])
+
+if params["engine"] == "VDB_EWA":
+    # Progress and Esc: an engine whose test_break() turns true after its second progress report
+    # (Esc in the UI) must stop the render at once; the reports must rise.
+    # The add-on's render functions on an engine of its own (a subclass of a registered engine
+    # would take over its RNA type).
+    class CancellingEngine(bpy.types.RenderEngine):
+        bl_idname = "VDB_EWA_CANCEL_TEST"
+        bl_label = "vdb_ewa (cancel test)"
+        render = vdb_ewa_render.VdbEwaRenderEngine.render
+        report_frame = vdb_ewa_render.VdbEwaRenderEngine.report_frame
+        reports = []
+
+        def report_progress(self, value):  # RNA's update_progress cannot be overridden
+            CancellingEngine.reports.append(value)
+            self.update_progress(value)
+
+        def cancel_requested(self):
+            return len(CancellingEngine.reports) >= 2
+
+    bpy.utils.register_class(CancellingEngine)
+    scene.render.engine = "VDB_EWA_CANCEL_TEST"
+    scene.vdb_ewa.quality = "final"  # long enough to be cancelled midway
+    t0 = time.monotonic()
+    bpy.ops.render.render()
+    cancelled_seconds = time.monotonic() - t0
+    scene.vdb_ewa.quality = "default"
+    scene.render.engine = "VDB_EWA"
+    t0 = time.monotonic()
+    bpy.ops.render.render()
+    full_seconds = time.monotonic() - t0
+    with open(params["exr"] + ".progress.json", "w") as f:
+        json.dump(dict(cancelled_reports=CancellingEngine.reports, cancelled_seconds=cancelled_seconds, full_seconds=full_seconds), f)

@@ -134,7 +134,9 @@ def main():
 
     # The CLI's image of the same scene, from this script's own derivation.
     moved = pyopenvdb.readAll(asset)[0][0]
-    composite = object_to_world @ file_map
+    half_voxel = np.eye(4)
+    half_voxel[:3, 3] = 0.5  # Blender's voxel (i, j, k) is at the centre of the index cell [i, i + 1]^3
+    composite = object_to_world @ file_map @ half_voxel
     moved.transform = pyopenvdb.createLinearTransform(composite.T.tolist())  # OpenVDB: row vectors
     pyopenvdb.write(out("moved.vdb"), grids=[moved])
     voxel = abs(np.linalg.det(composite[:3, :3])) ** (1.0 / 3.0)
@@ -145,7 +147,7 @@ def main():
     join = lambda v: ",".join("%.17g" % x for x in v)
     cli = [args.cli, out("moved.vdb"), out("cli.exr"), "--name", grid.name, "--res", args.res, "--translate", join(eye),
            "--lookat", join(target), "--up", "0,0,1", "--focal", "35", "--aperture", "36", "--near", "0.01", "--far", "1000",
-           "--light", join(light), "--scatter", join(scatter), "--absorb", join(absorb), "--quality", args.quality,
+           "--light", join(light), "--gain", "0", "--scatter", join(scatter), "--absorb", join(absorb), "--quality", args.quality,
            "--working-space", "lin_rec709", "--output-space", "lin_rec709", "--exr-type", "float", "-q"]
     done = subprocess.run(cli, capture_output=True, text=True)
     if done.returncode != 0:
@@ -161,6 +163,16 @@ def main():
         sys.exit("FAIL: the CLI's image is nearly empty: the test scene does not frame the grid")
     if value < 40.0:
         sys.exit("FAIL: %.1f dB < 40 dB: the engine's scene conversion differs from the CLI's" % value)
+    # Esc: the engine stopped after its second progress report, well before a final render's end.
+    with open(out("blender.exr") + ".progress.json") as f:
+        progress = json.load(f)
+    reports = progress["cancelled_reports"]
+    print("Esc: progress %s, cancelled after %.2f s (a default render: %.2f s)"
+          % (", ".join("%.2f" % r for r in reports), progress["cancelled_seconds"], progress["full_seconds"]))
+    if len(reports) < 2 or reports != sorted(reports) or not 0.0 <= reports[0] < 1.0:
+        sys.exit("FAIL: the engine's progress reports do not rise from 0 to 1: %s" % reports)
+    if reports[-1] >= 1.0 or len(reports) > 3:
+        sys.exit("FAIL: the render was not cancelled when test_break() turned true: %s" % reports)
     print("PASS")
     return 0
 

@@ -97,6 +97,8 @@ def render_options(depsgraph, warnings):
     options = scene_mapping.camera_options(scene, warnings)
     options["light"] = scene_mapping.light_options(depsgraph, warnings) or [(0.0, 0.0, 1.0, 0.0, 0.0, 0.0)]
     # Blender's scene-linear space is linear Rec.709; render and return it there.
+    # Cycles' attenuation: shadows fall as exp(-optical depth), without vdb_render's --gain.
+    options["gain"] = 0.0
     options["working_space"] = "lin_rec709"
     options["output_space"] = "lin_rec709"
     options["quality"] = scene.vdb_ewa.quality
@@ -139,6 +141,14 @@ class VdbEwaRenderEngine(bpy.types.RenderEngine):
         finally:
             self.end_result(result)
 
+    def report_progress(self, value):
+        """Blender's progress bar (the status bar), 0 to 1."""
+        self.update_progress(value)
+
+    def cancel_requested(self):
+        """Esc: Blender's test_break()."""
+        return self.test_break()
+
     def report_frame(self, depsgraph, result, width, height):
         try:
             vdb_ewa = import_vdb_ewa()
@@ -157,8 +167,8 @@ class VdbEwaRenderEngine(bpy.types.RenderEngine):
             self.update_stats("vdb_ewa", "volume %s (%d of %d)" % (volume.name, index + 1, len(volumes)))
 
             def progress(percent, index=index):
-                self.update_progress((index + percent / 100.0) / len(volumes))
-                return self.test_break()  # Esc
+                self.report_progress((index + percent / 100.0) / len(volumes))
+                return self.cancel_requested()
 
             try:
                 grid, material = volume_options(vdb_ewa, volume)

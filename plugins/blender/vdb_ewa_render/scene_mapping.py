@@ -5,6 +5,7 @@ import math
 import os
 
 import bpy
+import mathutils
 
 FOUR_PI = 4.0 * math.pi
 
@@ -141,6 +142,18 @@ def material_options(obj, warnings):
     return grid, options
 
 
+def half_voxel(volume, grid_name):
+    """Blender's placement of a grid's voxels, in object space: Cycles (and the viewport) put voxel
+    (i, j, k)'s value at the centre of the index cell [i, i + 1]^3, OpenVDB and vdb_ewa at the
+    index point (i, j, k) itself: half a voxel apart along each index axis (measured against
+    Cycles, docs/blender.md). Zero where the grid is not found (the render then says why)."""
+    volume.grids.load()
+    for grid in volume.grids:
+        if grid.name == grid_name:
+            return grid.matrix_object.to_3x3() @ mathutils.Vector((0.5, 0.5, 0.5))
+    return mathutils.Vector((0.0, 0.0, 0.0))
+
+
 def volumes(depsgraph, camera_location, warnings):
     """Every visible volume object with an OpenVDB file, nearest first."""
     found = []
@@ -156,7 +169,7 @@ def volumes(depsgraph, camera_location, warnings):
             warnings.append("volume %s: no OpenVDB file (%s); skipped" % (obj.name, path or "none"))
             continue
         grid, options = material_options(obj, warnings)
-        m = instance.matrix_world
+        m = instance.matrix_world @ mathutils.Matrix.Translation(half_voxel(data, grid))
         object_to_world = [[m[r][c] for c in range(4)] for r in range(4)]
         centre = m.translation
         depth = (centre - camera_location).length
