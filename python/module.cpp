@@ -184,7 +184,11 @@ PYBIND11_MODULE(vdb_ewa, m)
         .def_property_readonly("voxel_length", &GridSource::voxelLength,
             "The length densities are per (absorb, scatter, emission): cbrt |det| of the index-to-world map's linear "
             "part, in world units.")
-        .def("transformed", [](const GridSource& g, const py::object& matrix) { return g.transformed(objectToWorld(matrix)); },
+        .def("transformed", [](const GridSource& g, const py::object& matrix) {
+            const Mat4d m = objectToWorld(matrix);
+            py::gil_scoped_release release; // the moved grids are scanned again (the field's values)
+            return g.transformed(m);
+        },
             py::arg("object_to_world"),
             "The same grid moved by a 4x4 object-to-world matrix, column vectors: world = M @ (x, y, z, 1) (Blender's\n"
             "matrix_world); its colour and emission grids move with it, also those the render attaches by name.\n"
@@ -205,8 +209,14 @@ PYBIND11_MODULE(vdb_ewa, m)
     m.def("from_array", [](const py::array& array, const py::object& indexToWorld, const std::string& name, const py::object& emission,
               const py::object& temperature) {
         GridSource grid = gridFromArray(array, indexToWorld, name);
-        if (!emission.is_none()) grid = withArrayEmitter(grid, emission.cast<py::array>(), indexToWorld, "emission");
-        if (!temperature.is_none()) grid = withArrayEmitter(grid, temperature.cast<py::array>(), indexToWorld, "temperature");
+        for (const auto& [values, kind] : {std::pair{&emission, "emission"}, {&temperature, "temperature"}}) {
+            if (values->is_none()) continue;
+            const py::array a = py::array::ensure(*values);
+            if (!a || a.ndim() != array.ndim() || !std::equal(a.shape(), a.shape() + a.ndim(), array.shape())) {
+                throw vdb_ewa::ValueError(std::string(kind) + ": expected an array of the density's shape");
+            }
+            grid = withArrayEmitter(grid, a, indexToWorld, kind);
+        }
         return grid;
     }, py::arg("array"), py::arg("index_to_world") = py::none(), py::arg("name") = "density", py::kw_only(),
         py::arg("emission") = py::none(), py::arg("temperature") = py::none(),
@@ -280,7 +290,7 @@ PYBIND11_MODULE(vdb_ewa, m)
         std::shared_ptr<RenderedFrame> frame = render(grid, progress, token, kwargs);
         const py::object warn = py::module_::import("warnings").attr("warn");
         const py::object category = py::module_::import("vdb_ewa").attr("RenderWarning");
-        for (const std::string& w : frame->warnings) warn(w, category, 2);
+        for (const std::string& w : frame->warnings) warn(w, category, 1); // this C function has no frame: 1 is the caller
         return frame;
     }, py::arg("grid"), py::kw_only(), py::arg("progress") = py::none(), py::arg("cancel") = py::none(), renderDoc().c_str());
 

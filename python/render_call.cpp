@@ -190,6 +190,7 @@ Frame renderOnWorker(const Renderer& renderer, const GridSource& grid, const Cam
         int percent = 0;
         std::tie(percent, done) = interrupter.wait(reported, std::chrono::milliseconds(50));
         if (PyErr_CheckSignals() != 0) throw py::error_already_set(); // the guard cancels and joins
+        if (cancel && cancel->cancelled.load(std::memory_order_relaxed)) interrupter.cancel(); // seen at the render's next check
         if (done && !interrupter.error()) percent = 100;
         if (percent == reported) continue; // the 50 ms passed with no news
         reported = percent; // also without a callback, or the wait would return at once from now on
@@ -219,20 +220,20 @@ std::vector<KeywordInfo> renderKeywords()
 
 std::unique_ptr<ParsedOptions> RenderedFrame::prepared(const std::string& path) const
 {
-    // The options again, prepared for @a path (its format, the preview) as the CLI prepares them.
+    // The options again, prepared for @a path (its format, the preview, display and view) as the CLI prepares them.
     auto parsed = std::make_unique<ParsedOptions>();
     parsed->parse(arguments);
     CameraSettings cam;
     RenderSettings rs;
     parsed->options.resolve(std::nullopt, cam, rs);
     std::vector<std::string> ignored; // render() reported them
-    parsed->options.prepare(path, path.empty() ? "" : parsed->options.output().previewOption(), rs, ignored);
+    parsed->options.prepare(path, parsed->options.output().previewOption(), rs, ignored);
     return parsed;
 }
 
 cli::Attributes RenderedFrame::metadata() const
 {
-    return prepared("")->options.headerAttributes(grid, camera, given, input, seconds, std::nullopt);
+    return options->options.headerAttributes(grid, camera, given, input, seconds, std::nullopt);
 }
 
 void RenderedFrame::write(const std::string& path) const
@@ -255,7 +256,8 @@ std::shared_ptr<RenderedFrame> render(const py::object& gridOrPath, const py::ob
     }
     if (!progress.is_none() && !PyCallable_Check(progress.ptr())) throw ValueError("progress: expected a callable taking the percent");
     const std::vector<std::string> arguments = argumentsOf(kwargs, isPath);
-    ParsedOptions parsed;
+    const auto options = std::make_shared<ParsedOptions>();
+    ParsedOptions& parsed = *options;
     parsed.parse(arguments);
     CameraSettings cam;
     RenderSettings given;
@@ -279,6 +281,7 @@ std::shared_ptr<RenderedFrame> render(const py::object& gridOrPath, const py::ob
                                  "emission= and temperature= arrays)");
             }
         }
+        py::gil_scoped_release release; // reads and resamples the colour and emission grids
         grid = parsed.options.withExtraGrids(opened);
     }
     const Camera camera(cam, grid->worldCentre());
@@ -292,6 +295,7 @@ std::shared_ptr<RenderedFrame> render(const py::object& gridOrPath, const py::ob
 
     auto result = std::make_shared<RenderedFrame>(*grid, camera);
     result->arguments = arguments;
+    result->options = options;
     result->input = input;
     result->given = given;
     const Renderer renderer(working);

@@ -49,6 +49,7 @@ struct RenderedFrame
     Frame output;                       ///< in --output-space
     Frame working;                      ///< in the working space, for write()
     std::vector<std::string> arguments; ///< the keyword arguments as command-line arguments
+    std::shared_ptr<const ParsedOptions> options; ///< as render() resolved and prepared them
     GridSource grid;
     std::string input; ///< the grid's file, empty for an array
     Camera camera;
@@ -65,7 +66,7 @@ struct RenderedFrame
     cli::Attributes metadata() const;
 
 private:
-    /// The render's options parsed again and prepared for @a path (empty: in memory).
+    /// The render's options parsed again and prepared for @a path.
     std::unique_ptr<ParsedOptions> prepared(const std::string& path) const;
 };
 

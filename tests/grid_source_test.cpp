@@ -501,7 +501,7 @@ TEST(GridSource, StreamsWithoutOffsetsAreWalkedToo)
         << openMessage(file, truncated, "density");
 }
 
-TEST(GridSource, TransformedMovesTheGridAndTheGridsAttachedBeforeOrAfter)
+TEST(GridSource, TransformedMovesTheGridAndTheGridsAttachedBeforeOrAfterFromFilesOrHosts)
 {
     // A lumpy density and a flame grid, moved by a rotation, a non-uniform scale, a shear and a
     // translation (a DCC object's transform), against the same grids written with the moved map.
@@ -515,6 +515,7 @@ TEST(GridSource, TransformedMovesTheGridAndTheGridsAttachedBeforeOrAfter)
         openvdb::io::File file(original);
         file.write({density, flame});
     }
+    const openvdb::GridBase::Ptr hostFlame = flame->deepCopy(); // a host's grid, in the file's world
     Mat4d m(1.0); // columns
     const double a = 0.5;
     m[0] = glm::dvec4(2.0 * std::cos(a), 0.0, -2.0 * std::sin(a), 0.0); // x scaled 2, rotated about y
@@ -535,6 +536,7 @@ TEST(GridSource, TransformedMovesTheGridAndTheGridsAttachedBeforeOrAfter)
     const GridSource expected = GridSource::open(premoved).withEmissionGrid("flame");
     const GridSource movedThenAttached = GridSource::open(original).transformed(m).withEmissionGrid("flame");
     const GridSource attachedThenMoved = GridSource::open(original).withEmissionGrid("flame").transformed(m);
+    const GridSource hostAttachedAfter = withEmissionGrid(GridSource::open(original).transformed(m), hostFlame);
     const Vec3d c0 = GridSource::open(original).worldCentre();
     const Vec3d c1 = Vec3d(m * glm::dvec4(c0, 1.0));
     for (const GridSource* g : {&movedThenAttached, &attachedThenMoved}) {
@@ -547,6 +549,7 @@ TEST(GridSource, TransformedMovesTheGridAndTheGridsAttachedBeforeOrAfter)
     ASSERT_GT(alphaSum(want), 50.0);
     EXPECT_LT(maxAbsDiff(Renderer(rs).render(movedThenAttached, camera), want), 1e-4);
     EXPECT_LT(maxAbsDiff(Renderer(rs).render(attachedThenMoved, camera), want), 1e-4);
+    EXPECT_LT(maxAbsDiff(Renderer(rs).render(hostAttachedAfter, camera), want), 1e-4);
     // Unmoved, the image is another.
     EXPECT_GT(maxAbsDiff(Renderer(rs).render(GridSource::open(original).withEmissionGrid("flame"), camera), want), 0.1);
 

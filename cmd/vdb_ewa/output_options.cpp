@@ -137,6 +137,7 @@ void OutputOptions::prepare(const std::string& output, const std::string& previe
     mExr.chromaticities = chromaticitiesOf(*mConfig, mOutputSpace, &how);
     if (!mExr.chromaticities) warnings.push_back("no chromaticities attribute written (" + how + ")");
 
+    if (output.empty()) return; // in memory: the preview, display and view are checked when the frame is written
     if (!mPreview.empty() && !endsWith(preview, ".png")) throw ValueError(preview + ": --preview writes a .png file");
     if (!mPreview.empty() || isDisplayReferred(mFormat)) {
         if (mDisplay.empty()) mDisplay = mConfig->defaultDisplay();
@@ -258,6 +259,8 @@ void OutputOptions::toOutputSpace(Frame& frame) const
             d.g = rgba[4 * i + 1];
             d.b = rgba[4 * i + 2];
         }
+        // The flat beauty too (the Python module's array; a deep file holds the samples only).
+        toOutput.applyPremultiplied(frame.beauty.rgba.data(), frame.beauty.rgba.size() / 4);
         return;
     }
     const std::size_t pixels = frame.beauty.rgba.size() / 4;

@@ -350,19 +350,31 @@ GridSource GridSource::transformed(const Mat4d& m) const
 bool GridSource::hasEmissionGrid() const { return bool(mImpl->emission); }
 bool GridSource::hasTemperatureGrid() const { return bool(mImpl->temperature); }
 
+namespace {
+
+/// A host's grid in @a source's world: sharing its tree, moved by source's transformed() calls.
+openvdb::GridBase::ConstPtr inSourceWorld(const GridSource& source, const openvdb::GridBase::ConstPtr& grid)
+{
+    if (!grid || source.impl().placement == Mat4d(1.0)) return grid;
+    openvdb::GridBase::Ptr copy = openvdb::ConstPtrCast<openvdb::GridBase>(grid)->copyGrid(); // the tree is shared, never written
+    return placed(copy, source.impl().placement);
+}
+
+} // namespace
+
 GridSource withEmissionGrid(const GridSource& source, openvdb::GridBase::ConstPtr emissionGrid)
 {
-    return attachEmitter(source.impl(), emissionGrid, "host grid", false);
+    return attachEmitter(source.impl(), inSourceWorld(source, emissionGrid), "host grid", false);
 }
 
 GridSource withTemperatureGrid(const GridSource& source, openvdb::GridBase::ConstPtr temperatureGrid)
 {
-    return attachEmitter(source.impl(), temperatureGrid, "host grid", true);
+    return attachEmitter(source.impl(), inSourceWorld(source, temperatureGrid), "host grid", true);
 }
 
 GridSource withColorGrid(const GridSource& source, openvdb::GridBase::ConstPtr colorGrid)
 {
-    return attachColor(source.impl(), colorGrid, "host grid");
+    return attachColor(source.impl(), inSourceWorld(source, colorGrid), "host grid");
 }
 
 GridSource gridSourceFromOpenVDB(openvdb::GridBase::ConstPtr grid)

@@ -292,10 +292,13 @@ class Module(unittest.TestCase):
 
     def test_write_refuses_what_the_cli_refuses(self):
         frame = vdb_ewa.render(self.cloud, res="32x24", translate=(1.5, 0.8, 4.5))
+        with open(self.cloud, "rb") as f:
+            before = f.read()
         os.symlink(self.cloud, self.path("cloud_link.exr"))
         with self.assertRaisesRegex(vdb_ewa.ValueError, "same file as the input"):
             frame.write(self.path("cloud_link.exr"))
-        self.assertEqual(os.path.getsize(self.cloud), os.path.getsize(self.path("cloud.vdb")))
+        with open(self.cloud, "rb") as f:
+            self.assertEqual(f.read(), before)
         with self.assertRaises(vdb_ewa.IoError):
             frame.write(os.path.join(self.dir, "no", "such", "folder", "out.exr"))
         with self.assertRaisesRegex(vdb_ewa.ValueError, "unsupported output format"):
@@ -304,6 +307,25 @@ class Module(unittest.TestCase):
         self.assertTrue(os.path.getsize(self.path("out.png")) > 0)
         with self.assertRaisesRegex(vdb_ewa.ValueError, "was not rendered"):
             frame.aov("shadow")
+
+    def test_output_options_apply_when_the_frame_is_written(self):
+        # preview, display and view belong to the file: render() keeps them for write().
+        frame = vdb_ewa.render(self.cloud, res="32x24", translate=(1.5, 0.8, 4.5), preview=self.path("preview.png"),
+                               display="sRGB", view="Un-tone-mapped")
+        frame.write(self.path("with_preview.exr"))
+        self.assertTrue(os.path.isfile(self.path("preview.png")))
+        frame.write(self.path("display.png"))
+        self.assertTrue(os.path.isfile(self.path("display.png")))
+        with self.assertRaisesRegex(vdb_ewa.ValueError, "--preview writes a .png file"):
+            vdb_ewa.render(self.cloud, res="8x8", translate=(1.5, 0.8, 4.5), preview=self.path("p.jpg")).write(self.path("x.exr"))
+        # deep=True: the flat beauty is in output_space too.
+        kw = dict(res="32x24", translate=(1.5, 0.8, 4.5), output_space="lin_rec709")
+        np.testing.assert_array_equal(vdb_ewa.render(self.cloud, deep=True, **kw).beauty, vdb_ewa.render(self.cloud, **kw).beauty)
+        # Emitter arrays must lie on the density's voxels.
+        with self.assertRaisesRegex(vdb_ewa.ValueError, "temperature: expected an array of the density's shape"):
+            vdb_ewa.from_array(np.ones((4, 4, 4)), temperature=np.ones((4, 4, 5)))
+        with self.assertRaisesRegex(vdb_ewa.ValueError, "emission: expected an array"):
+            vdb_ewa.from_array(np.ones((4, 4, 4)), emission=[[1, 2], [3]])
 
     def test_warnings_reach_python(self):
         with warnings.catch_warnings(record=True) as caught:

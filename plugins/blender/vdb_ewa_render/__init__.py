@@ -12,6 +12,7 @@ bl_info = {
 }
 
 import os
+import re
 import sys
 
 import bpy
@@ -56,7 +57,8 @@ class VdbEwaSettings(bpy.types.PropertyGroup):
                ('high', "High", "vdb_ewa --quality high"), ('final', "Final", "vdb_ewa --quality final: refined kernels")])
     extra_options: bpy.props.StringProperty(
         name="Options", description="More vdb_ewa render options as keyword=value, comma-separated "
-                                    "(lod=0, refine=2); help(vdb_ewa.render) lists them")
+                                    "(lod=0, refine=2, ambient=0.1,0.1,0.1); they override the scene's; "
+                                    "help(vdb_ewa.render) lists them")
 
 
 class RENDER_PT_vdb_ewa(bpy.types.Panel):
@@ -77,17 +79,22 @@ class RENDER_PT_vdb_ewa(bpy.types.Panel):
 
 
 def parse_extra_options(text):
-    """'lod=0, refine=2' as a dict of keyword arguments (numbers where they parse)."""
+    """'lod=0, refine=2, ambient=0.1,0.1,0.1, deep=true' as keyword arguments: items split at the
+    commas before a keyword=, numbers where they parse, true/false as booleans, the rest strings
+    (X,Y,Z values stay strings, as on the command line)."""
     options = {}
-    for item in filter(None, (part.strip() for part in text.split(","))):
+    for item in filter(None, (part.strip() for part in re.split(r",(?=\s*[A-Za-z_]+\s*=)", text))):
         key, sep, value = item.partition("=")
         if not sep:
             raise ValueError("vdb_ewa options: expected keyword=value, got '%s'" % item)
-        value = value.strip()
+        key, value = key.strip(), value.strip()
+        if value.lower() in ("true", "false"):
+            options[key] = value.lower() == "true"
+            continue
         try:
-            options[key.strip()] = float(value) if any(c in value for c in ".e") else int(value)
+            options[key] = float(value) if any(c in value for c in ".eE") else int(value)
         except ValueError:
-            options[key.strip()] = value
+            options[key] = value
     return options
 
 
@@ -102,7 +109,6 @@ def render_options(depsgraph, warnings):
     options["working_space"] = "lin_rec709"
     options["output_space"] = "lin_rec709"
     options["quality"] = scene.vdb_ewa.quality
-    options.update(parse_extra_options(scene.vdb_ewa.extra_options))
     return options
 
 
@@ -158,6 +164,7 @@ class VdbEwaRenderEngine(bpy.types.RenderEngine):
         warnings = []
         try:
             options = render_options(depsgraph, warnings)
+            extra = parse_extra_options(depsgraph.scene.vdb_ewa.extra_options)
             volumes = scene_mapping.volumes(depsgraph, depsgraph.scene.camera.matrix_world.translation, warnings)
         except ValueError as e:
             self.report({'ERROR'}, "vdb_ewa: %s" % e)
@@ -172,10 +179,10 @@ class VdbEwaRenderEngine(bpy.types.RenderEngine):
 
             try:
                 grid, material = volume_options(vdb_ewa, volume)
+                call = {**options, **material, **extra}  # the panel's Options override the scene's
                 if os.environ.get("VDB_EWA_VERBOSE"):
-                    print("vdb_ewa: volume %s: %s moved by %s: %s" % (volume.name, volume.path, volume.object_to_world,
-                                                                     dict(options, **material)))
-                frame = vdb_ewa.render(grid, progress=progress, **options, **material)
+                    print("vdb_ewa: volume %s: %s moved by %s: %s" % (volume.name, volume.path, volume.object_to_world, call))
+                frame = vdb_ewa.render(grid, progress=progress, **call)
             except vdb_ewa.Cancelled:
                 return
             except vdb_ewa.Error as e:

@@ -122,16 +122,25 @@ def material_options(obj, warnings):
     absorb = tuple(max(1.0 - c, 0.0) * max(1.0 - math.sqrt(max(a, 0.0)), 0.0) * density for c, a in zip(color, absorption))
     options = dict(scatter=scatter, absorb=absorb)
     grid = _value(node, "Density Attribute", warnings, where) or "density"
-    if _value(node, "Color Attribute", warnings, where):
-        options["color_grid"] = _value(node, "Color Attribute", warnings, where)
+    names = grid_names(obj.data)
+    color_attribute = _value(node, "Color Attribute", warnings, where)
+    if color_attribute:
+        if color_attribute in names:
+            options["color_grid"] = color_attribute
+            warnings.append("%s: the Color Attribute tints the scattering only; Cycles' absorption follows it too" % where)
+        else:
+            warnings.append("%s: no grid '%s' for the Color Attribute; ignored" % (where, color_attribute))
     if abs(_value(node, "Anisotropy", warnings, where)) > 1e-6:
         warnings.append("%s: anisotropy is ignored (vdb_ewa scatters isotropically)" % where)
     if _value(node, "Emission Strength", warnings, where) > 0.0:
         warnings.append("%s: Emission Strength is ignored (Blender's emission does not follow the density; use a "
                         "temperature or flame grid)" % where)
     intensity = _value(node, "Blackbody Intensity", warnings, where)
-    if intensity > 0.0:
-        options["temperature"] = _value(node, "Temperature Attribute", warnings, where) or "temperature"
+    temperature = _value(node, "Temperature Attribute", warnings, where) or "temperature"
+    if intensity > 0.0 and temperature not in names:
+        warnings.append("%s: no grid '%s' for the Temperature Attribute; no blackbody emission" % (where, temperature))
+    elif intensity > 0.0:
+        options["temperature"] = temperature
         options["temperature_scale"] = _value(node, "Temperature", warnings, where)
         options["blackbody_intensity"] = intensity
         if tuple(_value(node, "Blackbody Tint", warnings, where)) != (1.0, 1.0, 1.0):
@@ -140,6 +149,12 @@ def material_options(obj, warnings):
             warnings.append("%s: Blackbody Intensity %g scales the emission; Cycles mixes 1 and T^4 by it (docs/lighting.md)"
                             % (where, intensity))
     return grid, options
+
+
+def grid_names(volume):
+    """The names of the grids in a volume's file (Blender reads its metadata)."""
+    volume.grids.load()
+    return {grid.name for grid in volume.grids}
 
 
 def half_voxel(volume, grid_name):
