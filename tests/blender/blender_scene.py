@@ -18,6 +18,9 @@ if params["engine"] == "VDB_EWA":
     sys.path.insert(0, params["addon_dir"])
     import vdb_ewa_render
     vdb_ewa_render.register()
+    # The panel's Options field: items split at the commas before a keyword=.
+    parsed = vdb_ewa_render.parse_extra_options("lod=0, ambient=0.1,0.1,0.1, deep=true, aov=shadow,emission, slab=0.5")
+    assert parsed == dict(lod=0, ambient="0.1,0.1,0.1", deep=True, aov="shadow,emission", slab=0.5), parsed
     scene.vdb_ewa.quality = params.get("quality", "default")
 scene.render.engine = params["engine"]
 scene.render.resolution_x, scene.render.resolution_y = params["res"]
