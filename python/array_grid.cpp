@@ -18,22 +18,29 @@ namespace py = pybind11;
 namespace vdb_ewa::python {
 namespace {
 
-/// @a m as OpenVDB's row-vector matrix (its transpose), checked.
+/// The 4x4 matrix @a m (a numpy array or nested sequences), finite. @throw ValueError naming @a argument
+Mat4d matrix4(const py::object& m, const std::string& argument)
+{
+    const auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(m);
+    if (!a || a.ndim() != 2 || a.shape(0) != 4 || a.shape(1) != 4) throw ValueError(argument + ": expected a 4x4 matrix");
+    Mat4d out;
+    for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c) {
+            out[c][r] = a.at(r, c); // GLM: out[column][row]
+            if (!std::isfinite(out[c][r])) throw ValueError(argument + ": a matrix element is not finite");
+        }
+    return out;
+}
+
+/// @a m as OpenVDB's row-vector matrix (its transpose), checked: affine and invertible.
 openvdb::math::Mat4d indexToWorldMatrix(const py::object& m)
 {
     openvdb::math::Mat4d rowVector = openvdb::math::Mat4d::identity();
     if (m.is_none()) return rowVector;
-    const auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(m);
-    if (!a || a.ndim() != 2 || a.shape(0) != 4 || a.shape(1) != 4) {
-        throw ValueError("index_to_world: expected a 4x4 matrix");
-    }
+    const Mat4d columns = matrix4(m, "index_to_world");
     for (int r = 0; r < 4; ++r)
-        for (int c = 0; c < 4; ++c) {
-            const double v = a.at(r, c);
-            if (!std::isfinite(v)) throw ValueError("index_to_world: a matrix element is not finite");
-            rowVector(c, r) = v;
-        }
-    if (a.at(3, 0) != 0.0 || a.at(3, 1) != 0.0 || a.at(3, 2) != 0.0 || a.at(3, 3) != 1.0) {
+        for (int c = 0; c < 4; ++c) rowVector(c, r) = columns[c][r];
+    if (columns[0][3] != 0.0 || columns[1][3] != 0.0 || columns[2][3] != 0.0 || columns[3][3] != 1.0) {
         throw ValueError("index_to_world: the last row must be 0, 0, 0, 1 (column vectors: world = M @ (i, j, k, 1); a "
                          "row-vector matrix, OpenVDB's, is its transpose)");
     }
@@ -64,13 +71,7 @@ openvdb::FloatGrid::Ptr floatGrid(const py::array& values, const py::object& ind
 
 Mat4d objectToWorld(const py::object& matrix)
 {
-    if (matrix.is_none()) return Mat4d(1.0);
-    const auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(matrix);
-    if (!a || a.ndim() != 2 || a.shape(0) != 4 || a.shape(1) != 4) throw ValueError("object_to_world: expected a 4x4 matrix");
-    Mat4d m;
-    for (int r = 0; r < 4; ++r)
-        for (int c = 0; c < 4; ++c) m[c][r] = a.at(r, c); // GLM: m[column][row]
-    return m;
+    return matrix.is_none() ? Mat4d(1.0) : matrix4(matrix, "object_to_world");
 }
 
 GridSource gridFromArray(const py::array& values, const py::object& indexToWorld, const std::string& name)

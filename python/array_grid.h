@@ -12,7 +12,7 @@
 namespace vdb_ewa::python {
 
 /// A 4x4 matrix argument (numpy array or nested sequences), column vectors, as the library's
-/// Mat4d; None: the identity. @throw ValueError unless 4x4 and finite (the library checks the rest).
+/// Mat4d; None: the identity. @throw ValueError unless 4x4 and finite (GridSource::transformed checks the rest).
 Mat4d objectToWorld(const pybind11::object& matrix);
 
 /// The grid @a name of @a values (3D, any real dtype; values equal to 0 are inactive, as

@@ -72,11 +72,8 @@ nlohmann::json toJson(const py::handle& value, const std::string& where)
 /// @a kwargs as vdb_ewa render's command-line arguments.
 std::vector<std::string> argumentsOf(const py::kwargs& kwargs, bool gridIsPath)
 {
-    ParsedOptions names;
     std::map<std::string, std::pair<std::string, bool>> byKeyword; // keyword -> (long name, flag)
-    for (const CLI::Option* opt : names.app.get_options()) {
-        for (const std::string& n : opt->get_lnames()) byKeyword[keywordOf(n)] = {n, opt->get_expected_min() == 0};
-    }
+    for (const KeywordInfo& k : renderKeywords()) byKeyword[k.keyword] = {k.option.substr(2), k.type == "bool"};
     std::vector<std::string> arguments;
     for (const auto& [key, value] : kwargs) {
         const std::string keyword = key.cast<std::string>();
@@ -286,12 +283,7 @@ std::shared_ptr<RenderedFrame> render(const py::object& gridOrPath, const py::ob
     }
     const Camera camera(cam, grid->worldCentre());
     const std::string what = input.empty() ? grid->name() : input;
-    if (camera.looksDownZByDefault()) {
-        warnings.push_back(what + ": the eye is at the grid's centre, the default target: looking down -z (translate or lookat frame it)");
-    }
-    if (camera.upReplacedByDefault()) {
-        warnings.push_back(what + ": the grid's centre lies along up from the eye: another world axis is the image's up (up, translate or lookat frame it)");
-    }
+    for (const std::string& w : cli::RenderOptions::cameraWarnings(camera)) warnings.push_back(what + ": " + w);
 
     auto result = std::make_shared<RenderedFrame>(*grid, camera);
     result->arguments = arguments;

@@ -176,13 +176,8 @@ private:
         const GridSource grid = mOptions.open(input);
         const double loadSeconds = seconds(t0);
         const Camera camera(cam, grid.worldCentre());
-        if (camera.looksDownZByDefault() && verbosity != Verbosity::Quiet) {
-            report.line("vdb_ewa: warning: " + input + ": the eye is at the grid's centre, the default target: looking down -z"
-                        " (--translate or --lookat frame it)", stderr);
-        }
-        if (camera.upReplacedByDefault() && verbosity != Verbosity::Quiet) {
-            report.line("vdb_ewa: warning: " + input + ": the grid's centre lies along --up from the eye: another world axis is"
-                        " the image's up (--up, --translate or --lookat frame it)", stderr);
+        if (verbosity != Verbosity::Quiet) {
+            for (const std::string& w : RenderOptions::cameraWarnings(camera)) report.line("vdb_ewa: warning: " + input + ": " + w, stderr);
         }
         const std::vector<Attributes> options = mOptions.resolvedOptions(grid, camera, rs);
         if (verbosity >= Verbosity::Verbose && (first || verbosity >= Verbosity::Debug)) {

@@ -285,6 +285,19 @@ RenderSettings RenderOptions::prepare(const std::string& output, const std::stri
     return working;
 }
 
+std::vector<std::string> RenderOptions::cameraWarnings(const Camera& camera)
+{
+    std::vector<std::string> warnings;
+    if (camera.looksDownZByDefault()) {
+        warnings.push_back("the eye is at the grid's centre, the default target: looking down -z (--translate or --lookat frame it)");
+    }
+    if (camera.upReplacedByDefault()) {
+        warnings.push_back("the grid's centre lies along --up from the eye: another world axis is the image's up (--up, --translate or "
+                           "--lookat frame it)");
+    }
+    return warnings;
+}
+
 GridSource RenderOptions::open(const std::string& path) const { return withExtraGrids(GridSource::open(path, mName)); }
 
 GridSource RenderOptions::withExtraGrids(const GridSource& opened) const

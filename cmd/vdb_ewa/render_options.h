@@ -42,6 +42,10 @@ public:
     GridSource open(const std::string& path) const;
     /// @a grid with the --color, --emission-grid and --temperature grids of its file.
     GridSource withExtraGrids(const GridSource& grid) const;
+    /// What @a camera chose on its own that a user should know (the default target at the eye,
+    /// another up axis), one line each, without the grid they concern.
+    static std::vector<std::string> cameraWarnings(const Camera& camera);
+
     /// The --name given (empty: vdb_render's rule).
     const std::string& gridName() const { return mName; }
 

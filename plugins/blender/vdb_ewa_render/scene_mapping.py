@@ -62,14 +62,17 @@ def camera_options(scene, warnings):
     return options
 
 
+def _instances(depsgraph, kind):
+    """The depsgraph's object instances of @a kind ('LIGHT', 'VOLUME')."""
+    return (instance for instance in depsgraph.object_instances if instance.object.type == kind)
+
+
 def light_options(depsgraph, warnings):
     """Sun lights as --light X,Y,Z,R,G,B: the direction towards the sun (its local +z) and colour
     x strength / 4 pi (a sun of irradiance E lights an isotropic medium as vdb_ewa's light of E / 4 pi)."""
     lights = []
-    for instance in depsgraph.object_instances:
+    for instance in _instances(depsgraph, 'LIGHT'):
         obj = instance.object
-        if obj.type != 'LIGHT':
-            continue
         light = obj.data
         if light.type != 'SUN':
             warnings.append("light %s: %s lights are not supported (sun lights are)" % (obj.name, light.type.lower()))
@@ -122,10 +125,9 @@ def material_options(obj, warnings):
     absorb = tuple(max(1.0 - c, 0.0) * max(1.0 - math.sqrt(max(a, 0.0)), 0.0) * density for c, a in zip(color, absorption))
     options = dict(scatter=scatter, absorb=absorb)
     grid = _value(node, "Density Attribute", warnings, where) or "density"
-    names = grid_names(obj.data)
     color_attribute = _value(node, "Color Attribute", warnings, where)
     if color_attribute:
-        if color_attribute in names:
+        if grid_of(obj.data, color_attribute) is not None:
             options["color_grid"] = color_attribute
             warnings.append("%s: the Color Attribute tints the scattering only; Cycles' absorption follows it too" % where)
         else:
@@ -137,7 +139,7 @@ def material_options(obj, warnings):
                         "temperature or flame grid)" % where)
     intensity = _value(node, "Blackbody Intensity", warnings, where)
     temperature = _value(node, "Temperature Attribute", warnings, where) or "temperature"
-    if intensity > 0.0 and temperature not in names:
+    if intensity > 0.0 and grid_of(obj.data, temperature) is None:
         warnings.append("%s: no grid '%s' for the Temperature Attribute; no blackbody emission" % (where, temperature))
     elif intensity > 0.0:
         options["temperature"] = temperature
@@ -151,10 +153,10 @@ def material_options(obj, warnings):
     return grid, options
 
 
-def grid_names(volume):
-    """The names of the grids in a volume's file (Blender reads its metadata)."""
+def grid_of(volume, name):
+    """The grid called @a name in a volume's file (Blender reads its metadata), or None."""
     volume.grids.load()
-    return {grid.name for grid in volume.grids}
+    return next((grid for grid in volume.grids if grid.name == name), None)
 
 
 def half_voxel(volume, grid_name):
@@ -162,20 +164,15 @@ def half_voxel(volume, grid_name):
     (i, j, k)'s value at the centre of the index cell [i, i + 1]^3, OpenVDB and vdb_ewa at the
     index point (i, j, k) itself: half a voxel apart along each index axis (measured against
     Cycles, docs/blender.md). Zero where the grid is not found (the render then says why)."""
-    volume.grids.load()
-    for grid in volume.grids:
-        if grid.name == grid_name:
-            return grid.matrix_object.to_3x3() @ mathutils.Vector((0.5, 0.5, 0.5))
-    return mathutils.Vector((0.0, 0.0, 0.0))
+    grid = grid_of(volume, grid_name)
+    return mathutils.Vector((0.0, 0.0, 0.0)) if grid is None else grid.matrix_object.to_3x3() @ mathutils.Vector((0.5, 0.5, 0.5))
 
 
 def volumes(depsgraph, camera_location, warnings):
     """Every visible volume object with an OpenVDB file, nearest first."""
     found = []
-    for instance in depsgraph.object_instances:
+    for instance in _instances(depsgraph, 'VOLUME'):
         obj = instance.object
-        if obj.type != 'VOLUME':
-            continue
         data = obj.data
         path = bpy.path.abspath(data.filepath, library=data.library)
         if data.is_sequence:
