@@ -270,14 +270,17 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
         physically based (default: 1)
     samples (--samples): level sets: vdb_render's rays per pixel; accepted for compatibility, the EWA
         filter anti-aliases without extra samples (default: 1)
-    threads (--threads): worker threads, 0 = all cores (default: 0)
-    cpus (--cpus): worker threads, 0 = all cores (default: 0)
+    threads (--threads): worker threads, 0 = the CPUs the farm task or container was granted
+        ($SLURM_CPUS_PER_TASK, the cgroup's quota), else all cores (default: 0; docs/farm.md)
+    cpus (--cpus): worker threads, 0 = the CPUs the farm task or container was granted
+        ($SLURM_CPUS_PER_TASK, the cgroup's quota), else all cores (default: 0; docs/farm.md)
     simd (--simd): on: the volume rasteriser uses the CPU's vector unit (AVX-512 or AVX2, detected at
         run time; images within 1e-5 of off); off: one pixel at a time, the reference it is tested
         against (default: on)
     max_memory (--max-memory): memory budget of a frame in bytes, with an optional K, M, G or T suffix
         (powers of 1024), range [64M, 1e18]; a frame that would need more stops before allocating it
-        (exit 5) (default: 0 = 3/4 of the physical memory)
+        (exit 5) (default: 0 = 3/4 of the memory the farm task or container was granted
+        ($SLURM_MEM_PER_NODE, the cgroup's limit), else of the physical memory)
     ocio_config (--ocio-config): OpenColorIO config file (default: $OCIO, else vdb_ewa's shipped ACES
         config); an unusable config is a warning and falls back to the next
     input_space (--input-space): colour space of the colour values given on the command line and in job

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Install the Debian 12 packages vdb_ewa needs to build, test and benchmark.
 # Idempotent: installs only what is missing. Uses sudo when not run as root. With --test, also
-# what the Python module's and the Blender add-on's tests need (scripts/test.sh). With --bench, also
+# what the Python module's, the Blender add-on's and the Slurm tests need (scripts/test.sh). With --bench, also
 # what bench/bench.py's image analyses need (numpy, pyopenvdb, OpenImageIO's Python module,
 # matplotlib) and bench/roofline (Google Benchmark, xsimd).
 set -euo pipefail
@@ -20,6 +20,9 @@ if [ "${1:-}" = "--test" ]; then
   # The Python module's test reads EXRs and writes VDBs with OpenVDB's own binding; the Blender
   # add-on's test renders in Blender (plugins/blender).
   packages+=(python3-openvdb python3-openimageio blender)
+  # tests/slurm: a one-node Slurm cluster (controller, node daemon, client commands, munge) runs
+  # vdb_ewa submit's job arrays.
+  packages+=(slurmctld slurmd slurm-client munge)
 fi
 if [ "${1:-}" = "--bench" ]; then
   packages+=(python3-numpy python3-openvdb python3-openimageio python3-matplotlib libbenchmark-dev libxsimd-dev)

@@ -35,12 +35,13 @@ inline std::string slurp(const std::string& path)
     return s.str();
 }
 
-/// Run the CLI with @a args; $OCIO is unset unless @a ocio names a value for it.
-inline CliRun runCli(const TempDir& dir, const std::string& args, const std::string& ocio = "")
+/// Run the CLI with @a args; $OCIO is unset unless @a ocio names a value for it. @a shellPrefix
+/// goes before the command ("cd DIR && env A=1 ").
+inline CliRun runCli(const TempDir& dir, const std::string& args, const std::string& ocio = "", const std::string& shellPrefix = "")
 {
     const std::string out = dir.file("stdout.txt"), err = dir.file("stderr.txt");
     const std::string env = ocio.empty() ? "env -u OCIO " : "env OCIO='" + ocio + "' ";
-    const int status = std::system((env + VDB_EWA_CLI_PATH + " " + args + " >" + out + " 2>" + err).c_str());
+    const int status = std::system((shellPrefix + env + VDB_EWA_CLI_PATH + " " + args + " >" + out + " 2>" + err).c_str());
     CliRun r;
     r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     r.out = slurp(out);

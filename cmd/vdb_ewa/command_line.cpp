@@ -17,6 +17,8 @@ CommandLine::CommandLine() : mApp("vdb_ewa: EWA volume splatting of OpenVDB fog 
     mApp.set_version_flag("--version", std::string("vdb_ewa ") + vdb_ewa::versionString());
     mCommands.push_back(addRenderCommand(mApp));
     mCommands.push_back(addMakeGridCommand(mApp));
+    mCommands.push_back(addSubmitCommand(mApp));
+    mCommands.push_back(addStatusCommand(mApp));
 }
 
 Command& CommandLine::parse(std::vector<std::string> args)

@@ -7,6 +7,7 @@
 #include <memory>
 #include <set>
 #include <string>
+#include <vector>
 
 namespace vdb_ewa::cli {
 
@@ -25,5 +26,28 @@ public:
 
 std::unique_ptr<Command> addRenderCommand(CLI::App& app);
 std::unique_ptr<Command> addMakeGridCommand(CLI::App& app);
+std::unique_ptr<Command> addSubmitCommand(CLI::App& app);
+std::unique_ptr<Command> addStatusCommand(CLI::App& app);
+
+/// What a render command line renders: its frames and the paths of their files.
+struct RenderJob
+{
+    std::vector<int> frames;   ///< --frames in order (every chunk's); {0} without --frames
+    bool sequence = false;     ///< --frames was given: the paths hold frame patterns
+    std::string input, output; ///< as given (with their frame patterns)
+    std::string preview;       ///< --preview as given; empty without one
+    bool skipExisting = false;
+
+    /// @a pattern (input, output or preview) of @a frame.
+    std::string pathOf(const std::string& pattern, int frame) const;
+    /// The frame is done: its output exists, and its preview if one is asked for (outputs are
+    /// renamed into place whole, so an existing one is complete).
+    bool done(int frame) const;
+};
+
+/// Parse and check @a renderArguments (the render subcommand's, `--job FILE` applied as the CLI
+/// applies it) as `vdb_ewa render` would before reading any grid.
+/// @throw CLI::ParseError, vdb_ewa::Error (ValueError, IoError) as the render would
+RenderJob renderJobOf(const std::vector<std::string>& renderArguments);
 
 } // namespace vdb_ewa::cli

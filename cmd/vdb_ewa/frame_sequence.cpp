@@ -73,4 +73,33 @@ std::string framePath(const std::string& path, int frame)
     return m.prefix().str() + (frame < 0 ? "-" : "") + digits + rest;
 }
 
+int chunkCount(std::size_t frameCount, int chunk)
+{
+    if (chunk < 1) throw ValueError("--chunk: " + std::to_string(chunk) + " frames a task: give at least 1");
+    return int((frameCount + std::size_t(chunk) - 1) / std::size_t(chunk));
+}
+
+std::vector<int> frameChunk(const std::vector<int>& frames, int chunk, int task)
+{
+    const int chunks = chunkCount(frames.size(), chunk);
+    if (task < 0 || task >= chunks) {
+        throw ValueError("--task " + std::to_string(task) + ": the " + std::to_string(frames.size()) + " frames make " + std::to_string(chunks) +
+                         " chunk" + (chunks == 1 ? "" : "s") + " of " + std::to_string(chunk) + " (tasks 0-" + std::to_string(chunks - 1) + ")");
+    }
+    const std::size_t begin = std::size_t(task) * std::size_t(chunk);
+    return {frames.begin() + long(begin), frames.begin() + long(std::min(frames.size(), begin + std::size_t(chunk)))};
+}
+
+std::string frameListText(const std::vector<int>& frames)
+{
+    std::string text;
+    for (std::size_t i = 0; i < frames.size();) {
+        std::size_t j = i;
+        while (j + 1 < frames.size() && long(frames[j + 1]) == long(frames[j]) + 1) ++j;
+        text += (text.empty() ? "" : ",") + std::to_string(frames[i]) + (j > i ? "-" + std::to_string(frames[j]) : "");
+        i = j + 1;
+    }
+    return text;
+}
+
 } // namespace vdb_ewa::cli

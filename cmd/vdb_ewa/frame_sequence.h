@@ -20,4 +20,16 @@ bool hasFramePattern(const std::string& path);
 /// a minus sign before the digits). @throw ValueError if @a path holds more than one pattern.
 std::string framePath(const std::string& path, int frame);
 
+/// The frames of array task @a task (0-based) when @a frames are cut into chunks of @a chunk
+/// frames in their order: frames [task * chunk, (task + 1) * chunk), the last chunk shorter.
+/// @throw ValueError naming --chunk or --task when @a chunk < 1 or the task has no chunk.
+std::vector<int> frameChunk(const std::vector<int>& frames, int chunk, int task);
+
+/// The number of chunks of @a chunk frames that @a frameCount frames make.
+int chunkCount(std::size_t frameCount, int chunk);
+
+/// @a frames as a frame list parseFrameList reads back in the same order: runs of consecutive
+/// frames as A-B, the rest comma-separated (1-4,9,11-12).
+std::string frameListText(const std::vector<int>& frames);
+
 } // namespace vdb_ewa::cli

@@ -5,6 +5,7 @@
 
 #include <vdb_ewa/output_file.h>
 
+#include <fcntl.h>
 #include <semaphore.h>
 #include <sys/resource.h>
 #include <unistd.h>
@@ -15,6 +16,7 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <ctime>
 #include <thread>
@@ -100,6 +102,29 @@ double peakMegabytes()
 {
     rusage usage{};
     return getrusage(RUSAGE_SELF, &usage) == 0 ? double(usage.ru_maxrss) * 1024.0 / 1e6 : 0.0;
+}
+
+bool resetPeakMemory()
+{
+    // Writing 5 to clear_refs resets the high-water mark VmHWM (Linux 4.0, proc(5)).
+    const int fd = ::open("/proc/self/clear_refs", O_WRONLY | O_CLOEXEC);
+    if (fd < 0) return false;
+    const bool reset = ::write(fd, "5", 1) == 1;
+    ::close(fd);
+    return reset;
+}
+
+double peakMegabytesSinceReset()
+{
+    std::FILE* status = std::fopen("/proc/self/status", "r");
+    if (!status) return peakMegabytes();
+    char line[256];
+    double kB = -1.0;
+    while (kB < 0.0 && std::fgets(line, sizeof line, status)) {
+        if (std::strncmp(line, "VmHWM:", 6) == 0) kB = std::atof(line + 6);
+    }
+    std::fclose(status);
+    return kB < 0.0 ? peakMegabytes() : kB * 1024.0 / 1e6;
 }
 
 std::string counted(long long count, const std::string& noun)

@@ -4,6 +4,7 @@
 #include "commands.h"
 #include "exit_codes.h"
 #include "frame_sequence.h"
+#include "job_file.h"
 #include "option_values.h"
 #include "render_options.h"
 #include "progress_report.h"
@@ -17,6 +18,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
@@ -28,6 +30,12 @@
 namespace vdb_ewa::cli {
 namespace {
 
+/// A frame's files exist: @a output, and @a preview unless it is empty.
+bool outputsExist(const std::string& output, const std::string& preview)
+{
+    return std::filesystem::exists(output) && (preview.empty() || std::filesystem::exists(preview));
+}
+
 class RenderCommand : public Command
 {
 public:
@@ -35,7 +43,8 @@ public:
     {
         mApp = app.add_subcommand("render", "Render a VDB volume or level set to an image with EWA splatting (the default subcommand: vdb_ewa IN OUT [options] is vdb_ewa render IN OUT [options])");
         mApp->footer("Every option also takes vdb_render's one-dash spelling (-res, -translate). Other commands: "
-                     "vdb_ewa make-grid --help (the sample grids), vdb_ewa --version.");
+                     "vdb_ewa make-grid --help (the sample grids), vdb_ewa submit --help and vdb_ewa status --help (Slurm job "
+                     "arrays, docs/farm.md), vdb_ewa --version.");
         mApp->add_option("input", mInput, "input .vdb file")->required();
         mApp->add_option("output", mOutput,
             "output image, its format by its extension: .exr (premultiplied RGBA and Z in --output-space), .png, .jpg, "
@@ -48,6 +57,13 @@ public:
             "--preview) hold a frame pattern, #### (padded to the number of #) or %04d (default: one frame)");
         mApp->add_flag("--skip-existing", mSkipExisting,
             "skip frames whose output (and --preview, if given) exist (outputs are written whole or not at all, so a killed job resumes)");
+        mApp->add_option("--chunk", mChunk,
+            "farm array tasks: render only this task's chunk of N frames of --frames, frames [I*N, (I+1)*N) for task I "
+            "(--task, or $SLURM_ARRAY_TASK_ID), in [1, 1000000] (default: every frame; docs/farm.md)")
+            ->check(CLI::Range(1, 1000000));
+        mApp->add_option("--task", mTask,
+            "with --chunk: the task's index I, from 0 (default: $SLURM_ARRAY_TASK_ID)")
+            ->check(CLI::Range(0, 1000000));
         mApp->add_option("--job", mJob,
             "JSON job file of option: value pairs (long option names, plus input and output); options on the "
             "command line override it, unknown keys are an error (docs/batch.md)");
@@ -67,6 +83,20 @@ public:
         const Renderer renderer(rs); // validates the render settings
     }
 
+    /// The parsed command line's frames (all of them: --chunk does not apply) and files.
+    RenderJob job() const
+    {
+        validate();
+        RenderJob job;
+        job.frames = isSequence() ? parseFrameList(mFrames) : std::vector<int>{0};
+        job.sequence = isSequence();
+        job.input = mInput;
+        job.output = mOutput;
+        job.preview = mOptions.output().previewOption();
+        job.skipExisting = mSkipExisting;
+        return job;
+    }
+
     int run() override
     {
         const Verbosity verbosity = mQuiet ? Verbosity::Quiet
@@ -76,8 +106,13 @@ public:
         CameraSettings cam;
         RenderSettings rs;
         mOptions.resolve(firstFrame(), cam, rs);
+        const std::string grants = mOptions.grantedText();
         const Renderer validated(rs); // the render settings are checked before any file is read
         const std::vector<int> frames = frameList();
+        if (verbosity != Verbosity::Quiet && (mChunk || !grants.empty())) {
+            std::cout << "vdb_ewa: " << (mChunk ? "task " + std::to_string(taskIndex()) + ": frames " + frameListText(frames) + (grants.empty() ? "" : "; ") : "")
+                      << grants << "\n";
+        }
         std::vector<std::string> warnings;
         // The colour values as given (printed by -v, kept in the EXR) and in the working space.
         const RenderSettings working = mOptions.prepare(pathOf(mOutput, frames.front()),
@@ -97,19 +132,20 @@ public:
             const std::string output = pathOf(mOutput, frames[i]);
             // A frame is done when all its files are: an EXR without its --preview is rendered again.
             const std::string preview = pathOf(mOptions.output().previewOption(), frames[i]);
-            if (mSkipExisting && std::filesystem::exists(output) && (preview.empty() || std::filesystem::exists(preview))) {
+            if (mSkipExisting && outputsExist(output, preview)) {
                 ++skipped;
-                if (verbosity >= Verbosity::Verbose) report.line("vdb_ewa: " + output + " exists: skipped");
+                if (verbosity != Verbosity::Quiet) report.line("vdb_ewa: frame " + std::to_string(frames[i]) + " skipped: " + output + " exists");
                 continue;
             }
             try {
                 renderOneFrame(renderer, mOptions.cameraFile().empty() ? cam : mOptions.cameraFor(frameOf(frames[i])), rs, frames[i], output, report, verbosity, i == 0);
                 report.framesWritten(++written);
             } catch (const Cancelled&) {
+                if (isSequence()) report.line("vdb_ewa: frame " + std::to_string(frames[i]) + " interrupted", stderr);
                 break;
             } catch (const std::exception& e) {
                 if (!isSequence()) throw;
-                report.line("vdb_ewa: frame " + std::to_string(frames[i]) + ": " + e.what(), stderr);
+                report.line("vdb_ewa: frame " + std::to_string(frames[i]) + " failed (exit " + std::to_string(exitCodeFor(e)) + "): " + e.what(), stderr);
                 failed.push_back(frames[i]);
                 if (failCode == kExitOk) failCode = exitCodeFor(e);
             }
@@ -146,7 +182,8 @@ private:
             if (hasFramePattern(mInput)) throw ValueError(mInput + ": a frame pattern (#### or %04d) needs --frames");
             return {0};
         }
-        const std::vector<int> frames = parseFrameList(mFrames);
+        std::vector<int> frames = parseFrameList(mFrames);
+        if (mChunk) frames = frameChunk(frames, *mChunk, taskIndex());
         if (!hasFramePattern(mInput)) throw ValueError("--frames: the input " + mInput + " has no frame pattern (#### or %04d)");
         for (const std::string& out : {mOutput, mOptions.output().previewOption()}) {
             if (!out.empty() && frames.size() > 1 && !hasFramePattern(out)) {
@@ -154,6 +191,18 @@ private:
             }
         }
         return frames;
+    }
+
+    /// --task, else $SLURM_ARRAY_TASK_ID (with --chunk).
+    int taskIndex() const
+    {
+        if (mTask) return *mTask;
+        const char* id = std::getenv("SLURM_ARRAY_TASK_ID");
+        if (!id) throw ValueError("--chunk: no task index: give --task or run inside a Slurm array task (SLURM_ARRAY_TASK_ID)");
+        char* end = nullptr;
+        const long task = std::strtol(id, &end, 10);
+        if (end == id || *end || task < 0 || task > 1000000) throw ValueError(std::string("--chunk: SLURM_ARRAY_TASK_ID '") + id + "' is not a task index");
+        return int(task);
     }
 
     /// @a frame as RenderOptions takes it: none outside a sequence.
@@ -172,6 +221,7 @@ private:
         const std::string preview = pathOf(mOptions.output().previewOption(), frameNumber);
         mOptions.output().refuseInputs(output, preview, {input, mJob, mOptions.environment()});
         const auto t0 = std::chrono::steady_clock::now();
+        const bool framePeak = resetPeakMemory();
         stallForTests("read");
         const GridSource grid = mOptions.open(input);
         const double loadSeconds = seconds(t0);
@@ -201,8 +251,8 @@ private:
         if (verbosity >= Verbosity::Verbose) report.line(statsText(stats, loadSeconds, seconds(t1)));
         if (isSequence() && verbosity >= Verbosity::Normal) {
             std::ostringstream line;
-            line << "vdb_ewa: frame " << frameNumber << ": " << output << " (" << std::fixed << std::setprecision(2) << seconds(t0)
-                 << " s, peak " << std::setprecision(0) << peakMegabytes() << " MB)";
+            line << "vdb_ewa: frame " << frameNumber << " done: " << output << " (" << std::fixed << std::setprecision(2) << seconds(t0)
+                 << " s, peak " << std::setprecision(0) << (framePeak ? peakMegabytesSinceReset() : peakMegabytes()) << " MB)";
             report.line(line.str());
         }
     }
@@ -272,11 +322,30 @@ private:
     RenderOptions mOptions;
     int mVerbose = 0;
     bool mQuiet = false, mSkipExisting = false;
+    std::optional<int> mChunk, mTask;
     std::string mFrames, mJob;
 };
 
 } // namespace
 
 std::unique_ptr<Command> addRenderCommand(CLI::App& app) { return std::make_unique<RenderCommand>(app); }
+
+std::string RenderJob::pathOf(const std::string& pattern, int frame) const
+{
+    return sequence && !pattern.empty() ? framePath(pattern, frame) : pattern;
+}
+
+bool RenderJob::done(int frame) const { return outputsExist(pathOf(output, frame), pathOf(preview, frame)); }
+
+RenderJob renderJobOf(const std::vector<std::string>& renderArguments)
+{
+    CLI::App app;
+    RenderCommand render(app);
+    std::vector<std::string> args = applyJobFile(renderArguments, *render.subcommand());
+    args.insert(args.begin(), "render");
+    std::reverse(args.begin(), args.end()); // CLI11 takes a reversed vector
+    app.parse(args);
+    return render.job();
+}
 
 } // namespace vdb_ewa::cli

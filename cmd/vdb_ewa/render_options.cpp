@@ -3,6 +3,7 @@
 
 #include "camera_file_option.h"
 #include "frame_sequence.h"
+#include "granted_resources.h"
 #include "option_values.h"
 
 #include <cmath>
@@ -163,13 +164,16 @@ void RenderOptions::add(CLI::App* app)
     mApp->add_option("--samples", mSamples,
         "level sets: vdb_render's rays per pixel; accepted for compatibility, the EWA filter anti-aliases "
         "without extra samples (default: 1)");
-    mApp->add_option("--threads,--cpus", mThreads, "worker threads, 0 = all cores (default: 0)");
+    mApp->add_option("--threads,--cpus", mThreads,
+        "worker threads, 0 = the CPUs the farm task or container was granted ($SLURM_CPUS_PER_TASK, the cgroup's quota), "
+        "else all cores (default: 0; docs/farm.md)");
     mApp->add_option("--simd", mSimd,
         "on: the volume rasteriser uses the CPU's vector unit (AVX-512 or AVX2, detected at run time; images within "
         "1e-5 of off); off: one pixel at a time, the reference it is tested against (default: on)");
     mApp->add_option("--max-memory", mMaxMemory,
         "memory budget of a frame in bytes, with an optional K, M, G or T suffix (powers of 1024), range [64M, 1e18]; "
-        "a frame that would need more stops before allocating it (exit 5) (default: 0 = 3/4 of the physical memory)");
+        "a frame that would need more stops before allocating it (exit 5) (default: 0 = 3/4 of the memory the farm task or container "
+        "was granted ($SLURM_MEM_PER_NODE, the cgroup's limit), else of the physical memory)");
     mOutputOptions.add(mApp);
 }
 
@@ -266,9 +270,15 @@ void RenderOptions::resolve(std::optional<int> frame, CameraSettings& cam, Rende
     if (mIsoOpacity) rs.surface.isoOpacity = *mIsoOpacity;
     if (!mShader.empty()) rs.surface.shader = parseChoice("shader", mShader, kShaders);
     if (mSamples && *mSamples < 1) throw ValueError("--samples must be >= 1");
-    rs.threads = mThreads;
     if (!mSimd.empty()) rs.simd = parseChoice("simd", mSimd, kOnOff);
-    if (!mMaxMemory.empty()) rs.maxMemory = parseBytes("max-memory", mMaxMemory);
+    const GrantedSettings granted = grantedSettings(mThreads, mMaxMemory.empty() ? 0.0 : parseBytes("max-memory", mMaxMemory));
+    rs.threads = granted.threads;
+    rs.maxMemory = granted.maxMemory;
+}
+
+std::string RenderOptions::grantedText() const
+{
+    return grantedSettings(mThreads, mMaxMemory.empty() ? 0.0 : parseBytes("max-memory", mMaxMemory)).text;
 }
 
 RenderSettings RenderOptions::prepare(const std::string& output, const std::string& preview, const RenderSettings& given,

@@ -26,9 +26,13 @@ public:
     void add(CLI::App* app);
 
     /// The camera and render settings as given (colours in --input-space): --quality's preset,
-    /// then each option given. @a frame: the frame of a sequence (it picks --camera-file's file
+    /// then each option given; --threads 0 and --max-memory 0 as the farm task or container
+    /// grants (granted_resources.h). @a frame: the frame of a sequence (it picks --camera-file's file
     /// and keyframe); none outside a sequence. @throw ValueError naming the option.
     void resolve(std::optional<int> frame, CameraSettings& camera, RenderSettings& settings) const;
+    /// What --threads 0 and --max-memory 0 took from the farm's or container's grant
+    /// (granted_resources.h), for the log; empty where nothing was granted.
+    std::string grantedText() const;
     /// The camera of @a frame (as resolve()).
     CameraSettings cameraFor(std::optional<int> frame) const;
 
