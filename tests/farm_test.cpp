@@ -7,6 +7,7 @@
 #include "../cmd/vdb_ewa/farm_folder.h"
 #include "../cmd/vdb_ewa/frame_sequence.h"
 #include "../cmd/vdb_ewa/granted_resources.h"
+#include "../cmd/vdb_ewa/sbatch_script.h"
 
 #include <gtest/gtest.h>
 
@@ -15,6 +16,7 @@
 #include <map>
 #include <random>
 #include <regex>
+#include <ctime>
 
 using namespace vdb_ewa;
 using namespace vdb_ewa::test;
@@ -102,7 +104,9 @@ TEST(GrantedResources, TheSmallestGrantOfSlurmAndTheCgroupWins)
     EXPECT_EQ(g.cpus, 0);
     EXPECT_EQ(g.memoryBytes, 0.0);
 
-    // Slurm alone.
+    // Slurm alone (the affinity is every CPU online: no grant).
+    sources.affinityCpus = [] { return 8; };
+    sources.onlineCpus = [] { return 8; };
     env = {{"SLURM_CPUS_PER_TASK", "3"}, {"SLURM_MEM_PER_NODE", "500"}, {"SLURM_JOB_CPUS_PER_NODE", "8"}};
     g = grantedResources(sources);
     EXPECT_EQ(g.cpus, 3);
@@ -112,6 +116,15 @@ TEST(GrantedResources, TheSmallestGrantOfSlurmAndTheCgroupWins)
     g = grantedResources(sources);
     EXPECT_EQ(g.cpus, 2);
     EXPECT_EQ(g.memoryBytes, 200.0 * 1024 * 1024) << "per CPU, times the CPUs";
+    env = {{"SLURM_CPUS_PER_TASK", "1e12"}};
+    EXPECT_EQ(grantedResources(sources).cpus, 65536) << "clamped";
+    // A cpuset (Slurm's task/affinity or task/cgroup binding) shows as the affinity.
+    sources.affinityCpus = [] { return 3; };
+    env.clear();
+    g = grantedResources(sources);
+    EXPECT_EQ(g.cpus, 3);
+    EXPECT_EQ(g.cpusFrom, "the process's CPU affinity (3 of 8 CPUs)");
+    sources.affinityCpus = [] { return 8; };
     env = {{"SLURM_CPUS_PER_TASK", "two"}, {"SLURM_MEM_PER_NODE", "-5"}};
     g = grantedResources(sources);
     EXPECT_EQ(g.cpus, 0) << "malformed values are no grant";
@@ -128,6 +141,20 @@ TEST(GrantedResources, TheSmallestGrantOfSlurmAndTheCgroupWins)
     EXPECT_EQ(g.cpus, 2) << "1.5 CPUs of quota, rounded up, under Slurm's 4";
     EXPECT_NE(g.cpusFrom.find("cgroup"), std::string::npos) << g.cpusFrom;
     EXPECT_EQ(g.memoryBytes, 1073741824.0) << "the parent's limit";
+    env = {{"SLURM_CPUS_PER_TASK", "4"}, {"SLURM_MEM_PER_CPU", "100"}};
+    g = grantedResources(sources);
+    EXPECT_EQ(g.cpus, 2) << "the quota";
+    EXPECT_EQ(g.memoryBytes, 400.0 * 1024 * 1024) << "per CPU of Slurm's 4, not of the quota's 2";
+    // What --threads 0 and --max-memory 0 become; explicit values stay.
+    GrantedSettings settings = grantedSettings(0, 0.0, g);
+    EXPECT_EQ(settings.threads, 2);
+    EXPECT_EQ(settings.maxMemory, 300.0 * 1024 * 1024);
+    settings = grantedSettings(5, 1e9, g);
+    EXPECT_EQ(settings.threads, 5);
+    EXPECT_EQ(settings.maxMemory, 1e9);
+    EXPECT_EQ(settings.text, "");
+    EXPECT_EQ(grantedSettings(0, 0.0, GrantedResources{0, "", 10.0 * 1024 * 1024, "x"}).maxMemory, 64.0 * 1024 * 1024) << "at least 64 MB";
+    EXPECT_EQ(grantedSettings(0, 0.0, GrantedResources{0, "", 1e30, "x"}).maxMemory, 1e18) << "within --max-memory's range";
 
     // cgroup v1: per controller; -1 and 2^63 are none.
     writeFile(sources.procSelfCgroup, "4:memory:/docker/abc\n3:cpu,cpuacct:/docker/abc\n");
@@ -167,6 +194,13 @@ TEST_F(Farm, AnArrayTaskRendersItsChunkWithTheGrantedThreadsAndMemory)
     EXPECT_NE(none.err.find("--chunk: no task index"), std::string::npos) << none.err;
     EXPECT_EQ(runCliWith(mDir, "SLURM_ARRAY_TASK_ID=x1", "render --job shot.json --chunk 2").code, 2);
     EXPECT_EQ(runCliWith(mDir, "", "render --job shot.json --chunk 0 --task 0").code, 2);
+    EXPECT_EQ(runCliWith(mDir, "", "render --job shot.json --task 0").code, 2) << "--task without --chunk";
+    const CliRun single = runCliWith(mDir, "", "render in.1.vdb one.exr --chunk 1 --task 0");
+    EXPECT_EQ(single.code, 2);
+    EXPECT_NE(single.err.find("--chunk: a task's chunk of --frames: give --frames"), std::string::npos) << single.err;
+    const CliRun same = runCliWith(mDir, "", "render --job shot.json in.#.vdb out/same.exr --chunk 1 --task 0");
+    EXPECT_EQ(same.code, 2) << "one frame a task, but six tasks write out/same.exr";
+    EXPECT_NE(same.err.find("out/same.exr has no frame pattern"), std::string::npos) << same.err;
 
     // The granted memory is the frame's budget: a frame over 3/4 of it stops (exit 5), an
     // explicit --max-memory wins.
@@ -192,9 +226,14 @@ TEST_F(Farm, SubmitWritesTheArrayScriptRunsSbatchAndRecordsTheJob)
     for (const std::string& line : std::vector<std::string>{"#!/bin/sh\n", "#SBATCH --array=0-1%5\n", "#SBATCH --output=" + farm + "/logs/%A_%a.log\n",
              "#SBATCH --chdir=" + fs::path(mDir.file("x")).parent_path().string() + "\n", "#SBATCH --cpus-per-task=2\n", "#SBATCH --mem=4G\n",
              "#SBATCH --time=1:00:00\n", "#SBATCH --partition=render\n", "#SBATCH --account=fx\n", "#SBATCH --job-name=vdb_ewa:shot\n",
-             " render --job " + mJob + " --frames 1-6 --chunk 4\n"}) {
+             " render --job " + mJob + " --frames 1-6 --chunk 4 --skip-newer-than ",
+             "# Written by: vdb_ewa submit shot.json --chunk 4 --partition render --mem 4G --cpus 2 --time 1:00:00 --max-running 5 "
+             "--sbatch-option=--account=fx --sbatch " + sbatch + "\n"}) {
         EXPECT_NE(script.find(line), std::string::npos) << line << "\n" << script;
     }
+    std::smatch submitted;
+    ASSERT_TRUE(std::regex_search(script, submitted, std::regex(R"( --skip-newer-than (\d+)\n)"))) << script;
+    EXPECT_LE(std::abs(std::stoll(submitted[1].str()) - (long long)std::time(nullptr)), 60) << "the submission's time";
     EXPECT_EQ(slurp(mDir.file("sbatch_args")).substr(0, 11), "--parsable ");
     std::vector<std::string> warnings;
     const std::vector<Submission> recorded = readSubmissions(farm, warnings);
@@ -208,16 +247,36 @@ TEST_F(Farm, SubmitWritesTheArrayScriptRunsSbatchAndRecordsTheJob)
     const int status = std::system(("cd / && env SLURM_ARRAY_TASK_ID=1 sh " + mDir.file("submitted.sh") + " >" + mDir.file("task.log") + " 2>&1").c_str());
     EXPECT_EQ(status, 0) << slurp(mDir.file("task.log"));
     EXPECT_EQ(doneFrames(slurp(mDir.file("task.log"))), (std::vector<int>{5, 6})) << "in the job's folder\n" << slurp(mDir.file("task.log"));
+    // Requeued (preemption, a node failure), the task does not redo the frames it wrote.
+    std::system(("cd / && env SLURM_ARRAY_TASK_ID=1 sh " + mDir.file("submitted.sh") + " >" + mDir.file("task.log") + " 2>&1").c_str());
+    EXPECT_TRUE(doneFrames(slurp(mDir.file("task.log"))).empty()) << slurp(mDir.file("task.log"));
+    EXPECT_NE(slurp(mDir.file("task.log")).find("vdb_ewa: frame 6 skipped: out/o.6.exr was written after --skip-newer-than\n"), std::string::npos)
+        << slurp(mDir.file("task.log"));
+    // Older outputs are rendered again: the frames were written before that time.
+    const CliRun rerender = runCliWith(mDir, "", "render --job shot.json --frames 5-6 --skip-newer-than " + std::to_string(std::time(nullptr) + 100));
+    EXPECT_EQ(doneFrames(rerender.out), (std::vector<int>{5, 6})) << rerender.out;
+    // status from another folder: the job's relative paths are the tasks' (the record's folder).
+    const CliRun elsewhere = runCli(mDir, "status " + mJob + " --squeue ''", "", "cd / && ");
+    EXPECT_NE(elsewhere.out.find(": 6 frames (1-6): 2 done, 0 running, 0 queued, 0 failed, 4 missing\n"), std::string::npos) << elsewhere.out;
+    EXPECT_NE(elsewhere.out.find("missing: 1-4 (job 4242 task 0 never started)\n"), std::string::npos) << elsewhere.out;
+    EXPECT_NE(elsewhere.out.find("to finish: vdb_ewa submit " + mJob + " --frames 1-4 --chunk 4 --partition render --mem 4G --cpus 2 --time 1:00:00 "
+                                 "--max-running 5 --sbatch-option=--account=fx --sbatch " + sbatch + " --skip-existing\n"), std::string::npos) << elsewhere.out;
 
     // --skip-existing submits only the missing frames, chunked again; --dry-run prints the
     // script and writes nothing; --parsable prints the id alone.
-    const CliRun dry = runCliWith(mDir, "", "submit shot.json --chunk 4 --skip-existing --dry-run --sbatch " + sbatch);
+    const CliRun dry = runCliWith(mDir, "", "submit shot.json --chunk 4 --skip-existing --dry-run --farm-dir other --sbatch " + sbatch);
     EXPECT_EQ(dry.code, 0) << dry.err;
     EXPECT_NE(dry.out.find("#SBATCH --array=0-0\n"), std::string::npos) << dry.out;
-    EXPECT_NE(dry.out.find(" --frames 1-4 --chunk 4 --skip-existing\n"), std::string::npos) << dry.out;
+    EXPECT_NE(dry.out.find("#SBATCH --output=" + mDir.file("other") + "/logs/%A_%a.log\n"), std::string::npos) << dry.out;
+    EXPECT_TRUE(std::regex_search(dry.out, std::regex(R"( --frames 1-4 --chunk 4 --skip-newer-than \d+ --skip-existing\n)"))) << dry.out;
+    EXPECT_FALSE(fs::exists(mDir.file("other"))) << "a dry run writes nothing";
     EXPECT_EQ(fs::remove(mDir.file("submitted.sh")), true);
-    const CliRun parsable = runCliWith(mDir, "", "submit shot.json --frames 1-2 --parsable --sbatch " + sbatch);
+    const CliRun parsable = runCliWith(mDir, "", "submit shot.json --frames 1-2 --parsable --farm-dir other --sbatch " + sbatch);
     EXPECT_EQ(parsable.out, "4242\n");
+    EXPECT_TRUE(fs::exists(mDir.file("other/4242.json")));
+    const CliRun other = runCliWith(mDir, "", "status shot.json --farm-dir other --squeue ''");
+    EXPECT_NE(other.out.find("missing: 1 (job 4242 task 0 never started)\nmissing: 2 (job 4242 task 1 never started)\n"), std::string::npos) << other.out;
+    EXPECT_NE(other.out.find(" --farm-dir " + mDir.file("other") + " "), std::string::npos) << "absolute, for any folder\n" << other.out;
     for (int f = 1; f <= 4; ++f) writeFile(mDir.file("out/o." + std::to_string(f) + ".exr"), "x");
     const CliRun nothing = runCliWith(mDir, "", "submit shot.json --skip-existing --sbatch " + sbatch);
     EXPECT_EQ(nothing.code, 0);
@@ -235,7 +294,7 @@ TEST_F(Farm, SubmitRefusesWhatEveryTaskWouldFailOnInOneLine)
         EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
         EXPECT_FALSE(fs::exists(mDir.file("shot.farm/4242.json")));
     };
-    fails("shot.json --partition nope", 4, sbatch + ": the submission failed: sbatch: error: Batch job submission failed: Invalid partition name specified");
+    fails("shot.json --partition nope", 4, sbatch + ": the submission failed: error: Batch job submission failed: Invalid partition name specified");
     for (const auto& e : fs::directory_iterator(mDir.file("shot.farm"))) EXPECT_EQ(e.path().filename(), "logs") << "no script left behind";
     fails("shot.json --mem lots", 2, "--mem: 'lots' is not Slurm's memory size");
     fails("shot.json --time soon", 2, "--time: 'soon' is not Slurm's time");
@@ -259,8 +318,8 @@ TEST_F(Farm, StatusListsDoneRunningQueuedFailedAndMissingFrames)
     // Two submissions: job 7 (tasks of 2: 1-2, 3-4, 5-6) and job 9 (frames 5-6, one task).
     const std::string farm = mDir.file("shot.farm");
     fs::create_directories(farm + "/logs");
-    recordSubmission(farm, {"7", parseFrameList("1-6"), 2, ""});
-    recordSubmission(farm, {"9", parseFrameList("5-6"), 2, ""});
+    recordSubmission(farm, {"7", parseFrameList("1-6"), 2, "2026-11-26T17:00:00Z", mDir.file(""), ""});
+    recordSubmission(farm, {"9", parseFrameList("5-6"), 2, "2026-11-26T17:10:00Z", mDir.file(""), " --chunk 2 --mem 1G"});
     writeFile(farm + "/garbage.json", "{");
     writeFile(mDir.file("out/o.1.exr"), "x");
     writeFile(farm + "/logs/7_0.log", "vdb_ewa: frame 1 done: out/o.1.exr (0.1 s, peak 9 MB)\nvdb_ewa: frame 2 done: out/o.2.exr (0.1 s, peak 9 MB)\n");
@@ -288,7 +347,10 @@ TEST_F(Farm, StatusListsDoneRunningQueuedFailedAndMissingFrames)
     EXPECT_EQ(later.code, 1);
     EXPECT_NE(later.out.find("2 done, 0 running, 0 queued, 1 failed, 3 missing\n"), std::string::npos) << later.out;
     EXPECT_NE(later.out.find("missing: 6 (job 9 task 0 ended before it)\n"), std::string::npos) << later.out;
-    EXPECT_NE(later.out.find("to finish: vdb_ewa submit shot.json --frames 2-4,6 --skip-existing\n"), std::string::npos) << later.out;
+    fs::remove(farm + "/logs/9_0.log");
+    EXPECT_NE(runCliWith(mDir, "", "status shot.json --squeue ''").out.find("missing: 6 (job 9 task 0 never started)\n"), std::string::npos);
+    EXPECT_NE(later.out.find("to finish: vdb_ewa submit shot.json --frames 2-4,6 --chunk 2 --mem 1G --skip-existing\n"), std::string::npos)
+        << "the latest submission's options\n" << later.out;
     EXPECT_NE(later.err.find(squeue + ": error: Unable to contact slurm controller: the queue is unknown"), std::string::npos) << later.err;
 
     // Every frame done: exit 0. Without a farm folder the outputs alone say it.
@@ -313,5 +375,55 @@ TEST(FarmFolder, TaskLogsReadTheLastLineOfEachFrame)
     EXPECT_EQ(log.frames.at(-2).state, FrameEntry::Skipped);
     EXPECT_EQ(log.ended, "cancelled due to time limit");
     EXPECT_TRUE(readTaskLog(dir.file("none.log")).frames.empty());
-    EXPECT_EQ(defaultFarmFolder("/a/b/shot.json"), "/a/b/shot.farm");
+    EXPECT_EQ(farmFolder("/a/b/shot.json", ""), "/a/b/shot.farm");
+    EXPECT_EQ(farmFolder("/a/b/shot.json", "/c/../d"), "/d");
+    // Submissions sort by time, then by id as a number: a cluster rebuilt restarts its ids.
+    recordSubmission(dir.file(""), {"10", {1}, 1, "2026-11-26T17:00:00Z", "", ""});
+    recordSubmission(dir.file(""), {"9", {1}, 1, "2026-11-26T17:00:00Z", "", ""});
+    recordSubmission(dir.file(""), {"2", {1}, 1, "2026-11-26T18:00:00Z", "", ""});
+    std::vector<std::string> warnings;
+    std::vector<std::string> ids;
+    for (const Submission& s : readSubmissions(dir.file(""), warnings)) ids.push_back(s.id);
+    EXPECT_EQ(ids, (std::vector<std::string>{"9", "10", "2"}));
+}
+
+TEST(SbatchScript, DirectivesHoldPathsWithSpacesAndPercentsAndRefuseWhatTheyCannot)
+{
+    SbatchRequest r;
+    r.program = "/opt/vdb ewa/bin/vdb_ewa";
+    r.jobFile = "/shows/it's/shot.json";
+    r.frames = parseFrameList("1-10");
+    r.chunk = 3;
+    r.submitted = 1800000000;
+    r.workingFolder = "/shows/a b";
+    r.logFolder = "/shows/a b/shot 100%.farm/logs";
+    r.name = "vdb_ewa:sh 010";
+    const std::string script = sbatchScript(r);
+    for (const char* line : {"#SBATCH --array=0-3\n", "#SBATCH --output=\"/shows/a b/shot 100%%.farm/logs/%A_%a.log\"\n",
+             "#SBATCH --chdir=\"/shows/a b\"\n", "#SBATCH --job-name=vdb_ewa:sh_010\n", "cd '/shows/a b' || exit 3",
+             "exec '/opt/vdb ewa/bin/vdb_ewa' render --job '/shows/it'\\''s/shot.json' --frames 1-10 --chunk 3 --skip-newer-than 1800000000\n"}) {
+        EXPECT_NE(script.find(line), std::string::npos) << line << "\n" << script;
+    }
+    // What an #SBATCH line cannot hold is refused in one line.
+    const auto refused = [&](SbatchRequest bad, const std::string& needle) {
+        try {
+            sbatchScript(bad);
+            ADD_FAILURE() << "accepted: " << needle;
+        } catch (const ValueError& e) {
+            const std::string message = e.what();
+            EXPECT_NE(message.find(needle), std::string::npos) << message;
+            EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+        }
+    };
+    SbatchRequest bad = r;
+    bad.workingFolder = "/shows/a\"b";
+    refused(bad, "--chdir '/shows/a\"b' holds a quote, backslash or line break");
+    bad = r;
+    bad.logFolder = "/shows/x\ny";
+    refused(bad, "'/shows/x\\ny/%A_%a.log'");
+    bad = r;
+    bad.extra = {"--comment=a b"};
+    refused(bad, "--sbatch-option: '--comment=a b' is not one sbatch option");
+    bad.extra = {"account=fx"};
+    refused(bad, "is not one sbatch option");
 }

@@ -41,13 +41,18 @@ struct RenderJob
     /// @a pattern (input, output or preview) of @a frame.
     std::string pathOf(const std::string& pattern, int frame) const;
     /// The frame is done: its output exists, and its preview if one is asked for (outputs are
-    /// renamed into place whole, so an existing one is complete).
-    bool done(int frame) const;
+    /// renamed into place whole, so an existing one is complete). Relative paths are taken in
+    /// @a folder where it is not empty (the tasks' working folder), else in the current one.
+    bool done(int frame, const std::string& folder = "") const;
 };
 
 /// Parse and check @a renderArguments (the render subcommand's, `--job FILE` applied as the CLI
 /// applies it) as `vdb_ewa render` would before reading any grid.
 /// @throw CLI::ParseError, vdb_ewa::Error (ValueError, IoError) as the render would
 RenderJob renderJobOf(const std::vector<std::string>& renderArguments);
+
+/// renderJobOf `--job @a jobFile` (and `--frames @a frames` unless empty): what submit and
+/// status act on.
+RenderJob renderJobOfFile(const std::string& jobFile, const std::string& frames);
 
 } // namespace vdb_ewa::cli

@@ -10,6 +10,7 @@
 namespace vdb_ewa::cli {
 
 constexpr int kExitOk = 0;
+constexpr int kExitIncomplete = 1;   ///< `vdb_ewa status`: some frame is not done (docs/farm.md)
 constexpr int kExitBadArguments = 2; ///< unknown option, malformed value, impossible camera
 constexpr int kExitBadInput = 3;     ///< input file missing, unreadable, wrong grid or type
 constexpr int kExitRenderFailed = 4; ///< rendering or writing the output failed

@@ -19,10 +19,23 @@ namespace vdb_ewa::cli {
 
 namespace fs = std::filesystem;
 
-std::string defaultFarmFolder(const std::string& jobPath)
+std::string farmFolder(const std::string& jobPath, const std::string& given)
 {
+    if (!given.empty()) return fs::absolute(given).lexically_normal().string();
     const fs::path job = fs::absolute(jobPath).lexically_normal();
     return (job.parent_path() / (job.stem().string() + ".farm")).string();
+}
+
+std::string frameLogLine(int frame, FrameEntry::State state, const std::string& text, int exitCode)
+{
+    const std::string head = "vdb_ewa: frame " + std::to_string(frame);
+    switch (state) {
+    case FrameEntry::Done: return head + " done: " + text;
+    case FrameEntry::Skipped: return head + " skipped: " + text;
+    case FrameEntry::Failed: return head + " failed (exit " + std::to_string(exitCode) + "): " + text;
+    case FrameEntry::Interrupted: break;
+    }
+    return head + " interrupted";
 }
 
 std::string taskLogPath(const std::string& farm, const std::string& id, int task)
@@ -34,7 +47,8 @@ std::string taskLogPattern(const std::string& farm) { return (fs::path(farm) / "
 
 void recordSubmission(const std::string& farm, const Submission& s)
 {
-    const nlohmann::json record = {{"job_id", s.id}, {"frames", frameListText(s.frames)}, {"chunk", s.chunk}, {"submitted", s.submitted}};
+    const nlohmann::json record = {{"job_id", s.id}, {"frames", frameListText(s.frames)}, {"chunk", s.chunk}, {"submitted", s.submitted},
+        {"folder", s.folder}, {"options", s.options}};
     const std::string path = (fs::path(farm) / (s.id + ".json")).string();
     const std::string temporary = path + ".tmp" + std::to_string(::getpid());
     {
@@ -65,14 +79,18 @@ std::vector<Submission> readSubmissions(const std::string& farm, std::vector<std
             s.frames = parseFrameList(record.at("frames").get<std::string>());
             s.chunk = record.at("chunk").get<int>();
             s.submitted = record.value("submitted", "");
+            s.folder = record.value("folder", "");
+            s.options = record.value("options", "");
             if (s.chunk < 1) throw ValueError("chunk < 1");
             submissions.push_back(std::move(s));
         } catch (const std::exception&) {
             warnings.push_back(p.string() + ": not a submission record: skipped");
         }
     }
-    // Job ids rise with time: compare them as numbers ("9" before "10").
+    // By time (job ids restart when a cluster is rebuilt or passes MaxJobId), then by id as a
+    // number ("9" before "10").
     std::sort(submissions.begin(), submissions.end(), [](const Submission& a, const Submission& b) {
+        if (a.submitted != b.submitted) return a.submitted < b.submitted;
         return a.id.size() != b.id.size() ? a.id.size() < b.id.size() : a.id < b.id;
     });
     return submissions;
@@ -84,6 +102,7 @@ TaskLog readTaskLog(const std::string& path)
     static const std::regex slurmEnd(R"(\*\*\* (?:JOB|STEP) \S+ ON \S+ CANCELLED AT \S+(?: DUE TO ([A-Z ]+?))? \*\*\*)");
     TaskLog log;
     std::ifstream in(path);
+    log.exists = bool(in);
     std::string line;
     std::smatch m;
     while (std::getline(in, line)) {

@@ -10,8 +10,9 @@
 
 namespace vdb_ewa::cli {
 
-/// The default farm folder of the job file @a jobPath: `<its folder>/<its stem>.farm`.
-std::string defaultFarmFolder(const std::string& jobPath);
+/// The farm folder of the job file @a jobPath, absolute: @a given (--farm-dir) where it is not
+/// empty, else `<the job's folder>/<its stem>.farm`.
+std::string farmFolder(const std::string& jobPath, const std::string& given);
 
 /// One `vdb_ewa submit`: the scheduler's job id, the frames it submitted (task t renders chunk t).
 struct Submission
@@ -19,7 +20,9 @@ struct Submission
     std::string id;
     std::vector<int> frames;
     int chunk = 1;
-    std::string submitted; ///< local time, ISO 8601
+    std::string submitted; ///< UTC, ISO 8601 (2026-11-26T17:40:00Z): sorts as it reads
+    std::string folder;    ///< the tasks' working folder: the job's relative paths resolve there
+    std::string options;   ///< submit's options but the frames', as words for a shell (a resubmission's)
 };
 
 /// The log of task @a task of job @a id, and the pattern sbatch's --output takes for it.
@@ -30,7 +33,8 @@ std::string taskLogPattern(const std::string& farm);
 /// @throw IoError naming the file
 void recordSubmission(const std::string& farm, const Submission& s);
 
-/// The submissions recorded in @a farm, oldest first (by job id); none where it does not exist.
+/// The submissions recorded in @a farm, oldest first (by time, then job id); none where it does
+/// not exist.
 /// Records that cannot be read are skipped, each with a line in @a warnings.
 std::vector<Submission> readSubmissions(const std::string& farm, std::vector<std::string>& warnings);
 
@@ -41,6 +45,11 @@ struct FrameEntry
     std::string detail; ///< Failed: "exit 3: in.0003.vdb: no such file"
 };
 
+/// The render's line on @a frame, as readTaskLog reads it back: `vdb_ewa: frame 7 done: TEXT`,
+/// `... skipped: TEXT`, `... failed (exit 3): TEXT`, `... interrupted` (@a text unused).
+/// @a exitCode: Failed's.
+std::string frameLogLine(int frame, FrameEntry::State state, const std::string& text, int exitCode = 0);
+
 /// What a log says: each frame's last line (vdb_ewa's `frame N done|skipped|failed|interrupted`),
 /// and why the scheduler ended the task, if it did (Slurm's `*** JOB 12 ON node CANCELLED AT
 /// ... DUE TO PREEMPTION ***`: "cancelled due to preemption"; empty otherwise).
@@ -48,6 +57,7 @@ struct TaskLog
 {
     std::map<int, FrameEntry> frames;
     std::string ended;
+    bool exists = false; ///< the log exists: the task started
 };
 
 /// Read the log @a path (a missing file reads as empty).

@@ -10,6 +10,9 @@
 #include <sstream>
 #include <vector>
 
+#include <sched.h>
+#include <unistd.h>
+
 namespace vdb_ewa::cli {
 namespace {
 
@@ -66,6 +69,14 @@ std::vector<std::string> cgroupFolders(const ResourceSources& sources, const std
     return folders;
 }
 
+/// The CPUs this process may run on (sched_getaffinity); 0 where unknown.
+int affinityCount()
+{
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    return ::sched_getaffinity(0, sizeof set, &set) == 0 ? CPU_COUNT(&set) : 0;
+}
+
 /// Keep the smaller of @a value and what @a grant holds.
 void keepSmaller(double& grant, std::string& from, double value, const std::string& source)
 {
@@ -89,6 +100,7 @@ GrantedResources grantedResources(const ResourceSources& sources)
     } else if (const auto perNode = leadingCount(env("SLURM_JOB_CPUS_PER_NODE"))) {
         keepSmaller(cpus, g.cpusFrom, *perNode, named("SLURM_JOB_CPUS_PER_NODE"));
     }
+    const double slurmCpus = cpus; // SLURM_MEM_PER_CPU is per allocated CPU
     for (const std::string& folder : cgroupFolders(sources, "cpu")) {
         double quota = 0.0, period = 0.0;
         if (const auto max = firstLine(folder + "/cpu.max")) { // v2: "max 100000" or "150000 100000"
@@ -99,11 +111,15 @@ GrantedResources grantedResources(const ResourceSources& sources)
         }
         if (quota > 0.0 && period > 0.0) keepSmaller(cpus, g.cpusFrom, std::ceil(quota / period), "the cgroup's CPU quota (" + folder + ")");
     }
+    const int affinity = sources.affinityCpus ? sources.affinityCpus() : affinityCount();
+    const int online = sources.onlineCpus ? sources.onlineCpus() : int(::sysconf(_SC_NPROCESSORS_ONLN));
+    if (affinity > 0 && affinity < online) keepSmaller(cpus, g.cpusFrom, affinity, "the process's CPU affinity (" + std::to_string(affinity) + " of " + std::to_string(online) + " CPUs)");
+    cpus = std::min(cpus, 65536.0);
 
     if (const auto perNode = leadingCount(env("SLURM_MEM_PER_NODE"))) {
         keepSmaller(memory, g.memoryFrom, *perNode * kMB, named("SLURM_MEM_PER_NODE") + " MB");
     } else if (const auto perCpu = leadingCount(env("SLURM_MEM_PER_CPU"))) {
-        const double n = cpus > 0.0 ? cpus : 1.0;
+        const double n = slurmCpus > 0.0 ? slurmCpus : 1.0;
         keepSmaller(memory, g.memoryFrom, *perCpu * kMB * n, named("SLURM_MEM_PER_CPU") + " MB x " + std::to_string(int(n)) + " CPUs");
     }
     for (const std::string& folder : cgroupFolders(sources, "memory")) {
@@ -127,7 +143,7 @@ GrantedSettings grantedSettings(int threads, double maxMemory, const GrantedReso
         text << granted.cpus << (granted.cpus == 1 ? " thread (" : " threads (") << granted.cpusFrom << ")";
     }
     if (maxMemory == 0.0 && granted.memoryBytes > 0.0) {
-        s.maxMemory = std::max(0.75 * granted.memoryBytes, 64.0 * kMB);
+        s.maxMemory = std::min(std::max(0.75 * granted.memoryBytes, 64.0 * kMB), 1.0e18); // --max-memory's range
         text << (text.tellp() > 0 ? ", " : "") << "a frame's memory budget " << std::fixed << std::setprecision(0) << s.maxMemory / kMB
              << " MB (3/4 of " << granted.memoryFrom << ")";
     }

@@ -24,13 +24,17 @@ struct ResourceSources
     std::function<const char*(const char*)> getenv; ///< null: the process's environment
     std::string cgroupRoot = "/sys/fs/cgroup";       ///< the cgroup file systems' mount point
     std::string procSelfCgroup = "/proc/self/cgroup"; ///< the process's cgroup paths
+    std::function<int()> affinityCpus;               ///< null: sched_getaffinity's count
+    std::function<int()> onlineCpus;                 ///< null: the CPUs online (sysconf)
 };
 
 /// The smallest grant of each kind among:
 /// - CPUs: SLURM_CPUS_PER_TASK, else the first count of SLURM_JOB_CPUS_PER_NODE ("2(x3)" is 2);
 ///   the cgroup's CPU quota (v2 cpu.max, v1 cpu.cfs_quota_us / cpu.cfs_period_us), rounded up;
-/// - memory: SLURM_MEM_PER_NODE, or SLURM_MEM_PER_CPU times the CPUs (in MB, Slurm's unit); the
-///   cgroup's limit (v2 memory.max, v1 memory.limit_in_bytes; "max" and v1's 2^63 are none).
+///   the CPUs the process may run on (its affinity: a cpuset, Slurm's usual binding) where
+///   they are fewer than the CPUs online; at most 65536;
+/// - memory: SLURM_MEM_PER_NODE, or SLURM_MEM_PER_CPU times Slurm's CPUs (in MB, Slurm's unit);
+///   the cgroup's limit (v2 memory.max, v1 memory.limit_in_bytes; "max" and v1's 2^63 are none).
 /// Malformed values are ignored (Slurm writes them; a task must not fail on them).
 GrantedResources grantedResources(const ResourceSources& sources = {});
 

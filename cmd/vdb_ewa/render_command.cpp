@@ -3,6 +3,7 @@
 #include "camera_file_option.h"
 #include "commands.h"
 #include "exit_codes.h"
+#include "farm_folder.h"
 #include "frame_sequence.h"
 #include "job_file.h"
 #include "option_values.h"
@@ -25,6 +26,7 @@
 #include <optional>
 #include <sstream>
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 namespace vdb_ewa::cli {
@@ -34,6 +36,16 @@ namespace {
 bool outputsExist(const std::string& output, const std::string& preview)
 {
     return std::filesystem::exists(output) && (preview.empty() || std::filesystem::exists(preview));
+}
+
+/// A frame's files were written at or after @a since (seconds since 1970).
+bool outputsWrittenSince(const std::string& output, const std::string& preview, long long since)
+{
+    const auto newer = [since](const std::string& path) {
+        struct stat st{};
+        return ::stat(path.c_str(), &st) == 0 && (long long)st.st_mtime >= since;
+    };
+    return newer(output) && (preview.empty() || newer(preview));
 }
 
 class RenderCommand : public Command
@@ -57,13 +69,19 @@ public:
             "--preview) hold a frame pattern, #### (padded to the number of #) or %04d (default: one frame)");
         mApp->add_flag("--skip-existing", mSkipExisting,
             "skip frames whose output (and --preview, if given) exist (outputs are written whole or not at all, so a killed job resumes)");
-        mApp->add_option("--chunk", mChunk,
+        mApp->add_option("--skip-newer-than", mSkipNewerThan,
+            "skip frames whose output (and --preview) were written at or after this time, in seconds since 1970 (UTC): a farm "
+            "task that was requeued does not redo the frames it wrote, yet older outputs are rendered again (default: none; "
+            "docs/farm.md)")
+            ->check(CLI::NonNegativeNumber);
+        CLI::Option* chunk = mApp->add_option("--chunk", mChunk,
             "farm array tasks: render only this task's chunk of N frames of --frames, frames [I*N, (I+1)*N) for task I "
             "(--task, or $SLURM_ARRAY_TASK_ID), in [1, 1000000] (default: every frame; docs/farm.md)")
             ->check(CLI::Range(1, 1000000));
         mApp->add_option("--task", mTask,
             "with --chunk: the task's index I, from 0 (default: $SLURM_ARRAY_TASK_ID)")
-            ->check(CLI::Range(0, 1000000));
+            ->check(CLI::Range(0, 1000000))
+            ->needs(chunk);
         mApp->add_option("--job", mJob,
             "JSON job file of option: value pairs (long option names, plus input and output); options on the "
             "command line override it, unknown keys are an error (docs/batch.md)");
@@ -134,18 +152,23 @@ public:
             const std::string preview = pathOf(mOptions.output().previewOption(), frames[i]);
             if (mSkipExisting && outputsExist(output, preview)) {
                 ++skipped;
-                if (verbosity != Verbosity::Quiet) report.line("vdb_ewa: frame " + std::to_string(frames[i]) + " skipped: " + output + " exists");
+                if (verbosity != Verbosity::Quiet) report.line(frameLogLine(frames[i], FrameEntry::Skipped, output + " exists"));
+                continue;
+            }
+            if (mSkipNewerThan && outputsWrittenSince(output, preview, *mSkipNewerThan)) {
+                ++skipped;
+                if (verbosity != Verbosity::Quiet) report.line(frameLogLine(frames[i], FrameEntry::Skipped, output + " was written after --skip-newer-than"));
                 continue;
             }
             try {
                 renderOneFrame(renderer, mOptions.cameraFile().empty() ? cam : mOptions.cameraFor(frameOf(frames[i])), rs, frames[i], output, report, verbosity, i == 0);
                 report.framesWritten(++written);
             } catch (const Cancelled&) {
-                if (isSequence()) report.line("vdb_ewa: frame " + std::to_string(frames[i]) + " interrupted", stderr);
+                if (isSequence()) report.line(frameLogLine(frames[i], FrameEntry::Interrupted, ""), stderr);
                 break;
             } catch (const std::exception& e) {
                 if (!isSequence()) throw;
-                report.line("vdb_ewa: frame " + std::to_string(frames[i]) + " failed (exit " + std::to_string(exitCodeFor(e)) + "): " + e.what(), stderr);
+                report.line(frameLogLine(frames[i], FrameEntry::Failed, e.what(), exitCodeFor(e)), stderr);
                 failed.push_back(frames[i]);
                 if (failCode == kExitOk) failCode = exitCodeFor(e);
             }
@@ -180,17 +203,17 @@ private:
     {
         if (!isSequence()) {
             if (hasFramePattern(mInput)) throw ValueError(mInput + ": a frame pattern (#### or %04d) needs --frames");
+            if (mChunk) throw ValueError("--chunk: a task's chunk of --frames: give --frames");
             return {0};
         }
-        std::vector<int> frames = parseFrameList(mFrames);
-        if (mChunk) frames = frameChunk(frames, *mChunk, taskIndex());
+        const std::vector<int> frames = parseFrameList(mFrames);
         if (!hasFramePattern(mInput)) throw ValueError("--frames: the input " + mInput + " has no frame pattern (#### or %04d)");
         for (const std::string& out : {mOutput, mOptions.output().previewOption()}) {
-            if (!out.empty() && frames.size() > 1 && !hasFramePattern(out)) {
+            if (!out.empty() && frames.size() > 1 && !hasFramePattern(out)) { // every task's frames, not only this one's
                 throw ValueError("--frames: " + out + " has no frame pattern (#### or %04d): every frame would overwrite it");
             }
         }
-        return frames;
+        return mChunk ? frameChunk(frames, *mChunk, taskIndex()) : frames;
     }
 
     /// --task, else $SLURM_ARRAY_TASK_ID (with --chunk).
@@ -251,7 +274,7 @@ private:
         if (verbosity >= Verbosity::Verbose) report.line(statsText(stats, loadSeconds, seconds(t1)));
         if (isSequence() && verbosity >= Verbosity::Normal) {
             std::ostringstream line;
-            line << "vdb_ewa: frame " << frameNumber << " done: " << output << " (" << std::fixed << std::setprecision(2) << seconds(t0)
+            line << frameLogLine(frameNumber, FrameEntry::Done, output) << " (" << std::fixed << std::setprecision(2) << seconds(t0)
                  << " s, peak " << std::setprecision(0) << (framePeak ? peakMegabytesSinceReset() : peakMegabytes()) << " MB)";
             report.line(line.str());
         }
@@ -323,6 +346,7 @@ private:
     int mVerbose = 0;
     bool mQuiet = false, mSkipExisting = false;
     std::optional<int> mChunk, mTask;
+    std::optional<long long> mSkipNewerThan;
     std::string mFrames, mJob;
 };
 
@@ -335,7 +359,13 @@ std::string RenderJob::pathOf(const std::string& pattern, int frame) const
     return sequence && !pattern.empty() ? framePath(pattern, frame) : pattern;
 }
 
-bool RenderJob::done(int frame) const { return outputsExist(pathOf(output, frame), pathOf(preview, frame)); }
+bool RenderJob::done(int frame, const std::string& folder) const
+{
+    const auto in = [&](const std::string& path) {
+        return folder.empty() || path.empty() || std::filesystem::path(path).is_absolute() ? path : (std::filesystem::path(folder) / path).string();
+    };
+    return outputsExist(in(pathOf(output, frame)), in(pathOf(preview, frame)));
+}
 
 RenderJob renderJobOf(const std::vector<std::string>& renderArguments)
 {
@@ -346,6 +376,13 @@ RenderJob renderJobOf(const std::vector<std::string>& renderArguments)
     std::reverse(args.begin(), args.end()); // CLI11 takes a reversed vector
     app.parse(args);
     return render.job();
+}
+
+RenderJob renderJobOfFile(const std::string& jobFile, const std::string& frames)
+{
+    std::vector<std::string> args{"--job", jobFile};
+    if (!frames.empty()) args.insert(args.end(), {"--frames", frames});
+    return renderJobOf(args);
 }
 
 } // namespace vdb_ewa::cli

@@ -11,6 +11,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cstring>
+#include <sstream>
 
 extern char** environ;
 
@@ -35,12 +36,17 @@ ProgramResult runProgram(const std::string& program, const std::vector<std::stri
     posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
     posix_spawn_file_actions_adddup2(&actions, outPipe[1], 1);
     posix_spawn_file_actions_adddup2(&actions, errPipe[1], 2);
+    posix_spawnattr_t attributes;
+    posix_spawnattr_init(&attributes);
+    posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETPGROUP); // its own group, to kill a wrapper's children too
+    posix_spawnattr_setpgroup(&attributes, 0);
     std::vector<char*> argv{const_cast<char*>(program.c_str())};
     for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
     argv.push_back(nullptr);
     pid_t pid = 0;
-    const int spawned = ::posix_spawnp(&pid, program.c_str(), &actions, nullptr, argv.data(), environ);
+    const int spawned = ::posix_spawnp(&pid, program.c_str(), &actions, &attributes, argv.data(), environ);
     posix_spawn_file_actions_destroy(&actions);
+    posix_spawnattr_destroy(&attributes);
     ::close(outPipe[1]);
     ::close(errPipe[1]);
     if (spawned != 0) {
@@ -54,14 +60,17 @@ ProgramResult runProgram(const std::string& program, const std::vector<std::stri
     pollfd fds[2] = {{outPipe[0], POLLIN, 0}, {errPipe[0], POLLIN, 0}};
     std::string* texts[2] = {&result.out, &result.err};
     bool timedOut = false;
-    for (int open = 2; open > 0;) {
+    int openStreams = 2;
+    while (openStreams > 0) {
         const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now()).count();
         if (left <= 0) {
             timedOut = true;
-            ::kill(pid, SIGKILL);
             break;
         }
-        if (::poll(fds, 2, int(left)) < 0 && errno != EINTR) break;
+        if (::poll(fds, 2, int(left)) < 0 && errno != EINTR) {
+            result.failure = std::string("poll: ") + std::strerror(errno);
+            break;
+        }
         for (int i = 0; i < 2; ++i) {
             if (fds[i].fd < 0 || !(fds[i].revents & (POLLIN | POLLHUP | POLLERR))) continue;
             char buffer[4096];
@@ -70,10 +79,11 @@ ProgramResult runProgram(const std::string& program, const std::vector<std::stri
             if (n == 0 || (n < 0 && errno != EINTR && errno != EAGAIN)) {
                 ::close(fds[i].fd);
                 fds[i].fd = -1;
-                --open;
+                --openStreams;
             }
         }
     }
+    if (openStreams > 0) ::kill(-pid, SIGKILL); // timed out or cannot read: nothing may be left running
     for (const pollfd& f : fds) {
         if (f.fd >= 0) ::close(f.fd);
     }
@@ -81,9 +91,26 @@ ProgramResult runProgram(const std::string& program, const std::vector<std::stri
     while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
     }
     if (timedOut) result.failure = "timed out after " + std::to_string(int(timeoutSeconds)) + " s";
+    else if (!result.failure.empty()) result.exitCode = -1;
     else if (WIFEXITED(status)) result.exitCode = WEXITSTATUS(status);
     else if (WIFSIGNALED(status)) result.failure = "killed by signal " + std::to_string(WTERMSIG(status));
     return result;
+}
+
+std::string ProgramResult::why(const std::string& program) const
+{
+    if (!failure.empty()) return failure;
+    std::string first, lastError;
+    std::istringstream lines(err);
+    for (std::string line; std::getline(lines, line);) {
+        if (line.empty()) continue;
+        if (first.empty()) first = line;
+        if (line.find("error") != std::string::npos) lastError = line;
+    }
+    std::string text = !lastError.empty() ? lastError : !first.empty() ? first : "exit " + std::to_string(exitCode);
+    const std::string name = program.substr(program.rfind('/') + 1) + ": ";
+    if (text.rfind(name, 0) == 0) text.erase(0, name.size());
+    return text;
 }
 
 } // namespace vdb_ewa::cli

@@ -22,8 +22,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr int kExitIncomplete = 1; ///< status: some frame is not done
-
 /// The latest submission of a frame: its task, the task's queue state and what its log says.
 struct Attempt
 {
@@ -33,6 +31,7 @@ struct Attempt
     std::string logPath;
     const FrameEntry* entry = nullptr; ///< the log's last line on the frame; null: none
     std::string ended;                 ///< the scheduler's reason for ending the task
+    bool started = false;              ///< the task has a log
 };
 
 class StatusCommand : public Command
@@ -51,15 +50,17 @@ public:
 
     CLI::App* subcommand() const override { return mApp; }
 
-    void validate() const override { renderJob(); }
+    void validate() const override { renderJobOfFile(mJob, mFrames); }
 
     int run() override
     {
-        const RenderJob job = renderJob();
-        const std::string farm = mFarm.empty() ? defaultFarmFolder(mJob) : mFarm;
+        const RenderJob job = renderJobOfFile(mJob, mFrames);
+        const std::string farm = farmFolder(mJob, mFarm);
         std::vector<std::string> warnings;
         const std::vector<Submission> submissions = readSubmissions(farm, warnings);
-        const std::map<std::string, std::string> queue = submissions.empty() ? std::map<std::string, std::string>{} : queueStates(warnings);
+        const std::map<std::string, std::string> queue = submissions.empty() ? std::map<std::string, std::string>{} : queueStates(submissions, warnings);
+        // The job's relative paths are the tasks' (the latest submission's working folder).
+        const std::string folder = submissions.empty() ? "" : submissions.back().folder;
 
         // Each frame's latest attempt, oldest submission first.
         std::map<int, TaskLog> logs; // kept alive for the entries' pointers, by submission order
@@ -73,7 +74,7 @@ public:
                 for (const int f : frameChunk(s.frames, s.chunk, task)) {
                     const auto entry = log.frames.find(f);
                     attempts[f] = {s.id, task, state == queue.end() ? "" : state->second, logPath,
-                                   entry == log.frames.end() ? nullptr : &entry->second, log.ended};
+                                   entry == log.frames.end() ? nullptr : &entry->second, log.ended, log.exists};
                 }
             }
         }
@@ -83,7 +84,7 @@ public:
         std::vector<std::string> failures;
         for (const int f : job.frames) {
             const auto a = attempts.find(f);
-            if (job.done(f)) {
+            if (job.done(f, folder)) {
                 done.push_back(f);
                 continue;
             }
@@ -105,7 +106,7 @@ public:
             } else if (at.entry && at.entry->state != FrameEntry::Interrupted) {
                 missing[where + " wrote it, but the output is gone"].push_back(f);
             } else {
-                const std::string why = !at.ended.empty() ? at.ended : at.entry ? "interrupted" : "ended before it";
+                const std::string why = !at.ended.empty() ? at.ended : at.entry ? "interrupted" : at.started ? "ended before it" : "never started";
                 missing[where + " " + why].push_back(f);
             }
         }
@@ -120,31 +121,27 @@ public:
         for (const std::string& f : failures) std::cout << "failed: " << f << "\n";
         for (const auto& [why, frames] : missing) std::cout << "missing: " << frameListText(frames) << " (" << why << ")\n";
         if (unfinished.empty()) return kExitOk;
-        if (running.empty() && queued.empty()) {
-            std::cout << "to finish: vdb_ewa submit " << shellQuoted(mJob) << " --frames " << frameListText(unfinished) << " --skip-existing\n";
+        if (running.empty() && queued.empty()) { // the latest submission's options, for the frames left
+            std::string options = submissions.empty() ? (mFarm.empty() ? "" : " --farm-dir " + shellQuoted(farm)) : submissions.back().options;
+            if (options.find(" --skip-existing") == std::string::npos) options += " --skip-existing";
+            std::cout << "to finish: vdb_ewa submit " << shellQuoted(mJob) << " --frames " << frameListText(unfinished) << options << "\n";
         }
         return kExitIncomplete;
     }
 
 private:
-    RenderJob renderJob() const
-    {
-        std::vector<std::string> args{"--job", mJob};
-        if (!mFrames.empty()) args.insert(args.end(), {"--frames", mFrames});
-        return renderJobOf(args);
-    }
-
-    /// squeue's state of each array task ("15_2" -> "RUNNING"); empty, with a warning, where
-    /// squeue cannot say.
-    std::map<std::string, std::string> queueStates(std::vector<std::string>& warnings) const
+    /// squeue's state of each array task of @a submissions ("15_2" -> "RUNNING"); empty, with a
+    /// warning, where squeue cannot say.
+    std::map<std::string, std::string> queueStates(const std::vector<Submission>& submissions, std::vector<std::string>& warnings) const
     {
         std::map<std::string, std::string> states;
         if (mSqueue.empty()) return states;
-        const ProgramResult r = runProgram(mSqueue, {"--noheader", "--array", "--format=%i %T"}, 30.0);
+        std::string ids;
+        for (const Submission& s : submissions) ids += (ids.empty() ? "" : ",") + s.id;
+        const ProgramResult r = runProgram(mSqueue, {"--noheader", "--array", "--format=%i %T", "--jobs=" + ids}, 30.0);
+        if (r.exitCode != 0 && r.err.find("Invalid job id") != std::string::npos) return states; // all have left the queue
         if (r.exitCode != 0) {
-            std::string why = r.failure.empty() ? r.err.substr(0, r.err.find('\n')) : r.failure;
-            if (why.rfind("squeue: ", 0) == 0) why.erase(0, 8); // squeue names itself
-            warnings.push_back(mSqueue + ": " + why + ": the queue is unknown, so running and queued frames show as missing");
+            warnings.push_back(mSqueue + ": " + r.why(mSqueue) + ": the queue is unknown, so running and queued frames show as missing");
             return states;
         }
         std::istringstream lines(r.out);

@@ -16,6 +16,7 @@
 #include <fstream>
 #include <iostream>
 #include <regex>
+#include <set>
 
 #include <unistd.h>
 
@@ -59,12 +60,13 @@ public:
 
     CLI::App* subcommand() const override { return mApp; }
 
-    void validate() const override { request(renderJob()); }
+    void validate() const override { request(renderJob(), 0); }
 
     int run() override
     {
         const RenderJob job = renderJob();
-        SbatchRequest r = request(job);
+        const std::time_t now = std::time(nullptr);
+        const SbatchRequest r = request(job, now);
         if (r.frames.empty()) {
             if (!mParsable) std::cout << "vdb_ewa: " << mJob << ": every frame's output exists: nothing to submit\n";
             return kExitOk;
@@ -73,79 +75,76 @@ public:
             std::cout << sbatchScript(r);
             return kExitOk;
         }
+        const std::string farm = farmFolder(mJob, mFarm);
         std::error_code error;
-        fs::create_directories(fs::path(r.logPattern).parent_path(), error);
-        if (error) throw IoError(farm() + ": cannot create the farm folder (" + error.message() + ")");
-        const std::string script = (fs::path(farm()) / ("submit" + std::to_string(::getpid()) + ".sbatch")).string();
+        fs::create_directories(r.logFolder, error);
+        if (error) throw IoError(farm + ": cannot create the farm folder (" + error.message() + ")");
+        const std::string script = (fs::path(farm) / ("submit" + std::to_string(::getpid()) + ".sbatch")).string();
         {
             std::ofstream out(script);
             out << sbatchScript(r);
             if (!out.flush()) throw IoError(script + ": cannot write the batch script");
         }
         const ProgramResult sbatch = runProgram(mSbatch, {"--parsable", script});
-        const std::string id = sbatch.out.substr(0, sbatch.out.find_first_of(";\n"));
+        const std::string id = sbatch.out.substr(0, sbatch.out.find_first_of(";\n")); // "id" or "id;cluster"
         if (sbatch.exitCode != 0 || !std::regex_match(id, std::regex("[0-9]+"))) {
             fs::remove(script, error);
-            std::string why = sbatch.failure.empty() ? sbatch.err.substr(0, sbatch.err.find('\n')) : sbatch.failure;
-            if (why.empty()) why = "exit " + std::to_string(sbatch.exitCode) + ", printed '" + sbatch.out.substr(0, 60) + "'";
+            const std::string why = sbatch.exitCode == 0 ? "it printed '" + sbatch.out.substr(0, 60) + "', not a job id" : sbatch.why(mSbatch);
+            const bool array = why.find("array") != std::string::npos;
             throw std::runtime_error(mSbatch + ": the submission failed: " + why +
-                                     (sbatch.failure == "not found" ? " (install Slurm's client, slurm-client, or give --sbatch)" : ""));
+                (sbatch.failure == "not found" ? " (install Slurm's client, slurm-client, or give --sbatch)"
+                 : array ? " (" + std::to_string(chunkCount(r.frames.size(), r.chunk)) + " tasks: over the cluster's MaxArraySize? raise --chunk)" : ""));
         }
-        fs::rename(script, fs::path(farm()) / (id + ".sbatch"), error);
-        recordSubmission(farm(), {id, r.frames, r.chunk, localTime()});
+        fs::rename(script, fs::path(farm) / (id + ".sbatch"), error);
+        try {
+            recordSubmission(farm, {id, r.frames, r.chunk, utcTime(now), r.workingFolder, resubmitOptions()});
+        } catch (const IoError& e) {
+            throw IoError("job " + id + " was submitted, but " + e.what() + ": vdb_ewa status cannot follow it");
+        }
         if (mParsable) {
             std::cout << id << "\n";
         } else {
             const int tasks = chunkCount(r.frames.size(), r.chunk);
             std::cout << "vdb_ewa: submitted job " << id << ": " << counted(tasks, "task") << " of " << counted(r.chunk, "frame")
-                      << " (frames " << frameListText(r.frames) << "); logs " << (fs::path(farm()) / "logs" / (id + "_*.log")).string()
-                      << "; progress: vdb_ewa status " << shellQuoted(mJob) << "\n";
+                      << " (frames " << frameListText(r.frames) << "); logs " << (fs::path(r.logFolder) / (id + "_*.log")).string()
+                      << "; progress: vdb_ewa status " << shellQuoted(mJob) << (mFarm.empty() ? "" : " --farm-dir " + shellQuoted(mFarm)) << "\n";
         }
         return kExitOk;
     }
 
 private:
-    static std::string localTime()
+    static std::string utcTime(std::time_t t)
     {
-        const std::time_t now = std::time(nullptr);
-        std::tm local{};
-        localtime_r(&now, &local);
+        std::tm utc{};
+        gmtime_r(&t, &utc);
         char text[32];
-        std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%S", &local);
+        std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &utc);
         return text;
     }
 
-    std::string farm() const { return mFarm.empty() ? defaultFarmFolder(mJob) : fs::absolute(mFarm).lexically_normal().string(); }
-
-    /// The job as each task will parse it: a broken job fails here, not on the farm.
     RenderJob renderJob() const
     {
-        std::vector<std::string> args{"--job", mJob};
-        if (!mFrames.empty()) args.insert(args.end(), {"--frames", mFrames});
-        const RenderJob job = renderJobOf(args);
+        const RenderJob job = renderJobOfFile(mJob, mFrames);
         if (!job.sequence) throw ValueError("submit: " + mJob + " gives no frames: give --frames or a \"frames\" key");
-        // Every task would fail on it (the render does not make folders, as vdb_render does not).
-        const fs::path folder = fs::absolute(job.pathOf(job.output, job.frames.front())).parent_path();
-        if (!fs::is_directory(folder)) throw IoError(job.pathOf(job.output, job.frames.front()) + ": folder '" + folder.string() + "' does not exist");
         return job;
     }
 
-    SbatchRequest request(const RenderJob& job) const
+    /// The sbatch request for @a job, submitted at @a now; the job checked as each task will
+    /// parse it, so a broken job fails here, not on the farm.
+    SbatchRequest request(const RenderJob& job, std::time_t now) const
     {
-        static const std::regex memory("[0-9]+[KMGTkmgt]?"), time("[0-9]+(-[0-9]+)?(:[0-9]+){0,2}"), word("[A-Za-z0-9_.,+-]+");
+        static const std::regex memory("[0-9]+[KMGTkmgt]?"), time("[0-9]+(-[0-9]+)?(:[0-9]+){0,2}|UNLIMITED|INFINITE|unlimited|infinite"),
+            word("[A-Za-z0-9_.,+-]+");
         if (!mMemory.empty() && !std::regex_match(mMemory, memory)) throw ValueError("--mem: '" + mMemory + "' is not Slurm's memory size (4096, 4G, 500M)");
-        if (!mTime.empty() && !std::regex_match(mTime, time)) throw ValueError("--time: '" + mTime + "' is not Slurm's time (30, 1:30:00, 2-00:00:00)");
+        if (!mTime.empty() && !std::regex_match(mTime, time)) throw ValueError("--time: '" + mTime + "' is not Slurm's time (30, 1:30:00, 2-00:00:00, UNLIMITED)");
         if (!mPartition.empty() && !std::regex_match(mPartition, word)) throw ValueError("--partition: '" + mPartition + "' is not a partition name");
-        for (const std::string& e : mExtra) {
-            if (e.rfind("-", 0) != 0) throw ValueError("--sbatch-option: '" + e + "' is not an option (--account=fx)");
-        }
         SbatchRequest r;
         std::error_code error;
         r.program = fs::read_symlink("/proc/self/exe", error).string();
         if (error) throw std::runtime_error("submit: cannot find the vdb_ewa program (/proc/self/exe)");
         r.jobFile = fs::absolute(mJob).lexically_normal().string();
         r.workingFolder = fs::current_path().string();
-        r.logPattern = taskLogPattern(farm());
+        r.logFolder = (fs::path(farmFolder(mJob, mFarm)) / "logs").string();
         r.name = mName.empty() ? "vdb_ewa:" + fs::path(mJob).stem().string() : mName;
         r.partition = mPartition;
         r.memory = mMemory;
@@ -154,14 +153,44 @@ private:
         r.chunk = mChunk;
         r.maxRunning = mMaxRunning;
         r.extra = mExtra;
+        r.submitted = (long long)now;
         r.skipExisting = mSkipExisting || job.skipExisting;
+        std::set<std::string> folders;
         for (const int f : job.frames) {
-            if (!r.skipExisting || !job.done(f)) r.frames.push_back(f);
+            if (r.skipExisting && job.done(f)) continue;
+            r.frames.push_back(f);
+            // Every task would fail on a missing output folder (the render makes none, as vdb_render makes none).
+            for (const std::string& pattern : {job.output, job.preview}) {
+                const std::string path = job.pathOf(pattern, f);
+                if (!path.empty() && folders.insert(fs::absolute(path).parent_path().string()).second && !fs::is_directory(fs::absolute(path).parent_path())) {
+                    throw IoError(path + ": folder '" + fs::absolute(path).parent_path().string() + "' does not exist");
+                }
+            }
         }
-        r.commandLine = "vdb_ewa submit " + shellQuoted(mJob) + (mFrames.empty() ? "" : " --frames " + shellQuoted(mFrames)) +
-                        " --chunk " + std::to_string(mChunk) + (r.skipExisting ? " --skip-existing" : "");
+        r.commandLine = "vdb_ewa submit " + shellQuoted(mJob) + (mFrames.empty() ? "" : " --frames " + shellQuoted(mFrames)) + resubmitOptions();
         if (!r.frames.empty()) sbatchScript(r); // the values fit in the script
         return r;
+    }
+
+    /// The options given, but the job, --frames and those of this one call (--dry-run,
+    /// --parsable), as shell words: a resubmission of the missing frames repeats them.
+    std::string resubmitOptions() const
+    {
+        std::string line;
+        for (const CLI::Option* opt : mApp->get_options()) {
+            if (opt->get_lnames().empty() || opt->count() == 0) continue;
+            const std::string name = opt->get_lnames().front();
+            if (name == "help" || name == "frames" || name == "dry-run" || name == "parsable") continue;
+            if (opt->get_expected_min() == 0) {
+                line += " --" + name; // a flag
+                continue;
+            }
+            for (const std::string& given : opt->results()) {
+                const std::string value = name == "farm-dir" ? farmFolder(mJob, mFarm) : given; // from any folder
+                line += " --" + name + (value.rfind("-", 0) == 0 ? "=" : " ") + shellQuoted(value);
+            }
+        }
+        return line;
     }
 
     CLI::App* mApp = nullptr;
