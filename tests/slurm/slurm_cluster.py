@@ -442,12 +442,7 @@ class SlurmCluster:
 
     def _kill_leftovers(self):
         pids = self.cluster_processes()
-        described = [_proc_describe(p) for p in pids]
-        for pid in pids:
-            try:
-                os.kill(pid, signal.SIGKILL)
-            except ProcessLookupError:
-                pass
+        described = _kill_described(pids)
         end = time.monotonic() + 5
         while time.monotonic() < end and any(_alive(p) for p in pids):
             time.sleep(0.05)
@@ -507,8 +502,13 @@ def _kill_stale_clusters(workdir):
             if not _slurmctld_alive(root.decode("utf-8", "replace")) and not _is_zombie(pid):
                 found.append(pid)
                 break
-    described = [_proc_describe(p) for p in found]
-    for pid in found:
+    return _kill_described(found)
+
+
+def _kill_described(pids):
+    """SIGKILL pids; returns what they were."""
+    described = [_proc_describe(p) for p in pids]
+    for pid in pids:
         try:
             os.kill(pid, signal.SIGKILL)
         except ProcessLookupError:
