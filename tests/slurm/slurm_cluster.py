@@ -121,7 +121,7 @@ class SlurmCluster:
         self.node = "localhost"
         self._procs = {}          # name -> Popen
         self.munge_socket = None
-        self._socket_dir = None   # a short folder in /tmp when the root's path is too long
+        self._socket_dir = None   # a folder in /tmp for munge's socket where the root's path cannot hold it
         self._old_handlers = {}
         self._stopped = True
         self.stale = []           # processes of earlier clusters in workdir killed at start
@@ -225,7 +225,9 @@ class SlurmCluster:
             f.write(os.urandom(1024))
         os.chmod(key, 0o400)
         sock = os.path.join(mdir, "munge.socket")
-        if len(sock.encode()) > 100:   # sun_path holds 108 bytes
+        # sun_path holds 108 bytes, and munged wants every folder above its socket searchable
+        # by all (a CI's checkout under mktemp -d is not): else a short folder in /tmp
+        if len(sock.encode()) > 100 or not _searchable_by_all(mdir):
             self._socket_dir = tempfile.mkdtemp(prefix="vdbmunge.", dir="/tmp")
             os.chmod(self._socket_dir, 0o755)
             sock = os.path.join(self._socket_dir, "munge.socket")
@@ -514,6 +516,21 @@ def _kill_described(pids):
         except ProcessLookupError:
             pass
     return described
+
+
+def _searchable_by_all(path):
+    """True if every folder from / to path has execute permission for all."""
+    path = os.path.abspath(path)
+    while True:
+        try:
+            if not os.stat(path).st_mode & 0o001:
+                return False
+        except OSError:
+            return False
+        parent = os.path.dirname(path)
+        if parent == path:
+            return True
+        path = parent
 
 
 def _slurmctld_alive(root):
