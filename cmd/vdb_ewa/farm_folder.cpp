@@ -38,12 +38,12 @@ std::string frameLogLine(int frame, FrameEntry::State state, const std::string& 
     return head + " interrupted";
 }
 
+std::string taskLogFolder(const std::string& farm) { return (fs::path(farm) / "logs").string(); }
+
 std::string taskLogPath(const std::string& farm, const std::string& id, int task)
 {
-    return (fs::path(farm) / "logs" / (id + "_" + std::to_string(task) + ".log")).string();
+    return (fs::path(taskLogFolder(farm)) / (id + "_" + std::to_string(task) + ".log")).string();
 }
-
-std::string taskLogPattern(const std::string& farm) { return (fs::path(farm) / "logs" / "%A_%a.log").string(); }
 
 void recordSubmission(const std::string& farm, const Submission& s)
 {

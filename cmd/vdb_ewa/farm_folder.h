@@ -25,9 +25,9 @@ struct Submission
     std::string options;   ///< submit's options but the frames', as words for a shell (a resubmission's)
 };
 
-/// The log of task @a task of job @a id, and the pattern sbatch's --output takes for it.
+/// The folder of the tasks' logs, and the log of task @a task of job @a id in it.
+std::string taskLogFolder(const std::string& farm);
 std::string taskLogPath(const std::string& farm, const std::string& id, int task);
-std::string taskLogPattern(const std::string& farm);
 
 /// Record @a s as <farm>/<id>.json (written whole: a temporary file renamed).
 /// @throw IoError naming the file

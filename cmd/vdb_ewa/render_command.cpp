@@ -1,11 +1,11 @@
 /// @file render_command.cpp
 /// @brief `vdb_ewa render IN.vdb OUT.exr [options]`: vdb_render's options, GNU spelling.
 #include "camera_file_option.h"
+#include "command_line.h"
 #include "commands.h"
 #include "exit_codes.h"
 #include "farm_folder.h"
 #include "frame_sequence.h"
-#include "job_file.h"
 #include "option_values.h"
 #include "render_options.h"
 #include "progress_report.h"
@@ -150,14 +150,12 @@ public:
             const std::string output = pathOf(mOutput, frames[i]);
             // A frame is done when all its files are: an EXR without its --preview is rendered again.
             const std::string preview = pathOf(mOptions.output().previewOption(), frames[i]);
-            if (mSkipExisting && outputsExist(output, preview)) {
+            const char* skip = mSkipExisting && outputsExist(output, preview) ? " exists"
+                : mSkipNewerThan && outputsWrittenSince(output, preview, *mSkipNewerThan) ? " was written after --skip-newer-than"
+                : nullptr;
+            if (skip) {
                 ++skipped;
-                if (verbosity != Verbosity::Quiet) report.line(frameLogLine(frames[i], FrameEntry::Skipped, output + " exists"));
-                continue;
-            }
-            if (mSkipNewerThan && outputsWrittenSince(output, preview, *mSkipNewerThan)) {
-                ++skipped;
-                if (verbosity != Verbosity::Quiet) report.line(frameLogLine(frames[i], FrameEntry::Skipped, output + " was written after --skip-newer-than"));
+                if (verbosity != Verbosity::Quiet) report.line(frameLogLine(frames[i], FrameEntry::Skipped, output + skip));
                 continue;
             }
             try {
@@ -369,13 +367,10 @@ bool RenderJob::done(int frame, const std::string& folder) const
 
 RenderJob renderJobOf(const std::vector<std::string>& renderArguments)
 {
-    CLI::App app;
-    RenderCommand render(app);
-    std::vector<std::string> args = applyJobFile(renderArguments, *render.subcommand());
-    args.insert(args.begin(), "render");
-    std::reverse(args.begin(), args.end()); // CLI11 takes a reversed vector
-    app.parse(args);
-    return render.job();
+    std::vector<std::string> args{"render"};
+    args.insert(args.end(), renderArguments.begin(), renderArguments.end());
+    CommandLine commandLine; // the CLI's own parse: one-dash spellings, --job
+    return dynamic_cast<const RenderCommand&>(commandLine.parse(args)).job();
 }
 
 RenderJob renderJobOfFile(const std::string& jobFile, const std::string& frames)

@@ -271,15 +271,17 @@ void RenderOptions::resolve(std::optional<int> frame, CameraSettings& cam, Rende
     if (!mShader.empty()) rs.surface.shader = parseChoice("shader", mShader, kShaders);
     if (mSamples && *mSamples < 1) throw ValueError("--samples must be >= 1");
     if (!mSimd.empty()) rs.simd = parseChoice("simd", mSimd, kOnOff);
-    const GrantedSettings granted = grantedSettings(mThreads, mMaxMemory.empty() ? 0.0 : parseBytes("max-memory", mMaxMemory));
+    const GrantedSettings granted = grantedExecution();
     rs.threads = granted.threads;
     rs.maxMemory = granted.maxMemory;
 }
 
-std::string RenderOptions::grantedText() const
+GrantedSettings RenderOptions::grantedExecution() const
 {
-    return grantedSettings(mThreads, mMaxMemory.empty() ? 0.0 : parseBytes("max-memory", mMaxMemory)).text;
+    return grantedSettings(mThreads, mMaxMemory.empty() ? 0.0 : parseBytes("max-memory", mMaxMemory));
 }
+
+std::string RenderOptions::grantedText() const { return grantedExecution().text; }
 
 RenderSettings RenderOptions::prepare(const std::string& output, const std::string& preview, const RenderSettings& given,
     std::vector<std::string>& warnings)

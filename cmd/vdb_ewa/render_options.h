@@ -6,6 +6,7 @@
 ///        a batch job (input, output, --frames, --job, verbosity).
 #pragma once
 
+#include "granted_resources.h"
 #include "output_options.h"
 
 #include <vdb_ewa/vdb_ewa.h>
@@ -73,6 +74,8 @@ public:
     static std::string lightsText(const std::vector<Light>& lights, const std::string& separator = "; ");
 
 private:
+    /// --threads and --max-memory under the farm's or container's grant (granted_resources.h).
+    GrantedSettings grantedExecution() const;
     /// A line for each option given without the one it qualifies: it would change nothing.
     void ignoredOptionWarnings(std::vector<std::string>& warnings) const;
 

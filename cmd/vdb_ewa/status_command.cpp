@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <sstream>
 
 namespace vdb_ewa::cli {
@@ -29,7 +30,7 @@ struct Attempt
     int task = 0;
     std::string queueState; ///< squeue's; empty once the task has left the queue
     std::string logPath;
-    const FrameEntry* entry = nullptr; ///< the log's last line on the frame; null: none
+    std::optional<FrameEntry> entry;   ///< the log's last line on the frame; none: no line
     std::string ended;                 ///< the scheduler's reason for ending the task
     bool started = false;              ///< the task has a log
 };
@@ -63,18 +64,16 @@ public:
         const std::string folder = submissions.empty() ? "" : submissions.back().folder;
 
         // Each frame's latest attempt, oldest submission first.
-        std::map<int, TaskLog> logs; // kept alive for the entries' pointers, by submission order
         std::map<int, Attempt> attempts;
-        int order = 0;
         for (const Submission& s : submissions) {
-            for (int task = 0, tasks = chunkCount(s.frames.size(), s.chunk); task < tasks; ++task, ++order) {
+            for (int task = 0, tasks = chunkCount(s.frames.size(), s.chunk); task < tasks; ++task) {
                 const std::string logPath = taskLogPath(farm, s.id, task);
-                const TaskLog& log = logs[order] = readTaskLog(logPath);
+                const TaskLog log = readTaskLog(logPath);
                 const auto state = queue.find(s.id + "_" + std::to_string(task));
                 for (const int f : frameChunk(s.frames, s.chunk, task)) {
                     const auto entry = log.frames.find(f);
                     attempts[f] = {s.id, task, state == queue.end() ? "" : state->second, logPath,
-                                   entry == log.frames.end() ? nullptr : &entry->second, log.ended, log.exists};
+                                   entry == log.frames.end() ? std::nullopt : std::optional<FrameEntry>(entry->second), log.ended, log.exists};
                 }
             }
         }

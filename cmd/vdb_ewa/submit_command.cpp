@@ -144,7 +144,7 @@ private:
         if (error) throw std::runtime_error("submit: cannot find the vdb_ewa program (/proc/self/exe)");
         r.jobFile = fs::absolute(mJob).lexically_normal().string();
         r.workingFolder = fs::current_path().string();
-        r.logFolder = (fs::path(farmFolder(mJob, mFarm)) / "logs").string();
+        r.logFolder = taskLogFolder(farmFolder(mJob, mFarm));
         r.name = mName.empty() ? "vdb_ewa:" + fs::path(mJob).stem().string() : mName;
         r.partition = mPartition;
         r.memory = mMemory;
@@ -162,9 +162,9 @@ private:
             // Every task would fail on a missing output folder (the render makes none, as vdb_render makes none).
             for (const std::string& pattern : {job.output, job.preview}) {
                 const std::string path = job.pathOf(pattern, f);
-                if (!path.empty() && folders.insert(fs::absolute(path).parent_path().string()).second && !fs::is_directory(fs::absolute(path).parent_path())) {
-                    throw IoError(path + ": folder '" + fs::absolute(path).parent_path().string() + "' does not exist");
-                }
+                if (path.empty()) continue;
+                const std::string folder = fs::absolute(path).parent_path().string();
+                if (folders.insert(folder).second && !fs::is_directory(folder)) throw IoError(path + ": folder '" + folder + "' does not exist");
             }
         }
         r.commandLine = "vdb_ewa submit " + shellQuoted(mJob) + (mFrames.empty() ? "" : " --frames " + shellQuoted(mFrames)) + resubmitOptions();
