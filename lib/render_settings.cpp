@@ -47,6 +47,9 @@ void RenderSettings::validate() const
         if (!finite3(gridEmission.rec709ToWorking[c]) || !(glm::length(gridEmission.rec709ToWorking[c]) <= kMaxCoefficient)) {
             fail("the blackbody's colour matrix (GridEmission::rec709ToWorking) must be finite");
         }
+        if (!finite3(inputToWorking[c]) || !(glm::length(inputToWorking[c]) <= kMaxCoefficient)) {
+            fail("the input colours' matrix (RenderSettings::inputToWorking) must be finite");
+        }
     }
     for (int c = 0; c < 3; ++c) {
         if (medium.emission[c] > 0.0 && !(medium.absorb[c] + medium.scatter[c] > 0.0)) {
@@ -73,7 +76,7 @@ void RenderSettings::validate() const
     if (std::isinf(surface.iso)) fail("--iso must be finite");
     if (!(surface.isoOpacity >= 0.0 && surface.isoOpacity <= 1.0)) fail("--iso-opacity must be in [0, 1]");
     if (!(surface.tolerance > 0.0 && surface.tolerance <= 100.0)) fail("surface depth tolerance must be in (0, 100] voxels");
-    if (threads < 0) fail("--threads must be >= 0");
+    if (!(threads >= 0 && threads <= kMaxThreads)) fail("--threads must be in [0, " + std::to_string(kMaxThreads) + "] (0: all cores)");
     if (!(maxMemory == 0.0 || (maxMemory >= kMinMemoryBudget && maxMemory <= 1.0e18))) fail("--max-memory must be 0 (3/4 of the physical memory) or in [64M, 1e18] bytes");
 }
 

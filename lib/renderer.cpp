@@ -78,6 +78,7 @@ IsoSurface isoSurface(const RenderSettings& settings, const GridSource::Impl& gr
     for (std::size_t i = 0; i < lit.size(); ++i) {
         const detail::SurfaceKernel& k = surfaces.kernels[i];
         if (!(k.area > 0.0)) continue; // not drawn
+        const Vec3d albedo = detail::workingColor(settings.inputToWorking, k.albedo);
         for (std::size_t l = 0; l < lights.size(); ++l) {
             const Vec3d& colour = settings.lights[l].color;
             if (colour.x == 0.0 && colour.y == 0.0 && colour.z == 0.0) continue; // black: as the volume's shadow pass
@@ -85,7 +86,7 @@ IsoSurface isoSurface(const RenderSettings& settings, const GridSource::Impl& gr
             const double lambert = std::max(0.0, glm::dot(k.normal, settings.lights[l].unitDirection()));
             for (std::size_t c = 0; c < 3; ++c) {
                 shadow[i][c] += t[c];
-                lit[i][c] += float(settings.lights[l].color[int(c)] * k.albedo[int(c)] * lambert * double(t[c]));
+                lit[i][c] += float(settings.lights[l].color[int(c)] * albedo[int(c)] * lambert * double(t[c]));
             }
         }
     }
@@ -211,7 +212,7 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
         stats.warnings.push_back(w.str());
     }
     progress.stage(35, 45);
-    const std::vector<detail::Rgb> colors = detail::kernelColors(g, kernels);
+    const std::vector<detail::Rgb> colors = detail::kernelColors(g, kernels, mSettings.inputToWorking);
     detail::SplatSet splats = detail::projectSplats(g, kernels, colors, camera, mSettings, passes, &progress);
     std::optional<IsoSurface> iso;
     if (!std::isnan(mSettings.surface.iso)) iso = isoSurface(mSettings, g, camera, passes, lights, progress, budget);

@@ -168,12 +168,13 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
     lookat (--lookat): aim the camera at the world point X,Y,Z
     up (--up): world vector that points up after --lookat (default: 0,1,0)
     camera (--camera): camera type: persp[ective] or ortho[graphic] (default: perspective)
-    fov (--fov): horizontal field of view in degrees (default: 44.7966, from --focal and --aperture)
-    focal (--focal): perspective focal length in mm (default: 50)
-    aperture (--aperture): perspective frame width in mm (default: 41.2136)
-    frame (--frame): orthographic frame width in world units (default: 1)
-    near (--near): near plane depth in world units (default: 0.001)
-    far (--far): far plane depth in world units (default: 3.40282e+38)
+    fov (--fov): horizontal field of view in degrees, in (0, 179) (default: 44.7966, from --focal and
+        --aperture)
+    focal (--focal): perspective focal length in mm, > 0 (default: 50)
+    aperture (--aperture): perspective frame width in mm, > 0 (default: 41.2136)
+    frame (--frame): orthographic frame width in world units, > 0 (default: 1)
+    near (--near): near plane depth in world units, > 0 (default: 0.001)
+    far (--far): far plane depth in world units, > --near; inf: none (default: 3.40282e+38)
     absorb (--absorb): absorption R,G,B per unit density per voxel length, each in [0, 1e6] (default:
         0.1,0.1,0.1)
     scatter (--scatter): scattering R,G,B per unit density per voxel length, each in [0, 1e6] (default:
@@ -192,15 +193,16 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
         sphere nearest its direction, in [1, 64] (default: 16)
     environment_intensity (--environment-intensity): multiplies the environment's radiance, >= 0
         (default: 1)
-    gain (--gain): shadow-ray extinction falls as 1/(1 + gain * distance in voxels) (default: 0.2)
-    cutoff (--cutoff): density cutoff, and rays stop where |transmittance RGB|^2 < cutoff (default:
-        0.005)
+    gain (--gain): shadow-ray extinction falls as 1/(1 + gain * distance in voxels), finite and >= 0
+        (default: 0.2)
+    cutoff (--cutoff): density cutoff, and rays stop where |transmittance RGB|^2 < cutoff; range [0, 1)
+        (default: 0.005)
     shadowstep (--shadowstep): shadow-ray step in voxels, >= 0.001; the light map's budget may raise it
         (docs/numerics.md) (default: 0.5)
     shadow_res (--shadow-res): light map: shadow rays every N voxels across the light, interpolated in
         between; range [0.25, 16] (default: 1)
-    step (--step): primary-ray step in voxels for --method raymarch (default: 1); the splatter has no
-        primary rays and ignores it
+    step (--step): primary-ray step in voxels for --method raymarch, >= 0.001 (default: 1); the splatter
+        has no primary rays and ignores it
     method (--method): splat (EWA volume splatting), raymarch (the reference: ray-marches the trilinear
         field with a shadow ray per sample, as vdb_render; slow) or raymarch-gaussian (diagnostic: ray-
         marches the splatter's own Gaussian reconstruction and per-kernel shadows) (default: splat)
@@ -208,11 +210,13 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
         (default: 0.5)
     surface_sigma (--surface-sigma): level sets and --iso: surface kernel std. deviation along the
         surface in voxels, range [0.1, 4] (default: 0.55)
-    lowpass (--lowpass): screen-space low-pass filter variance in pixels^2 (default: 1)
+    lowpass (--lowpass): screen-space low-pass filter variance in pixels^2, range [0, 100], > 0 unless
+        --aa none (default: 1)
     aa (--aa): anti-aliasing: floor (each footprint axis at least --lowpass wide), ewa (resampling
         filter, Eq. 33: always adds --lowpass), swan (uniform scaling) or none (default: floor)
-    cutoff_radius (--cutoff-radius): footprint cut-off radius in std. deviations (default: 3)
-    slab (--slab): image-aligned slab thickness in voxel lengths (default: 2)
+    cutoff_radius (--cutoff-radius): footprint cut-off radius in std. deviations, range [1, 6] (default:
+        3)
+    slab (--slab): image-aligned slab thickness in voxel lengths, range [0.05, 10000] (default: 2)
     quality (--quality): preset of the speed/accuracy knobs: draft, default, high or final (refined
         kernels); explicit options override it (values in docs/performance.md) (default: default)
     exp (--exp): footprint exp(-r/2): incremental (forward differencing), exact or table (default:
@@ -245,9 +249,9 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
         its values are smooth: the transmittance through any depth of it differs by at most this much
         between its columns; range [0, 1], 1 = by screen size alone (default: 0.05, draft 0.25)
     iso (--iso): fog volumes: also render the iso-surface density = VALUE with flattened surface
-        kernels, lit by --light and composited with the volume (default: off)
+        kernels, lit by --light and composited with the volume; finite, nan: off (default: off)
     iso_opacity (--iso-opacity): opacity of the --iso surface, 0..1 (default: 1)
-    isovalue (--isovalue): level sets: iso-surface to render, in world units (default: 0)
+    isovalue (--isovalue): level sets: iso-surface to render, in world units, finite (default: 0)
     shader (--shader): level sets: diffuse (|N.ray|, a light at the camera), matte (white), normal
         ((N+1)/2) or position (world position in the active bounding box) (default: diffuse)
     color (--color): name of a vec3s grid in the input file with material colours, sampled trilinearly:
@@ -264,16 +268,18 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
         sigma T^4 / pi per voxel length, Blender's Principled Volume) wherever it is, whatever the
         density (default: none)
     temperature_scale (--temperature-scale): Kelvin per unit of --temperature's values: Kelvin = value x
-        scale + offset (Blender: the node's Temperature; Houdini: T1 - T0) (default: 1)
+        scale + offset (Blender: the node's Temperature; Houdini: T1 - T0), within 1e6 (default: 1)
     temperature_offset (--temperature-offset): Kelvin at value 0 (Houdini: T0), within 1e6 (default: 0)
     blackbody_intensity (--blackbody-intensity): multiplies the blackbody's radiance, in [0, 1e6]; 1 is
         physically based (default: 1)
     samples (--samples): level sets: vdb_render's rays per pixel; accepted for compatibility, the EWA
         filter anti-aliases without extra samples (default: 1)
     threads (--threads): worker threads, 0 = the CPUs the farm task or container was granted
-        ($SLURM_CPUS_PER_TASK, the cgroup's quota), else all cores (default: 0; docs/farm.md)
+        ($SLURM_CPUS_PER_TASK, the cgroup's quota), else all cores; range [0, 1024] (default: 0;
+        docs/farm.md)
     cpus (--cpus): worker threads, 0 = the CPUs the farm task or container was granted
-        ($SLURM_CPUS_PER_TASK, the cgroup's quota), else all cores (default: 0; docs/farm.md)
+        ($SLURM_CPUS_PER_TASK, the cgroup's quota), else all cores; range [0, 1024] (default: 0;
+        docs/farm.md)
     simd (--simd): on: the volume rasteriser uses the CPU's vector unit (AVX-512 or AVX2, detected at
         run time; images within 1e-5 of off); off: one pixel at a time, the reference it is tested
         against (default: on)
@@ -288,11 +294,14 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
         space (default: lin_rec709, linear sRGB, what vdb_render's values mean)
     working_space (--working-space): colour space the render is computed in (default: the config's
         scene_linear role; ACEScg in the shipped config)
-    output_space (--output-space): colour space of .exr and .hdr outputs (default: the working space)
+    output_space (--output-space): colour space of .exr and .hdr outputs (default: with vdb_ewa's
+        shipped config, --input-space (lin_rec709), what vdb_render writes; with your own config ($OCIO
+        or --ocio-config), its scene_linear role)
     preview (--preview): also write an 8-bit display-referred PNG of the beauty over black
     display (--display): display of 8-bit outputs (.png, .jpg, .tif, .ppm) and --preview (default: the
         config's default display)
-    view (--view): view of 8-bit outputs and --preview (default: the display's default view)
+    view (--view): view of 8-bit outputs and --preview (default: the display's default view; the shipped
+        config's is Un-tone-mapped, the plain sRGB curve, and "ACES 1.0 - SDR Video" tone-maps)
     exr_type (--exr-type): pixel type of the colour channels: half or float; Z is always float (default:
         half)
     compression (--compression): EXR compression: none, rle, zip, zips, piz, dwaa or dwab; other formats

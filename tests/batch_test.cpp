@@ -288,6 +288,12 @@ TEST_F(Batch, JobFileHoldsTheSettingsAndTheCommandLineOverridesIt)
     fails(R"({"input": )", 3, job + ": not a JSON job file");
     fails(R"([1, 2])", 2, job + ": a job file holds one JSON object");
     fails(R"({"input": "a.vdb", "output": "b.exr", "scatter": [1e999, 1, 1]})", 3, job + ": not a JSON job file (");
+    // Nested a million levels deep, in a key and at the top: once a stack overflow (SIGSEGV).
+    // Up to 64 levels are JSON's business; the option then refuses a value of that shape.
+    const auto nested = [](int depth) { return std::string(std::size_t(depth), '[') + std::string(std::size_t(depth), ']'); };
+    fails(R"({"input": "a.vdb", "output": "b.exr", "light": )" + nested(1000000) + "}", 3, job + ": not a JSON job file (nested deeper than 64 levels)");
+    fails(nested(1000000), 3, job + ": not a JSON job file (nested deeper than 64 levels)");
+    fails(R"({"input": "a.vdb", "output": "b.exr", "light": )" + nested(63) + "}", 2, job + ": light: expected a list of numbers");
     const CliRun directory = runCli(mDir, "render --job " + mDir.file(""));
     EXPECT_EQ(directory.code, 3) << directory.err;
     EXPECT_NE(directory.err.find("not a regular file, so not a job file"), std::string::npos) << directory.err;

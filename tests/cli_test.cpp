@@ -170,7 +170,7 @@ TEST_F(Cli, WritesEveryImageFormatByItsExtension)
         }
         // 8-bit: the display transform of the beauty, as the preview (--display, --view).
         EXPECT_EQ(image.spec.format, OIIO::TypeDesc::UINT8);
-        EXPECT_NE(r.out.find("--display sRGB --view \"ACES 1.0 - SDR Video\""), std::string::npos) << r.out;
+        EXPECT_NE(r.out.find("--display sRGB --view Un-tone-mapped"), std::string::npos) << r.out;
         EXPECT_EQ(r.out.find("--exr-type"), std::string::npos) << r.out;
         const ImageFile reference = readImageFile(preview);
         ASSERT_EQ(reference.pixels.size(), image.pixels.size());
@@ -256,7 +256,7 @@ TEST_F(Cli, GreyValuesStayGreyInEveryInputSpace)
     ASSERT_EQ(grey.code, 0) << grey.err;
     EXPECT_NE(grey.out.find("--input-space \"Linear Rec.709 (sRGB)\""), std::string::npos) << grey.out;
     EXPECT_EQ(grey.out.find("model in the working space"), std::string::npos) << grey.out;
-    ASSERT_EQ(runCli(mDir, mGrid + " " + b + " -res 48x32 -translate 0,0,5 --input-space ACEScg").code, 0);
+    ASSERT_EQ(runCli(mDir, mGrid + " " + b + " -res 48x32 -translate 0,0,5 --input-space ACEScg --output-space lin_rec709").code, 0);
     EXPECT_EQ(maxAbsDiff(readExr(a), readExr(b)), 0.0);
     const CliRun coloured = runCli(mDir, mGrid + " " + b + " -res 16x16 -translate 0,0,5 -light 0,1,0,1,0,0 -v");
     EXPECT_NE(coloured.out.find("model in the working space: --absorb 0.1,0.1,0.1 --scatter 1.5,1.5,1.5 --emission 0,0,0 --light 0,1,0,0.613"),
@@ -412,9 +412,12 @@ TEST_F(Cli, ColorGridTintsAFogVolume)
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_NE(r.out.find("--shadow-res 1 --color Cd\n"), std::string::npos) << r.out;
     const Image img = readExr(out);
+    // Red in the input space (the colour grid's values are taken there), red in the file: the
+    // working space (ACEScg) between the two leaves rounding.
     const float* p = img.pixel(16, 16);
-    EXPECT_EQ(p[1], 0.0f);
-    EXPECT_EQ(p[2], 0.0f);
+    EXPECT_GT(p[0], 0.01f);
+    EXPECT_NEAR(p[1], 0.0f, 1e-4f * p[0]);
+    EXPECT_NEAR(p[2], 0.0f, 1e-4f * p[0]);
     // Red x white light: the red channel is the untinted render's, in the splatter and in the
     // reference alike (a red tint that also darkened or lightened red would show here).
     for (const std::string method : {"splat", "raymarch"}) {
@@ -427,7 +430,7 @@ TEST_F(Cli, ColorGridTintsAFogVolume)
         for (int y = 0; y < 32; ++y)
             for (int x = 0; x < 32; ++x) {
                 ASSERT_NEAR(a.pixel(x, y)[0], b.pixel(x, y)[0], 1e-5f + 1e-4f * b.pixel(x, y)[0]) << method << " " << x << "," << y;
-                ASSERT_EQ(a.pixel(x, y)[1], 0.0f) << method;
+                ASSERT_NEAR(a.pixel(x, y)[1], 0.0f, 1e-6f + 1e-4f * b.pixel(x, y)[0]) << method;
                 ASSERT_EQ(a.pixel(x, y)[3], b.pixel(x, y)[3]) << method << ": the tint changes no opacity";
             }
     }
@@ -564,6 +567,7 @@ TEST_F(Cli, ArgumentAndOutputErrors)
     expectFailure("render " + mGrid + " " + out + " --ambient 0,-1,0", 2, "--ambient must be in [0, 1e6]");
     expectFailure("render " + mGrid + " " + out + " --light 0,1,0,3e38,1,1", 2, "--light colour must be in [0, 1e6]");
     expectFailure("render " + mGrid + " " + out + " --shadowstep 1e-9", 2, "--shadowstep must be finite and >= 0.001");
+    expectFailure("render " + mGrid + " " + out + " --threads 2147483647", 2, "--threads must be in [0, 1024] (0: all cores)");
     expectFailure("render " + mGrid + " " + mDir.file("out.gif"), 2, "unsupported output format");
     expectFailure("render " + mGrid + " " + mDir.file("no/such/dir/out.exr"), 3, "does not exist");
     // Every error is one line of at most 300 characters, whatever it quotes.

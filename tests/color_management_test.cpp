@@ -100,8 +100,12 @@ TEST(ColorManagement, ShippedConfigHasTheRolesDisplaysAndViews)
     EXPECT_TRUE(config.isData("Raw"));
     EXPECT_FALSE(config.isData("ACEScg"));
     EXPECT_EQ(config.defaultDisplay(), "sRGB");
-    EXPECT_EQ(config.defaultView("sRGB"), "ACES 1.0 - SDR Video");
-    EXPECT_NO_THROW(config.checkDisplayView("sRGB", "Un-tone-mapped"));
+    // The plain sRGB curve by default (8-bit dailies hold the EXR's values, as a comp without
+    // an ACES config shows them); the ACES view one option away.
+    EXPECT_EQ(config.defaultView("sRGB"), "Un-tone-mapped");
+    EXPECT_NO_THROW(config.checkDisplayView("sRGB", "ACES 1.0 - SDR Video"));
+    EXPECT_TRUE(config.isShipped());
+    EXPECT_FALSE(ColorConfig::fromString(shippedConfigText()).isShipped()) << "the same text from elsewhere is the user's config";
     EXPECT_THROW(config.checkDisplayView("sRGB", "Filmic"), ValueError);
     EXPECT_THROW(config.checkDisplayView("P3", "Un-tone-mapped"), ValueError);
     try {

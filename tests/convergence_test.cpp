@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <utility>
 
 using namespace vdb_ewa;
@@ -171,13 +172,23 @@ TEST(Convergence, SmallerShadowStepsNeverMoveAwayFromTheClosedForm)
 TEST(Convergence, LightMapWeightIsASumOfExponentials)
 {
     // vdb_render divides a shadow sample's extinction by 1 + gain s; the light map filters each
-    // term of 1 / (1 + x) ~ sum_n a_n exp(-b_n x) recursively along its rays: the fit's error
-    // against the closed form over [0, xMax], relative.
-    for (const double xMax : {10.0, 1000.0}) {
-        const detail::ExponentialSum sum(xMax);
-        double worst = 0.0;
-        for (double x = 0.0; x <= xMax; x += xMax / 4096.0) worst = std::max(worst, std::abs(sum(x) * (1.0 + x) - 1.0));
-        std::printf("1 / (1 + x) as %zu exponentials on [0, %g]: worst relative error %.2e\n", sum.a.size(), xMax, worst);
-        EXPECT_LT(worst, 1e-4);
+    // term of 1 / (1 + g k) ~ sum_n a_n decay_n^k recursively along its rays (g = gain x step, k
+    // steps): the fit's error against the closed form over k in [1, K], relative, with an
+    // absolute floor at the smallest normal double (terms that small are left out). The gains
+    // span every double: the term count must not grow with them (a gain of 1e308 made the old
+    // fit loop forever and fill the memory; a denormal one, 1/g overflowing, loop forever).
+    for (const double g : {0.0, std::numeric_limits<double>::denorm_min(), 1e-310, 1e-300, 1e-6, 0.1, 1.0, 1000.0, 1e30, 1e308, std::numeric_limits<double>::infinity()}) {
+        for (const double steps : {1.0, 10.0, 1000.0, 1e6}) {
+            const detail::ExponentialSum sum(g, steps);
+            EXPECT_LE(double(sum.a.size()), (std::log(steps) + 15.6) / 0.8 + 1.0) << "g " << g << ", K " << steps;
+            double worst = 0.0;
+            for (double k = 1.0; k <= steps; k *= 1.0 + 1.0 / 64.0) {
+                const double exact = 1.0 / (1.0 + std::min(g, std::numeric_limits<double>::max()) * k);
+                const double error = std::abs(sum(k) - exact) / (exact + 1e-300 / 1e-4);
+                worst = std::max(worst, error);
+            }
+            if (steps == 1000.0) std::printf("1 / (1 + g k) as %zu exponentials, g %g, k in [1, %g]: worst relative error %.2e\n", sum.a.size(), g, steps, worst);
+            EXPECT_LT(worst, 1e-4) << "g " << g << ", K " << steps;
+        }
     }
 }

@@ -11,6 +11,9 @@
 
 #include <openvdb/math/Maps.h>
 
+#include <chrono>
+#include <limits>
+
 using namespace vdb_ewa;
 using namespace vdb_ewa::test;
 
@@ -246,6 +249,58 @@ TEST(Extremes, LightDirectionOfAnyLength)
         s.lights[0].direction = Vec3d(0.3, 0.3, 0.0) * scale;
         const Image img = Renderer(s).render(cloud, camera);
         EXPECT_EQ(img.rgba, unit.rgba) << "light direction x " << scale;
+    }
+}
+
+TEST(Extremes, ShadowGainsOfEveryMagnitudeLightAsTheReferenceDoes)
+{
+    // vdb_render's weight 1 / (1 + gain s) at --gain 1e308: no shadow sample a step away or more
+    // weighs, so the light reaches every point whole. The light map's sum of exponentials once
+    // grew without end there (151 s and 22.9 GB on the sample cloud); now it is a few terms, and
+    // the splatter stays as close to the reference's exact weight as at the default gain.
+    const auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(
+        openvdb::ConstPtrCast<openvdb::FloatGrid>(makeSampleGrid(SampleGrid::Cloud, 0.05).impl().grid)->deepCopyGrid());
+    const CameraSettings cam = lookAtCamera(Vec3d(1.5, 0.8, 4.5), Vec3d(0.0), 48, 32);
+    const auto render = [&](double gain, Method method) {
+        RenderSettings s;
+        s.shadow.gain = gain;
+        s.method = method;
+        s.step = 0.25;
+        const Image img = renderGrid(grid, cam, s);
+        expectSane(img);
+        return img;
+    };
+    const auto redSum = [](const Image& img) {
+        double sum = 0.0;
+        for (std::size_t i = 0; i < img.rgba.size(); i += 4) sum += img.rgba[i];
+        return sum;
+    };
+    const Image defaultSplat = render(0.2, Method::Splat), defaultRef = render(0.2, Method::RayMarch);
+    const double defaultError = rmse(defaultSplat, defaultRef, 0);
+    Image previous;
+    for (const double gain : {1e30, 1e308, std::numeric_limits<double>::max()}) {
+        SCOPED_TRACE(gain);
+        const auto start = std::chrono::steady_clock::now();
+        const Image splat = render(gain, Method::Splat);
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        const Image ref = render(gain, Method::RayMarch);
+        const double error = rmse(splat, ref, 0);
+        std::printf("  gain %g: splat %.3f s, red RMSE against the reference %.2e (%.2e at the default gain), red %.1f (%.1f)\n", gain,
+            seconds, error, defaultError, redSum(ref), redSum(defaultRef));
+        EXPECT_LT(seconds, 20.0);
+        EXPECT_LT(error, 1.25 * defaultError);
+        EXPECT_GT(redSum(ref), 1.05 * redSum(defaultRef)) << "no shadow at all: more light than at the default gain";
+        if (!previous.rgba.empty()) {
+            EXPECT_LT(maxAbsDiff(splat, previous), 1e-4) << "the limit is reached by 1e30";
+        }
+        previous = splat;
+    }
+    // Denormal gains are no gain: 1/g overflowed in the fit, and it looped forever.
+    const Image none = render(0.0, Method::Splat);
+    for (const double gain : {1e-310, std::numeric_limits<double>::denorm_min()}) {
+        const auto start = std::chrono::steady_clock::now();
+        EXPECT_LT(maxAbsDiff(render(gain, Method::Splat), none), 1e-4) << gain; // the fit's 1e-4
+        EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 20.0) << gain;
     }
 }
 

@@ -74,7 +74,16 @@ nlohmann::json readJsonObjectFile(const std::string& path, const std::string& ki
     if (!in) throw IoError(path + ": cannot open the " + kind + " file");
     nlohmann::json object;
     try {
-        object = nlohmann::json::parse(in);
+        // Nesting is refused as it is read: a million brackets are read without recursion, but
+        // what then walks the document (copies, checks, the destructor) recurses and overflows
+        // the stack. A job or camera file nests two levels (a list of lists of numbers).
+        object = nlohmann::json::parse(in, [&](int depth, nlohmann::json::parse_event_t event, nlohmann::json&) {
+            const bool opens = event == nlohmann::json::parse_event_t::object_start || event == nlohmann::json::parse_event_t::array_start;
+            if (opens && depth >= kMaxJsonDepth) {
+                throw IoError(path + ": not a JSON " + kind + " file (nested deeper than " + std::to_string(kMaxJsonDepth) + " levels)");
+            }
+            return true;
+        });
     } catch (const nlohmann::json::exception& e) {
         // Parse errors and numbers out of range (1e999): one line, the library's words clipped.
         throw IoError(path + ": not a JSON " + kind + " file (" + std::string(e.what()).substr(0, 160) + ")");

@@ -30,10 +30,14 @@ std::vector<std::string> jobArguments(const std::string& path, const std::vector
 /// @throw ValueError for a value of the wrong kind.
 std::vector<std::string> optionArguments(const std::string& key, const nlohmann::json& value, bool flag, const std::string& where);
 
+/// The deepest nesting of lists and objects a job or camera file may hold (they need two).
+constexpr int kMaxJsonDepth = 64;
+
 /// The JSON object in the regular file @a path (a directory or a FIFO is refused before it is
 /// opened: a FIFO with no writer would block the open). @a kind names the file in errors ("job",
 /// "camera"), @a entries what its object holds ("option: value").
-/// @throw IoError (not a regular file, unreadable, not JSON) or ValueError (not an object).
+/// @throw IoError (not a regular file, unreadable, not JSON, nested deeper than kMaxJsonDepth)
+///        or ValueError (not an object).
 nlohmann::json readJsonObjectFile(const std::string& path, const std::string& kind, const std::string& entries);
 
 /// If @a args (the render subcommand's arguments, after the subcommand's name) hold

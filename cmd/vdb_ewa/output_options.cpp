@@ -53,10 +53,14 @@ void OutputOptions::add(CLI::App* app)
         "values mean)");
     app->add_option("--working-space", mWorkingSpace,
         "colour space the render is computed in (default: the config's scene_linear role; ACEScg in the shipped config)");
-    app->add_option("--output-space", mOutputSpace, "colour space of .exr and .hdr outputs (default: the working space)");
+    app->add_option("--output-space", mOutputSpace,
+        "colour space of .exr and .hdr outputs (default: with vdb_ewa's shipped config, --input-space (lin_rec709), what "
+        "vdb_render writes; with your own config ($OCIO or --ocio-config), its scene_linear role)");
     app->add_option("--preview", mPreview, "also write an 8-bit display-referred PNG of the beauty over black");
     app->add_option("--display", mDisplay, "display of 8-bit outputs (.png, .jpg, .tif, .ppm) and --preview (default: the config's default display)");
-    app->add_option("--view", mView, "view of 8-bit outputs and --preview (default: the display's default view)");
+    app->add_option("--view", mView,
+        "view of 8-bit outputs and --preview (default: the display's default view; the shipped config's is Un-tone-mapped, "
+        "the plain sRGB curve, and \"ACES 1.0 - SDR Video\" tone-maps)");
     app->add_option("--exr-type", mExrType, "pixel type of the colour channels: half or float; Z is always float (default: half)");
     app->add_option("--compression", mCompression,
         "EXR compression: " + choiceList(kCompressions) + "; other formats ignore it (a warning); --deep files take none, rle or zips (default: zip, zips for --deep)");
@@ -105,11 +109,6 @@ void OutputOptions::prepare(const std::string& output, const std::string& previe
         if (mWorkingSpace.empty()) throw ValueError(mConfig->origin() + ": the config has no scene_linear role; give --working-space");
     }
     mWorkingSpace = mConfig->colorSpace(mWorkingSpace);
-    mOutputSpace = mOutputSpace.empty() ? mWorkingSpace : mConfig->colorSpace(mOutputSpace);
-    for (const std::string* space : {&mWorkingSpace, &mOutputSpace}) {
-        if (mConfig->isData(*space)) throw ValueError("colour space '" + *space + "' is a data space; renders need a colour space");
-    }
-    ColorTransform::between(*mConfig, mWorkingSpace, mOutputSpace); // fails now, not after the render
     // vdb_render's colour values are linear sRGB: the config's name for it, if it has one. The
     // blackbody's colour is computed there too.
     std::string rec709;
@@ -133,6 +132,15 @@ void OutputOptions::prepare(const std::string& output, const std::string& previe
     }
     if (mConfig->isData(mInputSpace)) throw ValueError("--input-space '" + mInputSpace + "' is a data space; colour values need a colour space");
     mInputToWorking = ColorTransform::between(*mConfig, mInputSpace, mWorkingSpace);
+    // What reaches the file (docs/output.md#which-space-reaches-the-file): with the shipped
+    // config, what vdb_render writes, the input space (linear Rec.709); with the user's own
+    // config ($OCIO, --ocio-config), its scene_linear role, the working space.
+    if (mOutputSpace.empty()) mOutputSpace = mConfig->isShipped() ? mInputSpace : mWorkingSpace;
+    else mOutputSpace = mConfig->colorSpace(mOutputSpace);
+    for (const std::string* space : {&mWorkingSpace, &mOutputSpace}) {
+        if (mConfig->isData(*space)) throw ValueError("colour space '" + *space + "' is a data space; renders need a colour space");
+    }
+    ColorTransform::between(*mConfig, mWorkingSpace, mOutputSpace); // fails now, not after the render
     std::string how;
     mExr.chromaticities = chromaticitiesOf(*mConfig, mOutputSpace, &how);
     if (!mExr.chromaticities) warnings.push_back("no chromaticities attribute written (" + how + ")");
@@ -177,14 +185,19 @@ void OutputOptions::toWorkingSpace(RenderSettings& rs, std::vector<std::string>&
     convert("--emission", rs.medium.emission);
     convert("--ambient", rs.ambient);
     convert("--emission-color", rs.gridEmission.color);
-    // The blackbody's Rec.709 colours: a linear map, its columns the images of the primaries.
-    if (mRec709ToWorking) {
+    // The blackbody's Rec.709 colours, and the colour grid's and the level-set shaders' input-space
+    // colours: linear maps, their columns the images of the primaries.
+    const auto matrixOf = [](const ColorTransform& transform) {
+        Mat3d m(1.0);
         for (int c = 0; c < 3; ++c) {
             Vec3d primary(0.0);
             primary[c] = 1.0;
-            rs.gridEmission.rec709ToWorking[c] = mRec709ToWorking->apply(primary);
+            m[c] = transform.apply(primary);
         }
-    }
+        return m;
+    };
+    if (mRec709ToWorking) rs.gridEmission.rec709ToWorking = matrixOf(*mRec709ToWorking);
+    rs.inputToWorking = matrixOf(*mInputToWorking);
 }
 
 Attributes OutputOptions::resolved() const

@@ -74,12 +74,12 @@ void RenderOptions::add(CLI::App* app)
     mApp->add_option("--lookat", mLookAt, "aim the camera at the world point X,Y,Z");
     mApp->add_option("--up", mUp, "world vector that points up after --lookat (default: 0,1,0)");
     mApp->add_option("--camera", mCamera, "camera type: persp[ective] or ortho[graphic] (default: perspective)");
-    mApp->add_option("--fov", mFov, "horizontal field of view in degrees (default: " + fmt(cs.fieldOfView()) + ", from --focal and --aperture)");
-    mApp->add_option("--focal", mFocal, "perspective focal length in mm (default: " + fmt(cs.focal) + ")");
-    mApp->add_option("--aperture", mAperture, "perspective frame width in mm (default: " + fmt(cs.aperture) + ")");
-    mApp->add_option("--frame", mFrame, "orthographic frame width in world units (default: " + fmt(cs.frame) + ")");
-    mApp->add_option("--near", mNear, "near plane depth in world units (default: " + fmt(cs.near) + ")");
-    mApp->add_option("--far", mFar, "far plane depth in world units (default: " + fmt(cs.far) + ")");
+    mApp->add_option("--fov", mFov, "horizontal field of view in degrees, in (0, 179) (default: " + fmt(cs.fieldOfView()) + ", from --focal and --aperture)");
+    mApp->add_option("--focal", mFocal, "perspective focal length in mm, > 0 (default: " + fmt(cs.focal) + ")");
+    mApp->add_option("--aperture", mAperture, "perspective frame width in mm, > 0 (default: " + fmt(cs.aperture) + ")");
+    mApp->add_option("--frame", mFrame, "orthographic frame width in world units, > 0 (default: " + fmt(cs.frame) + ")");
+    mApp->add_option("--near", mNear, "near plane depth in world units, > 0 (default: " + fmt(cs.near) + ")");
+    mApp->add_option("--far", mFar, "far plane depth in world units, > --near; inf: none (default: " + fmt(cs.far) + ")");
     // Optical model (vdb_render's dense-volume model).
     mApp->add_option("--absorb", mAbsorb, "absorption R,G,B per unit density per voxel length, each in [0, 1e6] (default: " + fmt3(rs.medium.absorb) + ")");
     mApp->add_option("--scatter", mScatter, "scattering R,G,B per unit density per voxel length, each in [0, 1e6] (default: " + fmt3(rs.medium.scatter) + ")");
@@ -101,20 +101,20 @@ void RenderOptions::add(CLI::App* app)
         "lights the environment becomes, each from the part of the sphere nearest its direction, in [1, " +
             std::to_string(kMaxLights) + "] (default: 16)");
     mApp->add_option("--environment-intensity", mEnvironmentIntensity, "multiplies the environment's radiance, >= 0 (default: 1)");
-    mApp->add_option("--gain", mGain, "shadow-ray extinction falls as 1/(1 + gain * distance in voxels) (default: " + fmt(rs.shadow.gain) + ")");
+    mApp->add_option("--gain", mGain, "shadow-ray extinction falls as 1/(1 + gain * distance in voxels), finite and >= 0 (default: " + fmt(rs.shadow.gain) + ")");
     mApp->add_option("--cutoff", mCutoff,
-        "density cutoff, and rays stop where |transmittance RGB|^2 < cutoff (default: " + fmt(rs.cutoff) + ")");
+        "density cutoff, and rays stop where |transmittance RGB|^2 < cutoff; range [0, 1) (default: " + fmt(rs.cutoff) + ")");
     mApp->add_option("--shadowstep", mShadowStep, "shadow-ray step in voxels, >= 0.001; the light map's budget may raise it (docs/numerics.md) (default: " + fmt(rs.shadow.step) + ")");
     mApp->add_option("--shadow-res", mShadowRes, "light map: shadow rays every N voxels across the light, interpolated in between; range [0.25, 16] (default: " + fmt(rs.shadow.resolution) + ")");
-    mApp->add_option("--step", mStep, "primary-ray step in voxels for --method raymarch (default: " + fmt(rs.step) + "); the splatter has no primary rays and ignores it");
+    mApp->add_option("--step", mStep, "primary-ray step in voxels for --method raymarch, >= 0.001 (default: " + fmt(rs.step) + "); the splatter has no primary rays and ignores it");
     mApp->add_option("--method", mMethod, "splat (EWA volume splatting), raymarch (the reference: ray-marches the trilinear field with a shadow ray per sample, as vdb_render; slow) or raymarch-gaussian (diagnostic: ray-marches the splatter's own Gaussian reconstruction and per-kernel shadows) (default: splat)");
     // EWA splatting.
     mApp->add_option("--kernel-sigma", mKernelSigma, "reconstruction kernel std. deviation in voxels, range [0.1, 4] (default: " + fmt(rs.splat.kernelSigma) + ")");
     mApp->add_option("--surface-sigma", mSurfaceSigma, "level sets and --iso: surface kernel std. deviation along the surface in voxels, range [0.1, 4] (default: " + fmt(rs.surface.sigma) + ")");
-    mApp->add_option("--lowpass", mLowpass, "screen-space low-pass filter variance in pixels^2 (default: " + fmt(rs.splat.lowpass) + ")");
+    mApp->add_option("--lowpass", mLowpass, "screen-space low-pass filter variance in pixels^2, range [0, 100], > 0 unless --aa none (default: " + fmt(rs.splat.lowpass) + ")");
     mApp->add_option("--aa", mAa, "anti-aliasing: floor (each footprint axis at least --lowpass wide), ewa (resampling filter, Eq. 33: always adds --lowpass), swan (uniform scaling) or none (default: floor)");
-    mApp->add_option("--cutoff-radius", mCutoffRadius, "footprint cut-off radius in std. deviations (default: " + fmt(rs.splat.cutoffRadius) + ")");
-    mApp->add_option("--slab", mSlab, "image-aligned slab thickness in voxel lengths (default: " + fmt(rs.splat.slab) + ")");
+    mApp->add_option("--cutoff-radius", mCutoffRadius, "footprint cut-off radius in std. deviations, range [1, 6] (default: " + fmt(rs.splat.cutoffRadius) + ")");
+    mApp->add_option("--slab", mSlab, "image-aligned slab thickness in voxel lengths, range [0.05, 10000] (default: " + fmt(rs.splat.slab) + ")");
     mApp->add_option("--quality", mQuality,
         "preset of the speed/accuracy knobs: draft, default, high or final (refined kernels); explicit options override it "
         "(values in docs/performance.md) (default: default)");
@@ -131,10 +131,10 @@ void RenderOptions::add(CLI::App* app)
     // Fog volumes with an iso-surface.
     mApp->add_option("--iso", mIso,
         "fog volumes: also render the iso-surface density = VALUE with flattened surface kernels, lit by "
-        "--light and composited with the volume (default: off)");
+        "--light and composited with the volume; finite, nan: off (default: off)");
     mApp->add_option("--iso-opacity", mIsoOpacity, "opacity of the --iso surface, 0..1 (default: 1)");
     // Level sets (vdb_render's level-set options).
-    mApp->add_option("--isovalue", mIsovalue, "level sets: iso-surface to render, in world units (default: " + fmt(rs.surface.isovalue) + ")");
+    mApp->add_option("--isovalue", mIsovalue, "level sets: iso-surface to render, in world units, finite (default: " + fmt(rs.surface.isovalue) + ")");
     mApp->add_option("--shader", mShader,
         "level sets: diffuse (|N.ray|, a light at the camera), matte (white), normal ((N+1)/2) or position "
         "(world position in the active bounding box) (default: diffuse)");
@@ -156,7 +156,7 @@ void RenderOptions::add(CLI::App* app)
         "Volume) wherever it is, whatever the density (default: none)");
     mApp->add_option("--temperature-scale", mKelvinScale,
         "Kelvin per unit of --temperature's values: Kelvin = value x scale + offset (Blender: the node's Temperature; "
-        "Houdini: T1 - T0) (default: " + fmt(ge.kelvinScale) + ")");
+        "Houdini: T1 - T0), within 1e6 (default: " + fmt(ge.kelvinScale) + ")");
     mApp->add_option("--temperature-offset", mKelvinOffset,
         "Kelvin at value 0 (Houdini: T0), within 1e6 (default: " + fmt(ge.kelvinOffset) + ")");
     mApp->add_option("--blackbody-intensity", mBlackbodyIntensity,
@@ -166,7 +166,7 @@ void RenderOptions::add(CLI::App* app)
         "without extra samples (default: 1)");
     mApp->add_option("--threads,--cpus", mThreads,
         "worker threads, 0 = the CPUs the farm task or container was granted ($SLURM_CPUS_PER_TASK, the cgroup's quota), "
-        "else all cores (default: 0; docs/farm.md)");
+        "else all cores; range [0, 1024] (default: 0; docs/farm.md)");
     mApp->add_option("--simd", mSimd,
         "on: the volume rasteriser uses the CPU's vector unit (AVX-512 or AVX2, detected at run time; images within "
         "1e-5 of off); off: one pixel at a time, the reference it is tested against (default: on)");

@@ -19,8 +19,8 @@ class VDB_EWA_API ColorConfig
 {
 public:
     /// The config vdb_ewa ships (share/ocio/config.ocio, compiled in): ACEScg as scene_linear,
-    /// Linear Rec.709 (sRGB), ACES2065-1, and an sRGB display with the ACES 1.0 SDR video view
-    /// and a plain (un-tone-mapped) sRGB view.
+    /// Linear Rec.709 (sRGB), ACES2065-1, and an sRGB display whose default view is the plain
+    /// sRGB curve (Un-tone-mapped), with the ACES 1.0 SDR video view beside it.
     static ColorConfig shipped();
     /// @throw IoError naming @a path and OpenColorIO's message if it cannot be loaded or is invalid.
     static ColorConfig fromFile(const std::string& path);
@@ -34,6 +34,9 @@ public:
 
     /// Where the config came from: a file path, or "vdb_ewa's shipped config".
     const std::string& origin() const;
+    /// True for shipped() (not a file of the same text): the CLI then writes what vdb_render
+    /// writes, the input space (docs/output.md#which-space-reaches-the-file).
+    bool isShipped() const;
     /// The colour space of a role, e.g. "scene_linear"; empty if the config lacks the role.
     std::string roleSpace(const std::string& role) const;
     /// Canonical name of a colour space given by name, alias or role.

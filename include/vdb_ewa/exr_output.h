@@ -43,8 +43,9 @@ VDB_EWA_API void writeDeepExr(const DeepImage& deep, const std::string& path, co
 VDB_EWA_API void writeExr(const Image& image, const std::string& path,
     const std::vector<std::pair<std::string, std::string>>& attributes = {});
 
-/// Let OpenEXR compress with @a threads threads (0 = all cores). Process-wide (OpenEXR's
-/// global thread pool): for applications such as the CLI, not for plugins inside a host.
+/// Let OpenEXR compress with @a threads threads (0, or more than the cores: all cores).
+/// Process-wide (OpenEXR's global thread pool): for applications such as the CLI, not for
+/// plugins inside a host. @throw BudgetError if the system cannot start them.
 VDB_EWA_API void setExrThreadsProcessWide(int threads);
 
 /// Read an RGBA EXR written by us or by vdb_render (for tests and benchmarks).

@@ -98,6 +98,10 @@ struct GridEmission
 /// Most directional lights a render takes (RenderSettings::lights): each has a light map.
 constexpr std::size_t kMaxLights = 64;
 
+/// Most worker threads a render takes (RenderSettings::threads): past the largest machines, and
+/// a 2^31-thread arena fails in the thread library with no word of the option.
+constexpr int kMaxThreads = 1024;
+
 /// The lights' transmittance: shadow rays / light map.
 struct ShadowOptions
 {
@@ -175,6 +179,12 @@ struct VDB_EWA_API RenderSettings
     /// and --iso surfaces ignore it). 0: none.
     Vec3d ambient{0.0, 0.0, 0.0};
     GridEmission gridEmission;  ///< emission and temperature grids
+    /// Colours that come from the grid and the shaders, not from these settings, are taken in
+    /// the input space, as vdb_render writes them: the --color grid's values and the level-set
+    /// shaders' (matte, normal, position, diffuse). This brings them to the space the other
+    /// colours are in (the working space): the CLI sets it from --input-space; identity: they are
+    /// in that space already. Negative components after it are taken as 0.
+    Mat3d inputToWorking{1.0};
     ShadowOptions shadow;       ///< the lights' transmittance
     SplatOptions splat;         ///< EWA splatting knobs
     SurfaceOptions surface;     ///< level sets and fog iso-surfaces

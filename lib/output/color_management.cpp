@@ -132,6 +132,8 @@ ColorConfig ColorConfig::resolve(const std::string& explicitPath, std::vector<st
 
 const std::string& ColorConfig::origin() const { return mImpl->origin; }
 
+bool ColorConfig::isShipped() const { return mImpl == shipped().mImpl; }
+
 std::string ColorConfig::roleSpace(const std::string& role) const
 {
     if (!mImpl->config->hasRole(role.c_str())) return {};

@@ -25,6 +25,8 @@
 #include <cmath>
 #include <cstddef>
 #include <deque>
+#include <string>
+#include <system_error>
 #include <thread>
 
 namespace vdb_ewa {
@@ -251,7 +253,16 @@ void writeExr(const Image& image, const std::string& path,
 
 void setExrThreadsProcessWide(int threads)
 {
-    Imf::setGlobalThreadCount(threads > 0 ? threads : int(std::max(1u, std::thread::hardware_concurrency())));
+    // More compression threads than cores gain nothing, and each reserves a stack: --threads 1024
+    // under a farm's address-space limit failed to start them.
+    const int cores = int(std::max(1u, std::thread::hardware_concurrency()));
+    const int count = threads > 0 ? std::min(threads, cores) : cores;
+    try {
+        Imf::setGlobalThreadCount(count);
+    } catch (const std::system_error& e) {
+        throw BudgetError("--threads " + std::to_string(threads) + ": the system could not start " + std::to_string(count) +
+                          " EXR compression threads (" + e.what() + ")");
+    }
 }
 
 Image readExr(const std::string& path)

@@ -76,7 +76,7 @@ Vec3d shade(SurfaceShader shader, const Vec3d& normal, const Vec3d& rayDir, cons
 /// weights) or whose square meets the disc's raster box (coverage is sampled across each
 /// pixel's square).
 bool projectSurfaceSplat(const SurfaceKernel& k, const Vec3d& t, const Vec3d& normal, const SurfaceSet& set, const Camera& camera,
-    const ProjectionParams& params, SurfaceShader shader, const Rgb* colour, SurfaceSplat& s)
+    const ProjectionParams& params, SurfaceShader shader, const Mat3d& inputToWorking, const Rgb* colour, SurfaceSplat& s)
 {
     Footprint fp;
     if (!projectSurface(t, normal, set.sigma, params, fp)) return false;
@@ -102,7 +102,8 @@ bool projectSurfaceSplat(const SurfaceKernel& k, const Vec3d& t, const Vec3d& no
         for (int ch = 0; ch < 3; ++ch) s.colour[ch] = (*colour)[std::size_t(ch)];
     } else {
         const Vec3d rayDir = params.perspective ? glm::normalize(k.pWorld - camera.eye()) : glm::transpose(camera.cameraFromWorld())[2];
-        const Vec3d c = k.albedo * shade(shader, k.normal, rayDir, k.pWorld, set);
+        // vdb_render's material colour times its shader, in the input space (as it writes them).
+        const Vec3d c = workingColor(inputToWorking, k.albedo * shade(shader, k.normal, rayDir, k.pWorld, set));
         for (int ch = 0; ch < 3; ++ch) s.colour[ch] = float(c[ch]);
     }
     s.depth = t.z;
@@ -136,7 +137,7 @@ LargeArray<SurfaceSplat> projectSurfaceSplats(const SurfaceSet& set, const Camer
         for (std::size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
             if (!facesEye(set.kernels[i], camera, t, normal)) continue;
             SurfaceSplat& s = splats[next++];
-            if (!projectSurfaceSplat(set.kernels[i], t, normal, set, camera, params, settings.surface.shader, colours ? &(*colours)[i] : nullptr, s)) {
+            if (!projectSurfaceSplat(set.kernels[i], t, normal, set, camera, params, settings.surface.shader, settings.inputToWorking, colours ? &(*colours)[i] : nullptr, s)) {
                 s.x0 = s.y0 = 0;
                 s.x1 = s.y1 = -1;
             }

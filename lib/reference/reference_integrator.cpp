@@ -51,7 +51,7 @@ ReferenceVolume buildVolume(const GridSource::Impl& grid, const RenderSettings& 
     stats.kernelsSkipped = kernels.belowCutoff + kernels.notANumber;
     const double t1 = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const std::vector<Rgb> shadows = shadowTransmittance(*impl, kernels, settings, progress);
-    const std::vector<Rgb> colors = kernelColors(*impl, kernels);
+    const std::vector<Rgb> colors = kernelColors(*impl, kernels, settings.inputToWorking);
     stats.kernelSeconds = t1;
     stats.shadowSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() - t1;
 
@@ -156,7 +156,7 @@ class TrilinearSampler
 {
 public:
     TrilinearSampler(const GridSource::Impl& grid, const RenderSettings& settings, const EmissionModel* emission)
-        : mGrid(grid), mAccessor(grid.field->getConstAccessor()), mColor(grid), mModel(settings), mCutoff(settings.cutoff),
+        : mGrid(grid), mAccessor(grid.field->getConstAccessor()), mColor(grid), mInputToWorking(settings.inputToWorking), mModel(settings), mCutoff(settings.cutoff),
           mTinted(bool(grid.color)), mShadow(settings.lights.size(), Rgb{1.0f, 1.0f, 1.0f}), mEmission(grid, emission)
     {
         for (std::size_t l = 0; l < settings.lights.size(); ++l) {
@@ -175,7 +175,7 @@ public:
             return emitted.x > 0.0 || emitted.y > 0.0 || emitted.z > 0.0;
         }
         for (auto& [l, marcher] : mShadows) mShadow[l] = marcher.march(pIndex);
-        const Vec3d color = mTinted ? mColor.at(mGrid.indexToWorld(pIndex)) : Vec3d(1.0);
+        const Vec3d color = mTinted ? workingColor(mInputToWorking, mColor.at(mGrid.indexToWorld(pIndex))) : Vec3d(1.0);
         for (int c = 0; c < 3; ++c) source[c] = mModel.source(c, mShadow.data(), color[c]);
         return true;
     }
@@ -185,6 +185,7 @@ private:
     openvdb::FloatGrid::ConstAccessor mAccessor;
     std::vector<std::pair<std::size_t, ShadowMarcher>> mShadows; ///< the lights that are not dark
     MaterialColor mColor;
+    Mat3d mInputToWorking;
     OpticalModel mModel;
     double mCutoff;
     bool mTinted;

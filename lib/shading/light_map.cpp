@@ -16,22 +16,37 @@
 namespace vdb_ewa {
 namespace detail {
 
-ExponentialSum::ExponentialSum(double xMax)
+ExponentialSum::ExponentialSum(double gainPerStep, double steps)
 {
-    // Nodes t_k every eta from where exp(t)(1 + xMax) is e^-12 (the integrand's mass left out
-    // below, relative) to where exp(-e^t) vanishes: 1e-4 relative or better on [0, xMax].
+    // In u = t + ln g, the integrand of 1 / (1 + g k) is exp(u - ln g - e^u (1/g + k)). Nodes
+    // every eta from where e^u (1/g + K) is e^-12 (the mass left out below, relative) to where
+    // e^u (1/g + 1) is 36.6 (exp(-36.6) is nothing at the nearest sample, k = 1). In logs
+    // throughout: g may be 1e-300 or 1e308.
+    if (!(gainPerStep > 0.0)) { // no gain, or one that underflowed: every sample weighs 1
+        a.push_back(1.0);
+        decay.push_back(1.0);
+        return;
+    }
     const double eta = 0.8;
-    const double t0 = -std::log1p(std::max(xMax, 0.0)) - 12.0, t1 = 3.6;
-    for (double t = t0; t <= t1; t += eta) {
-        a.push_back(eta * std::exp(t - std::exp(t)));
-        b.push_back(std::exp(t));
+    const double logG = std::log(std::min(gainPerStep, std::numeric_limits<double>::max()));
+    // ln(1/g + x) without forming 1/g, which overflows below g = 5.6e-309 (denormal gains).
+    const auto logInvGPlus = [&](double x) {
+        const double a = -logG, b = std::log(x);
+        return std::max(a, b) + std::log1p(std::exp(-std::abs(a - b)));
+    };
+    const double u0 = -logInvGPlus(std::max(steps, 1.0)) - 12.0, u1 = std::log(36.6) - logInvGPlus(1.0);
+    for (double u = u0; u <= u1; u += eta) {
+        const double weight = eta * std::exp(u - logG - std::exp(u - logG));
+        if (!(weight >= std::numeric_limits<double>::min())) continue;
+        a.push_back(weight);
+        decay.push_back(std::exp(-std::exp(u)));
     }
 }
 
-double ExponentialSum::operator()(double x) const
+double ExponentialSum::operator()(double k) const
 {
     double f = 0.0;
-    for (std::size_t n = 0; n < a.size(); ++n) f += a[n] * std::exp(-b[n] * x);
+    for (std::size_t n = 0; n < a.size(); ++n) f += a[n] * std::pow(decay[n], k);
     return f;
 }
 
@@ -116,10 +131,9 @@ LightMap::LightMap(const GridSource::Impl& grid, const RenderSettings& settings,
     // exponentials, each term a first-order recursive filter along the ray (ExponentialSum).
     std::vector<double> weight{1.0}, decay{1.0};
     if (settings.shadow.gain > 0.0) {
-        const ExponentialSum sum(settings.shadow.gain * step * double(mNw));
+        const ExponentialSum sum(settings.shadow.gain * step, double(mNw));
         weight = sum.a;
-        decay.resize(sum.b.size());
-        for (std::size_t n = 0; n < decay.size(); ++n) decay[n] = std::exp(-sum.b[n] * settings.shadow.gain * step);
+        decay = sum.decay;
     }
     const int terms = int(weight.size());
     const int margin = int(std::ceil(2.0 / step)); // kept below a ray's lowest density

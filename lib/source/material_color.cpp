@@ -25,7 +25,12 @@ Vec3d MaterialColor::at(const Vec3d& pWorld)
     return out;
 }
 
-std::vector<Rgb> kernelColors(const GridSource::Impl& grid, const KernelSet& kernels)
+Vec3d workingColor(const Mat3d& inputToWorking, const Vec3d& color)
+{
+    return glm::max(inputToWorking * color, Vec3d(0.0));
+}
+
+std::vector<Rgb> kernelColors(const GridSource::Impl& grid, const KernelSet& kernels, const Mat3d& inputToWorking)
 {
     std::vector<Rgb> out;
     if (!grid.color) return out;
@@ -33,7 +38,7 @@ std::vector<Rgb> kernelColors(const GridSource::Impl& grid, const KernelSet& ker
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.size(), 4096), [&](const tbb::blocked_range<std::size_t>& r) {
         MaterialColor color(grid);
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
-            const Vec3d c = color.at(grid.indexToWorld(kernels.kernels[i].pIndex));
+            const Vec3d c = workingColor(inputToWorking, color.at(grid.indexToWorld(kernels.kernels[i].pIndex)));
             out[i] = Rgb{float(c.x), float(c.y), float(c.z)};
         }
     });

@@ -20,7 +20,8 @@ class MaterialColor
 public:
     explicit MaterialColor(const GridSource::Impl& grid);
 
-    /// The colour at @a pWorld; non-finite and negative components read as 0.
+    /// The colour at @a pWorld, as the grid holds it (the input space); non-finite and negative
+    /// components read as 0.
     Vec3d at(const Vec3d& pWorld);
 
 private:
@@ -28,8 +29,14 @@ private:
     std::optional<openvdb::Vec3SGrid::ConstAccessor> mAccessor;
 };
 
-/// The colour at every kernel's centre, in kernel order; empty without a colour grid.
-std::vector<Rgb> kernelColors(const GridSource::Impl& grid, const KernelSet& kernels);
+/// An input-space colour (the colour grid's, a level-set shader's) in the working space:
+/// RenderSettings::inputToWorking times it, negative components (outside the working space's
+/// gamut) taken as 0.
+Vec3d workingColor(const Mat3d& inputToWorking, const Vec3d& color);
+
+/// The colour at every kernel's centre in the working space (@a inputToWorking), in kernel
+/// order; empty without a colour grid.
+std::vector<Rgb> kernelColors(const GridSource::Impl& grid, const KernelSet& kernels, const Mat3d& inputToWorking);
 
 } // namespace detail
 } // namespace vdb_ewa
