@@ -129,12 +129,10 @@ LightMap::LightMap(const GridSource::Impl& grid, const RenderSettings& settings,
 
     // vdb_render weighs a shadow sample s voxel lengths away by 1 / (1 + gain s): as a sum of
     // exponentials, each term a first-order recursive filter along the ray (ExponentialSum).
-    std::vector<double> weight{1.0}, decay{1.0};
-    if (settings.shadow.gain > 0.0) {
-        const ExponentialSum sum(settings.shadow.gain * step, double(mNw));
-        weight = sum.a;
-        decay = sum.decay;
-    }
+    // No gain is the one term 1 (ExponentialSum's own case).
+    const ExponentialSum sum(settings.shadow.gain * step, double(mNw));
+    const std::vector<double>& weight = sum.a;
+    const std::vector<double>& decay = sum.decay;
     const int terms = int(weight.size());
     const int margin = int(std::ceil(2.0 / step)); // kept below a ray's lowest density
     // Index position of lattice point (i, j, k): affine grids p0 + i du + j dv + k dw.
