@@ -250,6 +250,44 @@ TEST_F(Batch, EveryStageStopsWithinHalfASecondOfASignal)
     }
 }
 
+// A farm's status reads which frame a stopped task was on from its log: a stopped sequence
+// prints one `frame N interrupted` line for the frame in flight, whether the render's own
+// check stops it, the watchdog ends a read that never checks, or the stop lands between two
+// frames (then N is the frame that did not start: the CI's slurm test once saw no line).
+TEST_F(Batch, AStoppedSequenceNamesTheFrameItWasOn)
+{
+    struct Case
+    {
+        const char* stall;   ///< VDB_EWA_TEST_STALL
+        const char* waitFor; ///< signal once stderr or stdout holds this
+        int interrupted;
+        int written;
+    };
+    const Case cases[] = {{"read", "stalling", 1, 0}, {"between-frames", "frame 1 done", 2, 1}};
+    for (const Case& c : cases) {
+        setenv("VDB_EWA_TEST_STALL", c.stall, 1);
+        BackgroundCli job(mDir, {"render", mDir.file("smoke.####.vdb"), mDir.file("seq.####.exr"), "--frames", "1,2,4",
+                                    "--res", "32x18", "--translate", "0,0,5", "--quality", "draft"});
+        unsetenv("VDB_EWA_TEST_STALL");
+        ASSERT_TRUE(job.started());
+        ASSERT_TRUE(waitFor([&] { return (job.err() + job.out()).find(c.waitFor) != std::string::npos; }, 120.0))
+            << c.stall << "\n" << job.out() << job.err();
+        job.signal(SIGTERM);
+        EXPECT_EQ(job.wait(), 130) << c.stall << ": " << job.err();
+        const std::string err = job.err();
+        std::smatch m;
+        std::vector<int> lines;
+        for (auto it = err.cbegin(); std::regex_search(it, err.cend(), m, std::regex(R"(vdb_ewa: frame (\d+) interrupted\n)"));
+             it = m.suffix().first) {
+            lines.push_back(std::stoi(m[1]));
+        }
+        EXPECT_EQ(lines, std::vector<int>{c.interrupted}) << c.stall << ": " << err;
+        EXPECT_NE(err.find("interrupted: " + std::to_string(c.written) + " of 3 frames written"), std::string::npos)
+            << c.stall << ": " << err;
+        EXPECT_EQ(temporaryFiles(mDir), 0) << c.stall;
+    }
+}
+
 TEST_F(Batch, JobFileHoldsTheSettingsAndTheCommandLineOverridesIt)
 {
     const std::string job = mDir.file("shot.json");

@@ -19,6 +19,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <ctime>
+#include <limits>
 #include <thread>
 
 namespace vdb_ewa::cli {
@@ -28,18 +29,36 @@ std::atomic<ProgressReport*> gReport{nullptr};
 volatile std::sig_atomic_t gStop = 0;
 sem_t gStopPosted; // the handler's post wakes the watchdog
 std::atomic<int> gFramesWritten{0}, gFrames{1};
+constexpr long long kNoFrame = std::numeric_limits<long long>::min();
+std::atomic<long long> gFrameInFlight{kNoFrame}; ///< a sequence's frame label; taken by whoever reports it
 
-/// Append the decimal digits of @a value (>= 0) at @a out. Async-signal-safe.
-char* appendNumber(char* out, int value)
+/// Append the decimal digits of @a value (a sign if negative) at @a out. Async-signal-safe.
+char* appendNumber(char* out, long long value)
 {
-    char digits[12];
+    if (value < 0) *out++ = '-';
+    unsigned long long magnitude = value < 0 ? 0ull - static_cast<unsigned long long>(value) : static_cast<unsigned long long>(value);
+    char digits[24];
     int n = 0;
     do {
-        digits[n++] = char('0' + value % 10);
-        value /= 10;
-    } while (value > 0 && n < 12);
+        digits[n++] = char('0' + magnitude % 10);
+        magnitude /= 10;
+    } while (magnitude > 0 && n < 24);
     while (n > 0) *out++ = digits[--n];
     return out;
+}
+
+/// The frame in flight's `vdb_ewa: frame N interrupted` line (the text of frameLogLine), once:
+/// whoever takes the frame first writes it. Async-signal-safe.
+void writeInterruptedFrame()
+{
+    const long long frame = gFrameInFlight.exchange(kNoFrame);
+    if (frame == kNoFrame) return;
+    char line[64] = "vdb_ewa: frame ";
+    char* end = appendNumber(line + std::strlen(line), frame);
+    static const char tail[] = " interrupted\n";
+    std::memcpy(end, tail, sizeof tail - 1);
+    end += sizeof tail - 1;
+    [[maybe_unused]] const ssize_t n = ::write(STDERR_FILENO, line, std::size_t(end - line));
 }
 
 /// End the process now: no temporary output left, exit 130, the same line as a cooperative
@@ -47,6 +66,7 @@ char* appendNumber(char* out, int value)
 [[noreturn]] void stopNow()
 {
     removeTemporaryOutputs();
+    writeInterruptedFrame();
     char line[96] = "vdb_ewa: interrupted: ";
     char* end = line + std::strlen(line);
     end = appendNumber(end, gFramesWritten.load());
@@ -139,7 +159,25 @@ ProgressReport::ProgressReport(int frameCount, Verbosity verbosity)
     gFramesWritten.store(0);
 }
 
-void ProgressReport::framesWritten(int count) { gFramesWritten.store(count); }
+void ProgressReport::framesWritten(int count)
+{
+    gFramesWritten.store(count);
+    frameEnded();
+}
+
+void ProgressReport::frameInFlight(int label) { gFrameInFlight.store(label); }
+
+void ProgressReport::frameEnded() { gFrameInFlight.store(kNoFrame); }
+
+void ProgressReport::reportInterruptedFrame()
+{
+    if (mBarShown) {
+        std::printf("\r\033[K");
+        std::fflush(stdout);
+        mBarShown = false;
+    }
+    writeInterruptedFrame();
+}
 
 ProgressReport::~ProgressReport()
 {

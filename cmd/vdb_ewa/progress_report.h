@@ -26,8 +26,18 @@ public:
 
     /// The next frame (0-based) begins.
     void beginFrame(int index) { mFrame = index; }
-    /// @a count frames are written so far (for the line a stop signal prints).
+    /// @a count frames are written so far (for the line a stop signal prints); no frame is in
+    /// flight until the next frameInFlight().
     void framesWritten(int count);
+    /// A sequence's frame @a label is under way: a stop before frameEnded() or framesWritten()
+    /// reports it (`frame N interrupted`), from reportInterruptedFrame() or, if the frame does
+    /// not stop in time, from the watchdog. Exactly one of the two writes the line.
+    void frameInFlight(int label);
+    /// The frame in flight ended without being written (skipped or failed).
+    void frameEnded();
+    /// After a stop: `vdb_ewa: frame N interrupted` on stderr for the frame still in flight, if
+    /// any (none when the stop came after the last frame was written).
+    void reportInterruptedFrame();
     /// 100 % after the last frame (unless cancelled); ends a terminal bar's line.
     void finishJob();
     /// Print @a text and a newline on @a stream (stdout or stderr) on a line of its own: a

@@ -145,8 +145,11 @@ public:
         installStopHandlers(report);
         std::vector<int> failed;
         int failCode = kExitOk, written = 0, skipped = 0;
-        for (std::size_t i = 0; i < frames.size() && !stopRequested(); ++i) {
+        for (std::size_t i = 0; i < frames.size(); ++i) {
             report.beginFrame(int(i));
+            // In flight from here, so a stop between two frames reports the one that did not start.
+            if (isSequence()) report.frameInFlight(frames[i]);
+            if (stopRequested()) break;
             const std::string output = pathOf(mOutput, frames[i]);
             // A frame is done when all its files are: an EXR without its --preview is rendered again.
             const std::string preview = pathOf(mOptions.output().previewOption(), frames[i]);
@@ -154,6 +157,7 @@ public:
                 : mSkipNewerThan && outputsWrittenSince(output, preview, *mSkipNewerThan) ? " was written after --skip-newer-than"
                 : nullptr;
             if (skip) {
+                report.frameEnded();
                 ++skipped;
                 if (verbosity != Verbosity::Quiet) report.line(frameLogLine(frames[i], FrameEntry::Skipped, output + skip));
                 continue;
@@ -161,16 +165,18 @@ public:
             try {
                 renderOneFrame(renderer, mOptions.cameraFile().empty() ? cam : mOptions.cameraFor(frameOf(frames[i])), rs, frames[i], output, report, verbosity, i == 0);
                 report.framesWritten(++written);
+                stallForTests("between-frames", stopRequested);
             } catch (const Cancelled&) {
-                if (isSequence()) report.line(frameLogLine(frames[i], FrameEntry::Interrupted, ""), stderr);
                 break;
             } catch (const std::exception& e) {
+                report.frameEnded();
                 if (!isSequence()) throw;
                 report.line(frameLogLine(frames[i], FrameEntry::Failed, e.what(), exitCodeFor(e)), stderr);
                 failed.push_back(frames[i]);
                 if (failCode == kExitOk) failCode = exitCodeFor(e);
             }
         }
+        if (stopRequested() || report.cancelled()) report.reportInterruptedFrame();
         report.finishJob();
         if (stopRequested() || report.cancelled()) {
             std::cerr << "vdb_ewa: interrupted: " << written << " of " << counted(std::int64_t(frames.size()), "frame") << " written\n";
