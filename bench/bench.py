@@ -41,6 +41,9 @@
                                                          issue 19: the Python module against the CLI on the
                                                          same settings (import to array, and with the EXR
                                                          written), vdb_render in the same rounds
+  bench/bench.py cull [--res 1920x1080] [--repeat 3]      issue 37's streamed frame: --cull on against off
+                                                         and vdb_render's defaults, README and default
+                                                         cameras, with the streamed frame's counters
   bench/bench.py output [--scene smoke] [--res 1920x1080] [--repeat 3]
                                                          issue 4's output stage: EXR pixel types,
                                                          compressions, passes and deep files, with
@@ -431,6 +434,44 @@ def cmd_targets(args):
         psnr = [f"{diff(out, r)[1]:.1f}" if os.path.exists(r) else "-" for r in (ref, conv)]
         print(f"| {name} | {t:.2f} | {', '.join(f'{x:.2f}' for x in times[name])} | {base / t:.1f}x | "
               f"{psnr[0]} | {psnr[1]} |", flush=True)
+
+
+def cmd_cull(args):
+    """Issue 37's streamed frame: --cull on against --cull off (the whole frame) and vdb_render's
+    defaults, interleaved round by round, from each scene's README camera and from the default
+    camera (vdb_render's framing); the counters of the streamed frame and the two images' PSNR."""
+    tmp = tempfile.mkdtemp(prefix="vdb_ewa_cull_")
+    print(f"# --cull on / off against vdb_render's defaults, {args.res}, median of {args.repeat} interleaved rounds, "
+          f"{os.cpu_count()} cores")
+    print("| scene | camera | vdb_render (s) | cull off (s) | cull on (s) | on vs off | on vs vdb_render | bricks expanded / hidden / outside "
+          "| kernels on / off | stages on: kernels, shadows, project, rasterise | peak MB on / off | PSNR on vs off (dB) |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for label, path, cam in SCENES:
+        if not os.path.exists(path) or "grids/" in label:
+            continue
+        for camera, cargs in (("README", cam.split()), ("default", [])):
+            common = ["-res", args.res, *cargs]
+            cmds = {"vdb_render": ["vdb_render", path, os.path.join(tmp, "v.exr"), *common],
+                    "off": [*EWA_RENDER, path, os.path.join(tmp, "off.exr"), *common, "--cull", "off", "-v"],
+                    "on": [*EWA_RENDER, path, os.path.join(tmp, "on.exr"), *common, "--cull", "on", "-v"]}
+            times = {k: [] for k in cmds}
+            outs = {}
+            for _ in range(args.repeat):
+                for k, c in cmds.items():
+                    dt, out = run(c)
+                    times[k].append(dt)
+                    outs[k] = out
+            med = {k: statistics.median(v) for k, v in times.items()}
+            m = re.search(r"(\d+) bricks in \d+ depth windows?, (\d+) expanded, (\d+) hidden behind opaque tiles, (\d+) outside", outs["on"])
+            bricks = f"{m.group(2)} / {m.group(3)} / {m.group(4)} of {m.group(1)}" if m else "not streamed"
+            kernels = [re.search(r"; (\d+) kernels \(", outs[k]).group(1) for k in ("on", "off")]
+            peaks = [re.search(r"peak memory (\d+) MB", outs[k]).group(1) for k in ("on", "off")]
+            st = stages(outs["on"])
+            psnr = diff(os.path.join(tmp, "on.exr"), os.path.join(tmp, "off.exr"))[1]
+            print(f"| {label} | {camera} | {med['vdb_render']:.2f} | {med['off']:.2f} | {med['on']:.2f} | {med['off'] / med['on']:.2f}x | "
+                  f"{med['vdb_render'] / med['on']:.1f}x | {bricks} | {kernels[0]} / {kernels[1]} | {st.get('kernels', nan):.3f}, "
+                  f"{st.get('shadows', nan):.3f}, {st.get('project', nan):.3f}, {st.get('rasterise', nan):.3f} | {peaks[0]} / {peaks[1]} | "
+                  f"{psnr:.1f} |", flush=True)
 
 
 def cmd_python(args):
@@ -855,6 +896,9 @@ def main():
     sy.add_argument("--res", default="960x540")
     sy.add_argument("--repeat", type=int, default=7)
     sy.add_argument("--write", action="store_true", help="the Python process writes the EXR too, as the CLI does")
+    sc = sub.add_parser("cull")
+    sc.add_argument("--res", default="1920x1080")
+    sc.add_argument("--repeat", type=int, default=3)
     so = sub.add_parser("output")
     so.add_argument("--scene", default="smoke")
     so.add_argument("--res", default="1920x1080")
@@ -901,7 +945,7 @@ def main():
     {"speed": cmd_speed, "sigma": cmd_sigma, "tradeoff": cmd_tradeoff, "targets": cmd_targets,
      "output": cmd_output, "surfaces": cmd_surfaces, "holes": cmd_holes, "plot": cmd_plot, "ladder": cmd_ladder,
      "analytic": cmd_analytic, "roofline": cmd_roofline, "scaling": cmd_scaling,
-     "stability": cmd_stability, "python": cmd_python}[a.cmd](a)
+     "stability": cmd_stability, "python": cmd_python, "cull": cmd_cull}[a.cmd](a)
 
 
 if __name__ == "__main__":

@@ -9,14 +9,17 @@
 #include "reference/reference.h"
 #include "shading/shading.h"
 #include "source/source.h"
+#include "support/huge_page_allocator.h"
 #include "support/memory_budget.h"
 #include "support/progress.h"
 
+#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <sstream>
 
@@ -101,6 +104,78 @@ IsoSurface isoSurface(const RenderSettings& settings, const GridSource::Impl& gr
     return out;
 }
 
+/// The voxel values the kernels skipped or clamped, a line each.
+void valueWarnings(std::uint64_t notANumber, std::uint64_t clamped, std::vector<std::string>& warnings)
+{
+    if (notANumber) warnings.push_back(countLine(notANumber, "NaN voxel values skipped"));
+    if (clamped) warnings.push_back(countLine(clamped, "voxel values above 1e6 (or +Inf) clamped to 1e6"));
+}
+
+/// What the projection clamped or left out, a line each.
+void splatWarnings(std::uint64_t beforeNear, std::uint64_t clampedNear, std::uint64_t clampedGrazing, std::uint64_t clippedSpan,
+    std::vector<std::string>& warnings)
+{
+    if (beforeNear) warnings.push_back(countLine(beforeNear, "voxels in front of the near plane left out (lower --near to see them)"));
+    if (clampedNear) warnings.push_back(countLine(clampedNear, "voxels around the camera drawn as if a little further away (the camera is inside the volume; move it out for an exact image)"));
+    if (clampedGrazing) warnings.push_back(countLine(clampedGrazing, "voxels far outside the frame drawn with the perspective of its edge (only the image's border can show it; widen --fov to include them)"));
+    if (clippedSpan) warnings.push_back(countLine(clippedSpan, "voxels crossed more than 1024 depth slabs and were cut short (raise --slab)"));
+}
+
+/// Each light's light map. They take at most a quarter of the budget (4 bytes a lattice point),
+/// shared between the lights; a warning where that coarsened them.
+std::vector<detail::LightMap> lightMaps(const RenderSettings& settings, const GridSource::Impl& g, const detail::MemoryBudget& budget,
+    detail::Progress& progress, std::vector<std::string>& warnings)
+{
+    const detail::OpticalModel model(settings);
+    std::size_t lit = 0;
+    for (std::size_t l = 0; l < settings.lights.size(); ++l) lit += model.dark(l) ? 0 : 1;
+    const double lightCount = double(std::max<std::size_t>(lit, 1));
+    const double lightPoints = std::min(detail::kLightMapPointBudget, budget.itemsWithin(0.25, 4.0)) / lightCount;
+    std::vector<detail::LightMap> lights;
+    lights.reserve(settings.lights.size());
+    for (std::size_t l = 0; l < settings.lights.size(); ++l) lights.emplace_back(g, settings, l, &progress, lightPoints);
+    for (const detail::LightMap& light : lights) {
+        if (light.shadowStep() == settings.shadow.step && light.shadowResolution() == settings.shadow.resolution) continue;
+        std::ostringstream w;
+        w << "--shadowstep raised from " << settings.shadow.step << " to " << light.shadowStep() << " and --shadow-res from "
+          << settings.shadow.resolution << " to " << light.shadowResolution()
+          << " voxels: finer shadows would need more than their share of memory (" << lightPoints << " light-map points a light; raise --max-memory)";
+        warnings.push_back(w.str());
+        break;
+    }
+    return lights;
+}
+
+/// Every splat's optical depth and source terms will be the same in R, G and B (the raster's
+/// one-channel path), known from the settings before any splat exists: a grey medium and
+/// lights, no material colours.
+bool greyFrame(const RenderSettings& settings, const GridSource::Impl& g)
+{
+    const detail::OpticalModel model(settings);
+    const auto grey = [](double r, double gr, double b) { return float(r) == float(gr) && float(r) == float(b); };
+    if (g.color || !grey(model.extinction(0), model.extinction(1), model.extinction(2))) return false;
+    if (!grey(model.emitted(0), model.emitted(1), model.emitted(2)) || !grey(model.ambient(0, 1.0), model.ambient(1, 1.0), model.ambient(2, 1.0))) {
+        return false;
+    }
+    for (std::size_t l = 0; l < settings.lights.size(); ++l) {
+        if (!grey(model.lightScale(l, 0), model.lightScale(l, 1), model.lightScale(l, 2))) return false;
+    }
+    return true;
+}
+
+/// Why the streamed frame cannot render @a g with @a settings yet (the whole frame does), or
+/// null: docs/architecture.md#the-streamed-frame.
+const char* notStreamable(const RenderSettings& settings, const GridSource::Impl& g)
+{
+    if (!settings.cull) return "--cull off";
+    if (!g.linear) return "a grid transform that is not affine";
+    if (g.emission || g.temperature) return "emission and temperature grids";
+    if (settings.splat.refine > 1) return "--refine";
+    if (!std::isnan(settings.surface.iso)) return "--iso";
+    if (settings.splat.antiAliasing == AntiAliasing::Swan) return "--antialias swan";
+    return nullptr;
+}
+
 } // namespace
 
 Renderer::Renderer(const RenderSettings& settings) : mSettings(settings)
@@ -151,6 +226,10 @@ void Renderer::renderLevelSet(const GridSource::Impl& grid, const Camera& camera
 void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, const PassRequest& passes,
     Frame& frame, RenderStats& stats, detail::Progress& progress) const
 {
+    if (!notStreamable(mSettings, g)) {
+        renderStreamedFogVolume(g, camera, passes, frame, stats, progress);
+        if (stats.streamed) return;
+    }
     // Progress: the stages' typical shares of a frame (docs/performance.md).
     StageTimer timer;
     progress.stage(0, 10);
@@ -179,26 +258,8 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     }
     stats.kernelSeconds = timer.lap();
     progress.stage(10, 35);
-    // The light maps take at most a quarter of the budget (4 bytes a lattice point), shared
-    // between the lights.
-    const detail::OpticalModel model(mSettings);
-    std::size_t lit = 0;
-    for (std::size_t l = 0; l < mSettings.lights.size(); ++l) lit += model.dark(l) ? 0 : 1;
-    const double lightCount = double(std::max<std::size_t>(lit, 1));
-    const double lightPoints = std::min(detail::kLightMapPointBudget, budget.itemsWithin(0.25, 4.0)) / lightCount;
-    std::vector<detail::LightMap> lights;
-    lights.reserve(mSettings.lights.size());
-    for (std::size_t l = 0; l < mSettings.lights.size(); ++l) lights.emplace_back(g, mSettings, l, &progress, lightPoints);
+    const std::vector<detail::LightMap> lights = lightMaps(mSettings, g, budget, progress, stats.warnings);
     stats.shadowSeconds = timer.lap();
-    for (const detail::LightMap& light : lights) {
-        if (light.shadowStep() == mSettings.shadow.step && light.shadowResolution() == mSettings.shadow.resolution) continue;
-        std::ostringstream w;
-        w << "--shadowstep raised from " << mSettings.shadow.step << " to " << light.shadowStep() << " and --shadow-res from "
-          << mSettings.shadow.resolution << " to " << light.shadowResolution()
-          << " voxels: finer shadows would need more than their share of memory (" << lightPoints << " light-map points a light; raise --max-memory)";
-        stats.warnings.push_back(w.str());
-        break;
-    }
     if (emittersLowered) {
         std::ostringstream w;
         w << "--refine-emission lowered: refined emission and temperature kernels would need more than their share of memory ("
@@ -251,18 +312,179 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
           << "(below " << detail::kVisibleKelvin << " K): --temperature-scale and --temperature-offset map its values to Kelvin";
         stats.warnings.push_back(w.str());
     }
-    if (kernels.notANumber) stats.warnings.push_back(countLine(kernels.notANumber, "NaN voxel values skipped"));
-    if (kernels.clamped) stats.warnings.push_back(countLine(kernels.clamped, "voxel values above 1e6 (or +Inf) clamped to 1e6"));
-    if (splats.beforeNear) stats.warnings.push_back(countLine(splats.beforeNear, "voxels in front of the near plane left out (lower --near to see them)"));
-    if (splats.clampedNear) stats.warnings.push_back(countLine(splats.clampedNear, "voxels around the camera drawn as if a little further away (the camera is inside the volume; move it out for an exact image)"));
-    if (splats.clampedGrazing) stats.warnings.push_back(countLine(splats.clampedGrazing, "voxels far outside the frame drawn with the perspective of its edge (only the image's border can show it; widen --fov to include them)"));
+    valueWarnings(kernels.notANumber, kernels.clamped, stats.warnings);
+    splatWarnings(splats.beforeNear, splats.clampedNear, splats.clampedGrazing, 0, stats.warnings);
     if (splats.requestedThickness > 0.0) {
         std::ostringstream w;
         w << "--slab raised from " << splats.requestedThickness << " to " << splats.slabs.thickness
           << " world units so that no voxel crosses more than " << detail::kSlabSpanTarget << " depth slabs (a strongly sheared grid transform)";
         stats.warnings.push_back(w.str());
     }
-    if (splats.clippedSpan) stats.warnings.push_back(countLine(splats.clippedSpan, "voxels crossed more than 1024 depth slabs and were cut short (raise --slab)"));
+    splatWarnings(0, 0, 0, splats.clippedSpan, stats.warnings);
+}
+
+void Renderer::renderStreamedFogVolume(const GridSource::Impl& g, const Camera& camera, const PassRequest& passes, Frame& frame,
+    RenderStats& stats, detail::Progress& progress) const
+{
+    StageTimer timer;
+    progress.stage(0, 5);
+    const detail::MemoryBudget budget = budgetFor(g, mSettings);
+    const detail::LevelOfDetail lod(g, camera, mSettings);
+    const std::vector<detail::Brick> bricks = detail::listBricks(g);
+    // The slabs every window shares: --slab thick, unless some kernel could span more than
+    // kSlabSpanTarget of them (the whole frame raises the thickness from the kernels it made;
+    // it renders those grids).
+    const SlabGrid slabs = detail::frameSlabs(g, camera, mSettings);
+    {
+        int widest = mSettings.splat.lodPixels > 0.0 ? detail::LevelOfDetail::kLeafDim : 1;
+        for (const detail::Brick& b : bricks) {
+            if (!b.leaf) widest = std::max(widest, detail::tileLatticeSpacing(b.box.dim().x(), mSettings.splat.tileKernelSpacing));
+        }
+        const Mat3d& a = g.indexToWorldLinear;
+        const double norm = std::sqrt(glm::dot(a[0], a[0]) + glm::dot(a[1], a[1]) + glm::dot(a[2], a[2])); // >= the largest stretch
+        const double sd = norm * detail::kernelSigmaVoxels(detail::Kernel{Vec3d(0.0), 0.0f, float(widest)}, mSettings.splat.kernelSigma);
+        if (2.0 * detail::kDepthTruncation * sd / double(detail::kSlabSpanTarget) > slabs.thickness) return;
+    }
+    stats.streamed = true;
+    stats.bricks = bricks.size();
+    stats.activeVoxels = g.activeVoxels;
+    stats.activeTiles = g.activeTiles;
+
+    // Every brick's screen rectangle and first slab, before any kernel exists.
+    const detail::BrickBounder bounder(g, camera, mSettings, &lod, slabs);
+    std::vector<detail::BrickBounds> bounds(bricks.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, bricks.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i) bounds[i] = bounder.bound(bricks[i]);
+    });
+    // Front to back: by first slab, ties in tree order.
+    std::vector<std::uint32_t> order;
+    double voxels = 0.0;
+    for (std::uint32_t i = 0; i < bricks.size(); ++i) {
+        if (!bounds[i].visible) continue;
+        order.push_back(i);
+        voxels += bricks[i].leaf ? double(bricks[i].leaf->onVoxelCount()) : double(bricks[i].box.volume());
+    }
+    stats.bricksOutside = bricks.size() - order.size();
+    std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return bounds[a].nearestSlab < bounds[b].nearestSlab; });
+    stats.kernelSeconds += timer.lap();
+
+    progress.stage(5, 30);
+    const std::vector<detail::LightMap> lights = lightMaps(mSettings, g, budget, progress, stats.warnings);
+    stats.shadowSeconds = timer.lap();
+
+    progress.stage(30, 100);
+    progress.setUnits(order.size());
+    detail::StreamedRaster raster(camera, mSettings, passes, lights, g.color != nullptr, greyFrame(mSettings, g), slabs, &budget);
+    stats.rasterSeconds += timer.lap();
+    const double alpha = mSettings.splat.prefilter ? detail::quasiInterpolationAlpha(mSettings.splat.kernelSigma) : 0.0;
+    const detail::UnitKernelRule units{mSettings, &lod};
+    // Windows grow front to back: the first holds about 1/kFirstWindow of the visible voxels,
+    // each next one kGrowth times more (fine windows where the front turns opaque, few in all:
+    // each costs a pass over the open tiles), none more than the memory budget's share.
+    constexpr double kFirstWindow = 256.0, kGrowth = 2.0, kSmallestWindow = 16384.0;
+    const double mostVoxels = std::max(budget.itemsWithin(0.25, detail::kBytesPerKernel), 4096.0);
+    double windowVoxels = std::min(std::max(voxels / kFirstWindow, kSmallestWindow), mostVoxels), done = 0.0;
+    constexpr double kFewOpaque = 0.05;
+    const double tiles = double(raster.tilesX()) * double(raster.tilesY());
+    constexpr double kCrossingShare = 0.5, kLargeSplatTiles = 64.0;
+    constexpr int kMaxDeferred = 2;
+    int deferred = 0;
+    detail::SplatSet carried;
+    std::uint64_t outOfOrder = 0, beforeNear = 0, clampedNear = 0, clampedGrazing = 0, clippedSpan = 0, notANumber = 0, clamped = 0;
+    std::int64_t windowStart = std::numeric_limits<std::int64_t>::min();
+    for (std::size_t begin = 0; begin < order.size();) {
+        // The window: bricks up to about windowVoxels, ending between two first slabs.
+        std::size_t end = begin;
+        double held = 0.0;
+        while (end < order.size() && (held < windowVoxels || bounds[order[end]].nearestSlab == bounds[order[end - 1]].nearestSlab)) {
+            const detail::Brick& b = bricks[order[end++]];
+            held += b.leaf ? double(b.leaf->onVoxelCount()) : double(b.box.volume());
+        }
+        const std::int64_t windowEnd = end < order.size() ? bounds[order[end]].nearestSlab : std::numeric_limits<std::int64_t>::max();
+        ++stats.windows;
+        // Bricks whose every tile is opaque already are never expanded (the occlusion summary).
+        std::vector<const detail::Brick*> expanded;
+        for (std::size_t k = begin; k < end; ++k) {
+            const detail::BrickBounds& b = bounds[order[k]];
+            if (raster.hidden(b.x0 / detail::kTileSize, b.y0 / detail::kTileSize, b.x1 / detail::kTileSize, b.y1 / detail::kTileSize)) {
+                ++stats.bricksHidden;
+                continue;
+            }
+            expanded.push_back(&bricks[order[k]]);
+        }
+        stats.bricksExpanded += expanded.size();
+        // The window's splats: its bricks', then those earlier windows made for it (carried).
+        detail::SplatSet window;
+        if (!expanded.empty()) {
+            detail::KernelSet kernels = detail::extractKernels(g, mSettings, &lod, nullptr, &budget, nullptr, &expanded);
+            if (alpha > 0.0) stats.haloKernels += detail::quasiInterpolate(g, alpha, kernels, nullptr, &units);
+            stats.kernels += kernels.kernels.size();
+            stats.kernelsSkipped += kernels.belowCutoff + kernels.notANumber;
+            notANumber += kernels.notANumber;
+            clamped += kernels.clamped;
+            stats.voxelsMerged += kernels.mergedVoxels;
+            stats.mergedKernels += kernels.mergedKernels;
+            const std::vector<detail::Rgb> colors = detail::kernelColors(g, kernels, mSettings.inputToWorking);
+            stats.kernelSeconds += timer.lap();
+            window = detail::projectSplats(g, kernels, colors, camera, mSettings, passes, nullptr, &slabs);
+            stats.kernelsCulled += window.culled;
+            stats.splats += window.splats.size();
+            beforeNear += window.beforeNear;
+            clampedNear += window.clampedNear;
+            clampedGrazing += window.clampedGrazing;
+            clippedSpan += window.clippedSpan;
+            for (const detail::Splat& sp : window.splats) outOfOrder += sp.firstSlab < windowStart;
+        }
+        detail::appendSplats(window, carried);
+        stats.projectSeconds += timer.lap();
+        // Ending a window here leaves the slabs of the splats crossing its end pending in every
+        // tile they cover, copied aside until the next window. Where a few large splats (near
+        // the eye) cross it over most of the image, the window goes on into the next, up to
+        // kMaxDeferred times (culling needs windows to end): pig's first windows, 200 MB of
+        // pending slabs at 1080p, 0.5 s in page faults (docs/performance.md).
+        double crossing = 0.0, crossingSplats = 0.0;
+        for (const detail::Splat& sp : window.splats) {
+            if (sp.firstSlab + std::int64_t(sp.slabCount) <= windowEnd) continue;
+            crossing += double(sp.x1 / detail::kTileSize - sp.x0 / detail::kTileSize + 1) * double(sp.y1 / detail::kTileSize - sp.y0 / detail::kTileSize + 1);
+            crossingSplats += 1.0;
+        }
+        if (crossing > kCrossingShare * tiles && crossing > kLargeSplatTiles * crossingSplats && deferred < kMaxDeferred && end < order.size()) {
+            ++deferred;
+            carried = std::move(window);
+        } else {
+            deferred = 0;
+            carried = detail::splitSplatsAt(window, windowEnd);
+            raster.composite(window, windowEnd, &progress);
+            windowStart = windowEnd;
+        }
+        stats.rasterSeconds += timer.lap();
+        progress.advance(end - begin);
+        begin = end;
+        windowVoxels = std::min(windowVoxels * kGrowth, mostVoxels);
+        // Where three windows and an eighth of the voxels left fewer than kFewOpaque of the tiles
+        // opaque, little will be hidden: the rest in as few windows as the budget allows. (A
+        // window composites only in front of the next one's first slab, a brick's reach in front
+        // of its voxels: the first window may composite nothing yet.)
+        done += held;
+        if (stats.windows >= 3 && done >= voxels / 8.0 && double(raster.opaqueTiles()) < kFewOpaque * tiles) {
+            windowVoxels = mostVoxels;
+        }
+    }
+    detail::RasterStats raster_;
+    frame = raster.finish(raster_);
+    stats.rasterSeconds += timer.lap();
+    stats.splatTilePairs = raster_.splatTilePairs;
+    stats.screenTiles = raster_.tiles;
+    stats.screenTilesOpaque = raster_.tilesOpaque;
+    stats.splatTilePairsSkipped = raster_.pairsSkipped;
+    stats.footprintSamples = raster_.footprintSamples;
+    stats.slabComposites = raster_.slabComposites;
+    stats.rasterBackend = raster_.backend;
+    if (outOfOrder) stats.warnings.push_back(countLine(outOfOrder, "splats started in front of their window (a bound of the streamed frame is wrong; --cull off renders without it)"));
+    if (g.activeVoxels == 0 && g.activeTiles == 0) stats.warnings.push_back("the grid has no active values: the image is empty");
+    // Counted in the bricks expanded: a hidden brick's values are never read.
+    valueWarnings(notANumber, clamped, stats.warnings);
+    splatWarnings(beforeNear, clampedNear, clampedGrazing, clippedSpan, stats.warnings);
 }
 
 Image Renderer::render(const GridSource& grid, const Camera& camera, RenderStats* statsOut, Interrupter* interrupter) const
@@ -287,6 +509,11 @@ Frame Renderer::renderFrame(const GridSource& grid, const Camera& camera, const 
         }
     } bracket(interrupter, grid.name());
     detail::Progress progress(interrupter);
+    // Large blocks kept for reuse between the stages and windows go back at the end.
+    struct ReleaseBlocks
+    {
+        ~ReleaseBlocks() { detail::releaseCachedBlocks(); }
+    } releaseBlocks;
     RenderStats stats;
     Frame frame;
     const GridSource::Impl& g = grid.impl();

@@ -136,6 +136,7 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
            threads: Optional[int] = None,
            cpus: Optional[int] = None,
            simd: OptionValue = None,
+           cull: OptionValue = None,
            max_memory: OptionValue = None,
            ocio_config: OptionValue = None,
            input_space: OptionValue = None,
@@ -283,6 +284,10 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
     simd (--simd): on: the volume rasteriser uses the CPU's vector unit (AVX-512 or AVX2, detected at
         run time; images within 1e-5 of off); off: one pixel at a time, the reference it is tested
         against (default: on)
+    cull (--cull): fog volumes: on: the streamed frame, bricks (leaf nodes, active tiles) composited
+        front to back in depth windows, those behind opaque screen tiles never expanded into kernels
+        (images within 1e-5 of off); off: every kernel built and projected, the reference it is tested
+        against (default: on; docs/architecture.md#the-streamed-frame)
     max_memory (--max-memory): memory budget of a frame in bytes, with an optional K, M, G or T suffix
         (powers of 1024), range [64M, 1e18]; a frame that would need more stops before allocating it
         (exit 5) (default: 0 = 3/4 of the memory the farm task or container was granted

@@ -336,7 +336,12 @@ private:
                   << s.kernelsCulled << " kernels culled, " << s.splats << " splatted into " << s.splatTilePairs
                   << " (splat, tile) pairs; " << s.screenTilesOpaque << " of " << s.screenTiles
                   << " screen tiles turned opaque early, skipping " << s.splatTilePairsSkipped << " pairs; "
-                  << s.footprintSamples << " footprint samples, " << s.slabComposites << " slab composites (" << s.rasterBackend << " rasteriser)\n"
+                  << s.footprintSamples << " footprint samples, " << s.slabComposites << " slab composites (" << s.rasterBackend << " rasteriser)";
+        if (s.streamed) {
+            out << "; streamed front to back: " << counted(s.bricks, "brick") << " in " << counted(s.windows, "depth window") << ", "
+                << s.bricksExpanded << " expanded, " << s.bricksHidden << " hidden behind opaque tiles, " << s.bricksOutside << " outside the frame";
+        }
+        out << "\n"
                   << std::fixed << std::setprecision(3) << "vdb_ewa: timings (s): load " << loadSeconds << ", kernels "
                   << s.kernelSeconds << ", shadows " << s.shadowSeconds << ", project " << s.projectSeconds
                   << ", rasterise " << s.rasterSeconds << ", write " << writeSeconds << "; peak memory "

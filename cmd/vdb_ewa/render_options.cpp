@@ -170,6 +170,10 @@ void RenderOptions::add(CLI::App* app)
     mApp->add_option("--simd", mSimd,
         "on: the volume rasteriser uses the CPU's vector unit (AVX-512 or AVX2, detected at run time; images within "
         "1e-5 of off); off: one pixel at a time, the reference it is tested against (default: on)");
+    mApp->add_option("--cull", mCull,
+        "fog volumes: on: the streamed frame, bricks (leaf nodes, active tiles) composited front to back in depth windows, "
+        "those behind opaque screen tiles never expanded into kernels (images within 1e-5 of off); off: every kernel built and "
+        "projected, the reference it is tested against (default: on; docs/architecture.md#the-streamed-frame)");
     mApp->add_option("--max-memory", mMaxMemory,
         "memory budget of a frame in bytes, with an optional K, M, G or T suffix (powers of 1024), range [64M, 1e18]; "
         "a frame that would need more stops before allocating it (exit 5) (default: 0 = 3/4 of the memory the farm task or container "
@@ -271,6 +275,7 @@ void RenderOptions::resolve(std::optional<int> frame, CameraSettings& cam, Rende
     if (!mShader.empty()) rs.surface.shader = parseChoice("shader", mShader, kShaders);
     if (mSamples && *mSamples < 1) throw ValueError("--samples must be >= 1");
     if (!mSimd.empty()) rs.simd = parseChoice("simd", mSimd, kOnOff);
+    if (!mCull.empty()) rs.cull = parseChoice("cull", mCull, kOnOff);
     const GrantedSettings granted = grantedExecution();
     rs.threads = granted.threads;
     rs.maxMemory = granted.maxMemory;
@@ -389,7 +394,7 @@ std::vector<Attributes> RenderOptions::resolvedOptions(const GridSource& grid, c
              {"renormalize", choiceName(rs.splat.renormalize, kOnOff)}, {"taper", choiceName(rs.splat.taper, kOnOff)}, {"exp", choiceName(rs.splat.expEvaluation, kExpEvaluations)},
              {"precision", choiceName(rs.splat.doublePrecision, kPrecisions)}, {"slab", fmt(rs.splat.slab)},
              {"tile-spacing", std::to_string(rs.splat.tileKernelSpacing)}, {"refine", std::to_string(rs.splat.refine)}, {"refine-emission", std::to_string(rs.splat.refineEmission)}, {"lod", fmt(rs.splat.lodPixels)}, {"lod-error", fmt(rs.splat.lodError)},
-             {"threads", std::to_string(rs.threads)}, {"simd", choiceName(rs.simd, kOnOff)}})
+             {"threads", std::to_string(rs.threads)}, {"simd", choiceName(rs.simd, kOnOff)}, {"cull", choiceName(rs.cull, kOnOff)}})
         method.emplace_back(k, v);
     return {cameraGroup, model, method, mOutputOptions.resolved()};
 }

@@ -96,6 +96,7 @@ private:
     std::optional<double> mKernelSigma, mSurfaceSigma, mLowpass, mCutoffRadius, mSlab;
     int mThreads = 0;
     std::string mSimd;
+    std::string mCull;
     std::string mMaxMemory;
     OutputOptions mOutputOptions;
 };

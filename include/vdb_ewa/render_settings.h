@@ -201,6 +201,11 @@ struct VDB_EWA_API RenderSettings
     /// chosen at run time; within 1e-5 of the scalar one); false: the scalar backend, its test oracle
     /// (docs/architecture.md#simd-rasteriser).
     bool simd = true;
+    /// Fog volumes: the streamed frame, which composites bricks front to back in depth windows
+    /// and never builds the kernels of a brick hidden behind opaque screen tiles (within 1e-5
+    /// of the whole frame); false: every kernel built, shaded and projected, the streamed
+    /// frame's test oracle (docs/architecture.md#the-streamed-frame).
+    bool cull = true;
     /// Memory budget of one frame's arrays in bytes (kernels, splats, bins, the light map, the
     /// frame), checked against the counts known before they are allocated (BudgetError);
     /// 0 = three quarters of the physical memory (docs/numerics.md#memory-budget).

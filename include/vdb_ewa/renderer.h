@@ -46,6 +46,12 @@ struct RenderStats
     std::uint64_t splatTilePairsSkipped = 0; ///< pairs skipped because their tile was opaque
     std::uint64_t footprintSamples = 0; ///< fog volumes: footprint weights evaluated (pixels inside a cut-off)
     std::uint64_t slabComposites = 0;   ///< fog volumes: (pixel, slab) samples composited
+    bool streamed = false;            ///< fog volumes: the streamed frame ran (RenderSettings::cull)
+    std::uint64_t bricks = 0;         ///< streamed frame: leaf nodes and active tiles of the grid
+    std::uint64_t bricksOutside = 0;  ///< streamed frame: bricks no splat of which reaches the image
+    std::uint64_t bricksHidden = 0;   ///< streamed frame: bricks behind opaque screen tiles, never expanded
+    std::uint64_t bricksExpanded = 0; ///< streamed frame: bricks whose kernels were built
+    std::uint64_t windows = 0;        ///< streamed frame: depth windows composited
     std::string rasterBackend = "scalar"; ///< fog volumes: the slab compositor that ran ("scalar", or the SIMD target: "AVX3" (AVX-512), "AVX2")
     std::vector<std::string> warnings; ///< what was clamped or skipped, one line each
 };
@@ -80,6 +86,10 @@ private:
     VDB_EWA_LOCAL void renderLevelSet(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes, Frame& frame,
         RenderStats& stats, detail::Progress& progress) const;
     /// Fog volumes: kernels, shadows, splats (Eq. 29-33), slab compositing.
+    /// Fog volumes, streamed: bricks front to back in depth windows, those behind opaque tiles
+    /// never expanded; returns with stats.streamed false (nothing done) where it cannot.
+    VDB_EWA_LOCAL void renderStreamedFogVolume(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes, Frame& frame,
+        RenderStats& stats, detail::Progress& progress) const;
     VDB_EWA_LOCAL void renderFogVolume(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes, Frame& frame,
         RenderStats& stats, detail::Progress& progress) const;
 

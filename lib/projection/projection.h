@@ -5,5 +5,7 @@
 ///        (docs/architecture.md).
 #pragma once
 
+#include "projection/brick_bounds.h"
 #include "projection/splat_projection.h"
+#include "projection/splat_window.h"
 #include "projection/surface_projection.h"

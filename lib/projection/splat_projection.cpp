@@ -63,16 +63,23 @@ bool pixelBox(const Footprint& fp, int width, int height, int& x0, int& y0, int&
     return true;
 }
 
+SlabGrid frameSlabs(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings)
+{
+    SlabGrid slabs;
+    slabs.zBase = camera.projection() == Projection::Perspective ? 0.0 : camera.near();
+    slabs.thickness = settings.splat.slab * grid.voxelLength;
+    return slabs;
+}
+
 SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels, const std::vector<Rgb>& colors,
-    const Camera& camera, const RenderSettings& settings, const PassRequest& passes, Progress* progress)
+    const Camera& camera, const RenderSettings& settings, const PassRequest& passes, Progress* progress, const SlabGrid* slabs)
 {
     SplatSet out;
     const ProjectionParams params = projectionParams(camera, settings.splat);
     const bool perspective = params.perspective;
     const Mat3d R = camera.cameraFromWorld();
     const double ell = grid.voxelLength;
-    out.slabs.zBase = perspective ? 0.0 : camera.near();
-    out.slabs.thickness = settings.splat.slab * ell;
+    out.slabs = slabs ? *slabs : frameSlabs(grid, camera, settings);
 
     // Affine grids: camera-space covariance of a unit kernel, formed once per frame (Eq. 31).
     const Mat3d RA = R * grid.indexToWorldLinear;
@@ -184,7 +191,7 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels, c
         if (visible[i]) maxSd = std::max(maxSd, extents[i].sd);
     }
     const double minThickness = 2.0 * kDepthTruncation * maxSd / double(kSlabSpanTarget);
-    if (minThickness > out.slabs.thickness) {
+    if (!slabs && minThickness > out.slabs.thickness) {
         out.requestedThickness = out.slabs.thickness;
         out.slabs.thickness = minThickness;
     }

@@ -99,9 +99,16 @@ void setFootprint(S& s, const Footprint& fp, double cutoffRadius)
 /// @a colors: each kernel's material colour, multiplied into the scattering weight (empty:
 /// white); the light's transmittance is applied by the compositor per slab sample. @a passes:
 /// the emission pass adds its source term to SplatSet::passSources (the shadow pass is lit per
-/// slab sample too). @a progress: one unit per kernel; throws Cancelled.
+/// slab sample too). @a progress: one unit per kernel; throws Cancelled. @a slabs: the slabs to
+/// use (a streamed frame's windows share them); null: frameSlabs, raised where a kernel would
+/// span more than kSlabSpanTarget of them.
 SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels, const std::vector<Rgb>& colors,
-    const Camera& camera, const RenderSettings& settings, const PassRequest& passes = {}, Progress* progress = nullptr);
+    const Camera& camera, const RenderSettings& settings, const PassRequest& passes = {}, Progress* progress = nullptr,
+    const SlabGrid* slabs = nullptr);
+
+/// The frame's slabs before any raise: --slab voxel lengths thick, from the eye (perspective:
+/// distance along the ray) or the near plane (orthographic: depth).
+SlabGrid frameSlabs(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings);
 
 } // namespace detail
 } // namespace vdb_ewa

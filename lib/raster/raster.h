@@ -9,5 +9,6 @@
 #include "raster/disc_coverage.h"
 #include "raster/slab_compositor.h"
 #include "raster/surface_rasterizer.h"
+#include "raster/streamed_raster.h"
 #include "raster/tile_bins.h"
 #include "raster/tile_rasterizer.h"

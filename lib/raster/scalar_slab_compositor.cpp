@@ -4,6 +4,7 @@
 ///        row and the slab flush. The test oracle of the SIMD backend.
 #include "raster/slab_compositor.h"
 
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>

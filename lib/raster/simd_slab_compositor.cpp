@@ -10,6 +10,7 @@
 /// HWY_AFTER_NAMESPACE lands in that target's namespace, compiled for its instruction set.
 #include "raster/slab_compositor.h"
 
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>

@@ -92,6 +92,38 @@ struct TileCounters
     std::uint64_t skipped = 0, samples = 0, composites = 0;
 };
 
+/// Where a streamed frame's tiles write what they finish: the frame's pixels and passes, each
+/// tile's deep samples (one TileDeep per tile when asked for, else empty) and counters (one per
+/// tile), and the camera depth per unit of distance along each pixel's ray (as
+/// SlabCompositor::composite's).
+struct StreamOutput
+{
+    Frame* frame = nullptr;
+    const std::vector<float>* depthScale = nullptr;
+    std::vector<TileDeep>* deep = nullptr;
+    std::vector<TileCounters>* counters = nullptr;
+};
+
+/// A frame composited in depth windows (the streamed frame, docs/architecture.md#the-streamed-frame):
+/// every tile keeps its sweep (transmittance, colour, pending slabs) from one window to the
+/// next, so the frame equals the one SlabCompositor::composite makes of all the windows'
+/// splats at once. The windows come front to back: a window's splats start at or behind the
+/// previous window's end. A tile is written to the output once it is opaque or the last
+/// window ends.
+class SlabStream
+{
+public:
+    virtual ~SlabStream() = default;
+    /// Sweep a window's splats (@a bins: in the sweep order) into their tiles, then composite
+    /// every slab in front of @a windowEnd (no later splat reaches one), so that opaque() tells
+    /// which tiles nothing behind can change. Parallel over tiles; throws Cancelled.
+    virtual void composite(const SplatSet& set, const TileBins& bins, std::int64_t windowEnd, Progress* progress) = 0;
+    /// Tile t (row-major, kTileSize pixels a side) has stopped every pixel's ray.
+    virtual bool opaque(int t) const = 0;
+    /// Write every tile not written yet.
+    virtual void finish() = 0;
+};
+
 /// One way of compositing a frame's tiles. Every tile sweeps its splats (bins: in the sweep
 /// order, first slab then kernel index) front to back into slab accumulators, lit per slab
 /// sample, until it is opaque, and writes its pixels and passes into @a frame (@a deep: one
@@ -106,6 +138,9 @@ public:
     virtual void composite(const SplatSet& set, const TileBins& bins, const CompositeOptions& options,
         const std::vector<float>& depthScale, Frame& frame, std::vector<TileDeep>& deep, std::vector<TileCounters>& counters,
         Progress* progress) const = 0;
+    /// The same compositing, window by window, into @a output; @a options and @a output must
+    /// outlive the stream.
+    virtual std::unique_ptr<SlabStream> stream(const CompositeOptions& options, const StreamOutput& output) const = 0;
 };
 
 /// The scalar backend carrying @a channels colour channels: 3, or 1 when every splat, the light

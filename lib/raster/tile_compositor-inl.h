@@ -8,7 +8,8 @@
 /// once, simd_slab_compositor.cpp once per Highway target. So every instantiation is compiled for
 /// its target and none is shared between targets (no ODR clash between, say, an AVX2 and a
 /// baseline copy of one inline function). Hence no include guard and no includes: the including
-/// file includes raster/slab_compositor.h, <tbb/parallel_for.h>, <algorithm>, <array>, <cmath>
+/// file includes raster/slab_compositor.h, <tbb/enumerable_thread_specific.h>, <tbb/parallel_for.h>,
+/// <algorithm>, <array>, <cmath>
 /// and <limits> first, outside its namespace. A backend defines TileCompositor<C>'s two inner
 /// loops, addRow and flushRow; the scalar ones are the others' test oracle.
 
@@ -22,19 +23,38 @@ template <int C>
 class TileCompositor
 {
 public:
-    TileCompositor(int x0, int y0, int w, int h, int ringSize, const CompositeOptions& options)
-        : mX0(x0), mY0(y0), mW(w), mH(h), mMask(ringSize - 1), mCutoff(options.cutoff), mExp(options.exp),
-          mTable(options.table), mOptions(options), mPassCount(options.layout.count),
-          mTau(std::size_t(ringSize) * C * kTilePixels, 0.0f),
-          mEmission(options.emissive ? std::size_t(ringSize) * C * kTilePixels : 0, 0.0f),
-          mPassEmission(std::size_t(ringSize) * std::size_t(mPassCount) * C * kTilePixels, 0.0f),
-          mPassC(std::size_t(mPassCount) * C * kTilePixels, 0.0f),
-          mScatter(options.tinted ? std::size_t(ringSize) * C * kTilePixels : 0, 0.0f),
-          mMoment(options.lights.empty() ? 0 : std::size_t(ringSize) * kTilePixels, 0.0f),
-          mMoment2(options.lights.empty() ? 0 : std::size_t(ringSize) * kTilePixels, 0.0f),
-          mRays(options.lights.size()),
-          mDirty(std::size_t(ringSize))
+    /// Pixel rays in one light's map coordinates, base + z dir (z: the slab coordinate), x, y,
+    /// z apart.
+    struct LightRays
     {
+        double base[3][kTilePixels], dir[3][kTilePixels];
+    };
+    /// A slab's pixels holding contributions, and which slab.
+    struct Dirty
+    {
+        bool on = false;
+        std::int64_t slab = 0;
+        int x0 = 0, y0 = 0, x1 = -1, y1 = -1;
+    };
+    /// A ring's storage between tiles (TileSweepStream lends it from tile to tile): every
+    /// accumulator 0, every slot clean; the light rays' storage, traced again by the next tile
+    /// (a fresh mapping of theirs costs more than tracing them).
+    struct Ring
+    {
+        int size = 0;
+        std::vector<float> tau, emission, scatter, passEmission, moment, moment2;
+        std::vector<Dirty> dirty;
+        std::vector<LightRays> rays;
+    };
+
+    /// @a ringSize: slab accumulators in the ring, a power of two above the largest span of the
+    /// splats to come (0: none yet; ensureRing allocates them).
+    TileCompositor(int x0, int y0, int w, int h, int ringSize, const CompositeOptions& options)
+        : mX0(x0), mY0(y0), mW(w), mH(h), mCutoff(options.cutoff), mExp(options.exp),
+          mTable(options.table), mOptions(options), mPassCount(options.layout.count),
+          mPassC(std::size_t(mPassCount) * C * kTilePixels, 0.0f)
+    {
+        ensureRing(ringSize);
         std::fill(std::begin(mT), std::end(mT), 1.0f);
         std::fill(std::begin(mC), std::end(mC), 0.0f);
         std::fill(std::begin(mZ), std::end(mZ), std::numeric_limits<float>::infinity());
@@ -58,6 +78,111 @@ public:
     }
 
     bool opaque() const { return mAliveCount == 0; }
+
+    /// Give the tile a ring of at least @a ringSize slots (a power of two): @a spare's if it is
+    /// large enough (a ring lent by a parked tile), else a new one; the pending slabs' planes,
+    /// in the ring or spilled by park(), are put in their slots (streamed frames: a later
+    /// window's splats may span more slabs than the earlier ones').
+    void ensureRing(int ringSize, Ring* spare = nullptr)
+    {
+        ringSize = std::max(ringSize, mSpilledRing);
+        if (ringSize <= mRingSize) return;
+        if (mRingSize > 0) park(nullptr); // the pending slabs spilled, the small ring let go
+        if (spare && spare->size >= ringSize) {
+            ringSize = spare->size;
+            mTau = std::move(spare->tau);
+            mEmission = std::move(spare->emission);
+            mScatter = std::move(spare->scatter);
+            mPassEmission = std::move(spare->passEmission);
+            mMoment = std::move(spare->moment);
+            mMoment2 = std::move(spare->moment2);
+            mDirty = std::move(spare->dirty);
+            mRays = std::move(spare->rays);
+            spare->size = 0;
+        } else {
+            TileCompositor fresh(*this, ringSize);
+            mTau = std::move(fresh.mTau);
+            mEmission = std::move(fresh.mEmission);
+            mScatter = std::move(fresh.mScatter);
+            mPassEmission = std::move(fresh.mPassEmission);
+            mMoment = std::move(fresh.mMoment);
+            mMoment2 = std::move(fresh.mMoment2);
+            mDirty = std::move(fresh.mDirty);
+        }
+        mRingSize = ringSize;
+        mMask = ringSize - 1;
+        // The spilled slabs back in their slots, in pending order.
+        std::size_t at = 0;
+        for (std::size_t i = 0; i < mPending.size(); ++i) {
+            const std::size_t to = slot(mPending[i]);
+            forEachSlotPlane([&](std::vector<float>& plane, std::size_t floats) {
+                std::copy_n(mSpill.begin() + std::ptrdiff_t(at), floats, plane.begin() + std::ptrdiff_t(to * floats));
+                at += floats;
+            });
+            mDirty[to] = mSpilledDirty[i];
+        }
+        mSpill.clear(); // its storage kept: the next window spills about as much
+        mSpilledDirty.clear();
+        mSpilledRing = 0;
+    }
+
+    /// Composite every pending slab in front of @a slab: no splat to come reaches one.
+    void flushUpTo(std::int64_t slab)
+    {
+        if (!mRaysTraced && !mPending.empty() && mPending.front() < slab) traceRays(); // a parked tile's rays went
+        flushBefore(slab);
+    }
+
+    /// The first slab holding contributions not yet composited (none: the largest slab).
+    std::int64_t firstPending() const
+    {
+        return mPending.empty() ? std::numeric_limits<std::int64_t>::max() : *std::min_element(mPending.begin(), mPending.end());
+    }
+
+    /// Some slab holds contributions not yet composited.
+    bool pending() const { return !mPending.empty(); }
+
+    /// Let the ring and the light rays go until the next splat (a streamed frame keeps its
+    /// tiles between windows; a parked tile holds its pixels and the planes of its pending
+    /// slabs, spilled; an opaque one its pixels only). @a spare (if given, and empty): receives the ring's storage, every
+    /// slot cleared, instead of the allocator.
+    void park(Ring* spare = nullptr)
+    {
+        if (mRingSize == 0) return;
+        // An opaque tile's pending slabs can change nothing (every pixel has stopped): dropped.
+        const bool keep = !opaque();
+        mSpilledDirty.clear();
+        for (const std::int64_t slab : mPending) {
+            const std::size_t from = slot(slab);
+            forEachSlotPlane([&](std::vector<float>& plane, std::size_t floats) {
+                const auto first = plane.begin() + std::ptrdiff_t(from * floats);
+                if (keep) mSpill.insert(mSpill.end(), first, first + std::ptrdiff_t(floats));
+                std::fill_n(first, floats, 0.0f);
+            });
+            if (keep) mSpilledDirty.push_back(mDirty[from]);
+            mDirty[from] = Dirty{};
+        }
+        if (!keep) mPending.clear();
+        mSpilledRing = mPending.empty() ? 0 : mRingSize;
+        if (spare && spare->size == 0) {
+            spare->tau = std::move(mTau);
+            spare->emission = std::move(mEmission);
+            spare->scatter = std::move(mScatter);
+            spare->passEmission = std::move(mPassEmission);
+            spare->moment = std::move(mMoment);
+            spare->moment2 = std::move(mMoment2);
+            spare->dirty = std::move(mDirty);
+            spare->rays = std::move(mRays);
+            spare->size = mRingSize;
+        }
+        for (std::vector<float>* ring : {&mTau, &mEmission, &mScatter, &mPassEmission, &mMoment, &mMoment2}) *ring = {};
+        mDirty = {};
+        mRays = {};
+        mRaysTraced = false;
+        mRingSize = 0;
+        mMask = -1;
+    }
+
     /// The footprint weights evaluated (pixels inside a cut-off, each spread into every slab
     /// its kernel overlaps) and the (pixel, slab) samples composited: the work the roofline
     /// benchmark's rates are measured in (bench/roofline).
@@ -137,7 +262,7 @@ public:
     /// depth per unit of distance along each pixel's ray (frame order).
     void finish(Frame& frame, const std::vector<float>& depthScale, TileDeep* deep)
     {
-        flushBefore(std::numeric_limits<std::int64_t>::max());
+        flushUpTo(std::numeric_limits<std::int64_t>::max());
         // Surfaces behind every slab of their pixel.
         for (int p = 0; p < kTilePixels; ++p) {
             if (mSurfacePending[p] && mAlive[p]) compositeSurface(p, std::numeric_limits<float>::infinity());
@@ -172,12 +297,31 @@ public:
     }
 
 private:
-    struct Dirty
+    /// @a f(plane, floats) for each ring array in use, with the floats one slot holds.
+    template <typename F>
+    void forEachSlotPlane(F&& f)
     {
-        bool on = false;
-        std::int64_t slab = 0;
-        int x0 = 0, y0 = 0, x1 = -1, y1 = -1;
-    };
+        const std::pair<std::vector<float>*, std::size_t> planes[] = {{&mTau, C * kTilePixels}, {&mEmission, C * kTilePixels},
+            {&mScatter, C * kTilePixels}, {&mPassEmission, std::size_t(mPassCount) * C * kTilePixels}, {&mMoment, kTilePixels},
+            {&mMoment2, kTilePixels}};
+        for (const auto& [plane, floats] : planes) {
+            if (!plane->empty() && floats > 0) f(*plane, floats);
+        }
+    }
+
+    /// An empty ring of @a ringSize slots for @a other's options (ensureRing).
+    TileCompositor(const TileCompositor& other, int ringSize)
+        : mX0(other.mX0), mY0(other.mY0), mW(other.mW), mH(other.mH), mMask(ringSize - 1), mCutoff(other.mCutoff),
+          mExp(other.mExp), mTable(other.mTable), mOptions(other.mOptions), mPassCount(other.mPassCount),
+          mTau(std::size_t(ringSize) * C * kTilePixels, 0.0f),
+          mEmission(mOptions.emissive ? std::size_t(ringSize) * C * kTilePixels : 0, 0.0f),
+          mPassEmission(std::size_t(ringSize) * std::size_t(mPassCount) * C * kTilePixels, 0.0f),
+          mScatter(mOptions.tinted ? std::size_t(ringSize) * C * kTilePixels : 0, 0.0f),
+          mMoment(mOptions.lights.empty() ? 0 : std::size_t(ringSize) * kTilePixels, 0.0f),
+          mMoment2(mOptions.lights.empty() ? 0 : std::size_t(ringSize) * kTilePixels, 0.0f),
+          mDirty(std::size_t(ringSize))
+    {
+    }
 
     std::size_t slot(std::int64_t slab) const { return std::size_t(slab & mMask); }
     /// Channel carried for colour channel c (all three share channel 0 when C == 1).
@@ -501,6 +645,7 @@ private:
     {
         mRaysTraced = true;
         if (mOptions.lights.empty()) return;
+        mRays.resize(mOptions.lights.size());
         const Camera& camera = *mOptions.camera;
         for (int ly = 0; ly < mH; ++ly)
             for (int lx = 0; lx < mW; ++lx) {
@@ -546,7 +691,13 @@ private:
 
     std::uint64_t mSamples = 0, mComposites = 0; ///< samples(), composites()
     int mX0, mY0, mW, mH;
-    std::int64_t mMask;
+    int mRingSize = 0;
+    std::int64_t mMask = -1;
+    /// park()'s copy of the pending slabs' planes (slot by slot, forEachSlotPlane's order), their
+    /// dirty boxes, and the ring size they need (0: nothing spilled).
+    std::vector<float> mSpill;
+    std::vector<Dirty> mSpilledDirty;
+    int mSpilledRing = 0;
     float mCutoff;
     ExpEvaluation mExp;
     const ExpTable* mTable;
@@ -559,12 +710,6 @@ private:
     /// [slot][pixel] optical depth x position in the slab (0 front, 1 back), and x its square
     /// (lit frames only): where the slab's mass lies, for shading.
     std::vector<float> mMoment, mMoment2;
-    /// Pixel rays in one light's map coordinates, base + z dir (z: the slab coordinate), x, y,
-    /// z apart.
-    struct LightRays
-    {
-        double base[3][kTilePixels], dir[3][kTilePixels];
-    };
     std::vector<LightRays> mRays; ///< per light of CompositeOptions::lights
     bool mRaysTraced = false; ///< traceRays ran
     float mZ[kTilePixels];              ///< Z pass along the ray, +inf until alpha reaches 0.5
@@ -595,7 +740,121 @@ class TileSweepCompositor final : public SlabCompositor
 public:
     void composite(const SplatSet& set, const TileBins& bins, const CompositeOptions& options, const std::vector<float>& depthScale,
         Frame& frame, std::vector<TileDeep>& deep, std::vector<TileCounters>& counters, Progress* progress) const override;
+    std::unique_ptr<SlabStream> stream(const CompositeOptions& options, const StreamOutput& output) const override;
 };
+
+/// A backend's SlabStream: one TileCompositor<C> per tile, kept from window to window, one task
+/// a tile per window; after its window a tile spills its pending slabs and lends its ring to
+/// the next tile its thread sweeps (each thread keeps up to kSpareRings spare rings).
+template <int C>
+class TileSweepStream final : public SlabStream
+{
+public:
+    TileSweepStream(const CompositeOptions& options, const StreamOutput& output)
+        : mOptions(options), mOutput(output), mWidth(output.frame->beauty.width), mHeight(output.frame->beauty.height),
+          mTilesX((mWidth + kTileSize - 1) / kTileSize), mTiles(std::size_t(mTilesX) * std::size_t((mHeight + kTileSize - 1) / kTileSize)),
+          mOpaque(mTiles.size(), 0), mSkipped(mTiles.size(), 0), mPending(mTiles.size(), 0), mWritten(mTiles.size(), 0)
+    {
+    }
+
+    void composite(const SplatSet& set, const TileBins& bins, std::int64_t windowEnd, Progress* progress) override
+    {
+        const std::size_t passFloats = std::size_t(set.passSourceCount) * 3;
+        tbb::parallel_for(tbb::blocked_range<int>(0, int(mTiles.size()), 1), [&](const tbb::blocked_range<int>& range) {
+            for (int t = range.begin(); t < range.end(); ++t) {
+                const std::size_t count = std::size_t(bins.offsets[t + 1] - bins.offsets[t]);
+                if (mWritten[std::size_t(t)]) { // opaque and written
+                    mSkipped[std::size_t(t)] += count;
+                    continue;
+                }
+                // No splat, and nothing pending that this window's end lets composite: as it was.
+                if (count == 0 && (!mPending[std::size_t(t)] || mTiles[std::size_t(t)]->firstPending() >= windowEnd)) continue;
+                if (progress) progress->check();
+                std::unique_ptr<TileCompositor<C>>& tile = mTiles[std::size_t(t)];
+                if (!tile) tile = makeTile(t, 0);
+                std::vector<Ring>& spares = mSpares.local();
+                if (!tile->opaque()) {
+                    // The smallest spare ring that is large enough.
+                    const int size = ringSizeFor(std::max(bins.maxSpan[std::size_t(t)], 1u));
+                    Ring* spare = nullptr;
+                    for (Ring& r : spares) {
+                        if (r.size >= size && (!spare || r.size < spare->size)) spare = &r;
+                    }
+                    tile->ensureRing(size, spare);
+                }
+                const std::uint32_t* order = bins.indices.data() + bins.offsets[t];
+                std::size_t done = 0;
+                for (; done < count && !tile->opaque(); ++done) {
+                    const Splat& s = set.splats[order[done]];
+                    tile->add(s, set.shares.data() + s.shareOffset, set.shareMoments.data() + 2 * s.shareOffset,
+                        passFloats ? set.passSources.data() + order[done] * passFloats : nullptr);
+                }
+                mSkipped[std::size_t(t)] += count - done;
+                tile->flushUpTo(windowEnd);
+                mOpaque[std::size_t(t)] = tile->opaque();
+                mPending[std::size_t(t)] = !tile->opaque() && tile->pending();
+                // The tile lends its ring to the next tile this thread sweeps (its pending
+                // slabs spilled), or to the allocator when the thread has kSpareRings.
+                Ring* spare = nullptr;
+                for (Ring& r : spares) {
+                    if (r.size == 0) spare = &r;
+                }
+                if (!spare && spares.size() < kSpareRings) spare = &spares.emplace_back();
+                tile->park(spare);
+                // Opaque, or the frame's last window: written now, its memory back at once.
+                if (tile->opaque() || windowEnd == std::numeric_limits<std::int64_t>::max()) write(t);
+            }
+        });
+    }
+
+    bool opaque(int t) const override { return mOpaque[std::size_t(t)] != 0; }
+
+    void finish() override
+    {
+        tbb::parallel_for(tbb::blocked_range<int>(0, int(mTiles.size()), 1), [&](const tbb::blocked_range<int>& range) {
+            for (int t = range.begin(); t < range.end(); ++t) {
+                if (!mWritten[std::size_t(t)]) write(t);
+            }
+        });
+    }
+
+private:
+    /// Write tile t's pixels, passes, deep samples and counters, and let it go.
+    void write(int t)
+    {
+        std::unique_ptr<TileCompositor<C>>& tile = mTiles[std::size_t(t)];
+        if (!tile) tile = makeTile(t, 0);
+        if (tile->pending()) tile->ensureRing(1); // the spilled slabs back in a ring
+        tile->finish(*mOutput.frame, *mOutput.depthScale, mOutput.deep->empty() ? nullptr : &(*mOutput.deep)[std::size_t(t)]);
+        (*mOutput.counters)[std::size_t(t)] = {mSkipped[std::size_t(t)], tile->samples(), tile->composites()};
+        tile.reset();
+        mWritten[std::size_t(t)] = 1;
+    }
+
+    std::unique_ptr<TileCompositor<C>> makeTile(int t, int ringSize) const
+    {
+        const int x0 = (t % mTilesX) * kTileSize, y0 = (t / mTilesX) * kTileSize;
+        return std::make_unique<TileCompositor<C>>(x0, y0, std::min(kTileSize, mWidth - x0), std::min(kTileSize, mHeight - y0), ringSize, mOptions);
+    }
+
+    using Ring = typename TileCompositor<C>::Ring;
+    static constexpr std::size_t kSpareRings = 4;
+    const CompositeOptions& mOptions;
+    StreamOutput mOutput;
+    int mWidth, mHeight, mTilesX;
+    std::vector<std::unique_ptr<TileCompositor<C>>> mTiles;
+    tbb::enumerable_thread_specific<std::vector<Ring>> mSpares; ///< each thread's rings lent between tiles
+    std::vector<std::uint8_t> mOpaque;
+    std::vector<std::uint64_t> mSkipped; ///< pairs skipped once the tile was opaque
+    std::vector<std::uint8_t> mPending;  ///< the tile holds slabs still to composite
+    std::vector<std::uint8_t> mWritten;  ///< the tile is written to the output (and let go)
+};
+
+template <int C>
+std::unique_ptr<SlabStream> TileSweepCompositor<C>::stream(const CompositeOptions& options, const StreamOutput& output) const
+{
+    return std::make_unique<TileSweepStream<C>>(options, output);
+}
 
 template <int C>
 void TileSweepCompositor<C>::composite(const SplatSet& set, const TileBins& bins, const CompositeOptions& options,

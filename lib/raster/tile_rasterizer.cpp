@@ -1,10 +1,10 @@
 /// @file tile_rasterizer.cpp
-/// @brief The volume rasteriser's order of work: the splats' sweep order and their tiles, the
-///        options every tile shares, a slab compositor backend (raster/slab_compositor.h), then
-///        the frame's deep image and counters.
+/// @brief The volume rasteriser's order of work for a whole frame: the splats' sweep order and
+///        their tiles, the options every tile shares, a slab compositor backend
+///        (raster/slab_compositor.h), then the frame's deep image and counters.
 #include "raster/tile_rasterizer.h"
 
-#include "raster/slab_compositor.h"
+#include "raster/frame_compositing.h"
 #include "support/blank_frame.h"
 
 #include <tbb/parallel_sort.h>
@@ -84,6 +84,60 @@ std::vector<SweepEntry> sweepOrder(const SplatSet& set)
     return entries;
 }
 
+} // namespace
+
+TileBins binInSweepOrder(const SplatSet& set, int width, int height, const MemoryBudget* budget)
+{
+    const std::vector<SweepEntry> sweep = sweepOrder(set);
+    return binInOrder(
+        sweep.size(), [&](std::size_t k) -> const SweepEntry& { return sweep[k]; }, [&](std::size_t k) { return sweep[k].index; },
+        [&](std::size_t k) { return sweep[k].span; }, width, height, budget);
+}
+
+FrameCompositing::FrameCompositing(const Camera& camera, const RenderSettings& settings, const PassRequest& passes,
+    const std::vector<LightMap>& lights, bool tinted, bool emissive, const SlabGrid& slabs)
+    : model(settings), table(float(settings.splat.cutoffRadius * settings.splat.cutoffRadius))
+{
+    options.cutoff = float(settings.cutoff);
+    options.exp = settings.splat.expEvaluation;
+    // exp(-r/2) at r = s.cutoff, in the float arithmetic the splats' cut-off is kept in.
+    if (settings.splat.taper) options.taperEdge = std::exp(-0.5f * float(settings.splat.cutoffRadius * settings.splat.cutoffRadius));
+    options.table = &table;
+    options.slabs = slabs;
+    options.passes = passes;
+    options.layout = PassLayout(passes);
+    for (std::size_t l = 0; l < lights.size(); ++l) {
+        if (model.dark(l)) continue;
+        CompositeLight light;
+        light.map = &lights[l];
+        for (int c = 0; c < 3; ++c) light.scale[c] = float(model.lightScale(l, c));
+        options.lights.push_back(light);
+    }
+    options.model = &model;
+    options.camera = &camera;
+    options.tinted = tinted && !options.lights.empty();
+    options.emissive = emissive;
+}
+
+std::unique_ptr<SlabCompositor> slabCompositorFor(const RenderSettings& settings, int channels, RasterStats& stats)
+{
+    std::unique_ptr<SlabCompositor> backend = settings.simd ? simdSlabCompositor(channels) : nullptr;
+    stats.backend = backend ? simdTarget() : "scalar";
+    if (!backend) backend = scalarSlabCompositor(channels);
+    return backend;
+}
+
+void addCounters(const std::vector<TileCounters>& counters, RasterStats& stats)
+{
+    stats.tiles = std::uint64_t(counters.size());
+    for (const TileCounters& c : counters) {
+        stats.tilesOpaque += (c.skipped > 0);
+        stats.pairsSkipped += c.skipped;
+        stats.footprintSamples += c.samples;
+        stats.slabComposites += c.composites;
+    }
+}
+
 /// Camera depth per unit of distance along each pixel centre's ray: the cosine between the
 /// ray and the viewing axis (perspective), 1 (orthographic).
 std::vector<float> depthScales(const Camera& camera)
@@ -102,15 +156,14 @@ std::vector<float> depthScales(const Camera& camera)
 }
 
 /// Tiles' deep samples -> one DeepImage in pixel order, depths converted to camera depth.
-DeepImage assembleDeep(std::vector<TileDeep>& tiles, const TileBins& bins, int width, int height,
-    const std::vector<float>& depthScale)
+DeepImage assembleDeep(std::vector<TileDeep>& tiles, int tilesX, int width, int height, const std::vector<float>& depthScale)
 {
     DeepImage deep;
     deep.width = width;
     deep.height = height;
     deep.offsets.assign(std::size_t(width) * std::size_t(height) + 1, 0);
     for (int t = 0; t < int(tiles.size()); ++t) {
-        const int x0 = (t % bins.tilesX) * kTileSize, y0 = (t / bins.tilesX) * kTileSize;
+        const int x0 = (t % tilesX) * kTileSize, y0 = (t / tilesX) * kTileSize;
         for (int p = 0; p < kTilePixels; ++p) {
             const int x = x0 + p % kTileSize, y = y0 + p / kTileSize;
             if (x < width && y < height) deep.offsets[std::size_t(y) * std::size_t(width) + std::size_t(x) + 1] = tiles[std::size_t(t)].counts[p];
@@ -121,7 +174,7 @@ DeepImage assembleDeep(std::vector<TileDeep>& tiles, const TileBins& bins, int w
     tbb::parallel_for(tbb::blocked_range<int>(0, int(tiles.size())), [&](const tbb::blocked_range<int>& range) {
         for (int t = range.begin(); t < range.end(); ++t) {
             TileDeep& tile = tiles[std::size_t(t)];
-            const int x0 = (t % bins.tilesX) * kTileSize, y0 = (t / bins.tilesX) * kTileSize;
+            const int x0 = (t % tilesX) * kTileSize, y0 = (t / tilesX) * kTileSize;
             std::size_t next = 0;
             for (int p = 0; p < kTilePixels; ++p) {
                 const int x = x0 + p % kTileSize, y = y0 + p / kTileSize;
@@ -139,45 +192,21 @@ DeepImage assembleDeep(std::vector<TileDeep>& tiles, const TileBins& bins, int w
     return deep;
 }
 
-} // namespace
-
 Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSettings& settings,
     const PassRequest& passes, RasterStats& stats, const std::vector<LightMap>& lights, bool tinted, Progress* progress,
     const MemoryBudget* budget, const SurfaceLayer* surface, const SurfaceLayer* surfaceShadow)
 {
-    const OpticalModel model(settings);
     const int width = camera.width(), height = camera.height();
     Frame frame = blankFrame(width, height, passes);
 
-    const std::vector<SweepEntry> sweep = sweepOrder(set);
-    const TileBins bins = binInOrder(
-        sweep.size(), [&](std::size_t k) -> const SweepEntry& { return sweep[k]; }, [&](std::size_t k) { return sweep[k].index; },
-        [&](std::size_t k) { return sweep[k].span; }, width, height, budget);
+    const TileBins bins = binInSweepOrder(set, width, height, budget);
     stats.splatTilePairs = bins.indices.size();
     const int tiles = bins.tilesX * bins.tilesY;
     std::vector<TileCounters> counters(static_cast<std::size_t>(tiles));
-    const ExpTable table(float(settings.splat.cutoffRadius * settings.splat.cutoffRadius));
-    CompositeOptions options;
-    options.cutoff = float(settings.cutoff);
-    options.exp = settings.splat.expEvaluation;
-    // exp(-r/2) at r = s.cutoff, in the float arithmetic the splats' cut-off is kept in.
-    if (settings.splat.taper) options.taperEdge = std::exp(-0.5f * float(settings.splat.cutoffRadius * settings.splat.cutoffRadius));
-    options.table = &table;
-    options.slabs = set.slabs;
-    options.passes = passes;
-    options.layout = PassLayout(passes);
-    for (std::size_t l = 0; l < lights.size(); ++l) {
-        if (model.dark(l)) continue;
-        CompositeLight light;
-        light.map = &lights[l];
-        for (int c = 0; c < 3; ++c) light.scale[c] = float(model.lightScale(l, c));
-        options.lights.push_back(light);
-    }
-    options.model = &model;
-    options.camera = &camera;
-    options.tinted = tinted && !options.lights.empty();
-    options.emissive = std::any_of(set.splats.begin(), set.splats.end(),
+    const bool emissive = std::any_of(set.splats.begin(), set.splats.end(),
         [](const Splat& s) { return s.emission[0] != 0.0f || s.emission[1] != 0.0f || s.emission[2] != 0.0f; });
+    FrameCompositing compositing(camera, settings, passes, lights, tinted, emissive, set.slabs);
+    CompositeOptions& options = compositing.options;
     const std::vector<float> depthScale = (passes.depth || passes.deep || surface) ? depthScales(camera) : std::vector<float>{};
     // The surface's slab coordinate per pixel: its camera depth along the pixel's ray.
     std::vector<float> surfaceAt;
@@ -198,19 +227,11 @@ Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSet
         }
         return true;
     };
-    const int channels = allGrey(set, options, model) && grey(surface) && grey(surfaceShadow) ? 1 : 3;
-    std::unique_ptr<SlabCompositor> backend = settings.simd ? simdSlabCompositor(channels) : nullptr;
-    stats.backend = backend ? simdTarget() : "scalar";
-    if (!backend) backend = scalarSlabCompositor(channels);
+    const int channels = allGrey(set, options, compositing.model) && grey(surface) && grey(surfaceShadow) ? 1 : 3;
+    const std::unique_ptr<SlabCompositor> backend = slabCompositorFor(settings, channels, stats);
     backend->composite(set, bins, options, depthScale, frame, deep, counters, progress);
-    if (passes.deep) frame.deep = assembleDeep(deep, bins, width, height, depthScale);
-    stats.tiles = std::uint64_t(tiles);
-    for (const TileCounters& c : counters) {
-        stats.tilesOpaque += (c.skipped > 0);
-        stats.pairsSkipped += c.skipped;
-        stats.footprintSamples += c.samples;
-        stats.slabComposites += c.composites;
-    }
+    if (passes.deep) frame.deep = assembleDeep(deep, bins.tilesX, width, height, depthScale);
+    addCounters(counters, stats);
     return frame;
 }
 

@@ -134,16 +134,95 @@ int tileLatticeSpacing(int tileDim, int maxSpacing)
     return s;
 }
 
+UnitKernelProbe::UnitKernelProbe(const GridSource::Impl& grid, const RenderSettings& settings, const LevelOfDetail* lod)
+    : mGrid(grid), mLod(lod), mCutoff(float(settings.cutoff)), mTileSpacing(settings.splat.tileKernelSpacing),
+      mAccessor(grid.grid->tree())
+{
+}
+
+bool UnitKernelProbe::isUnit(const openvdb::Coord& ijk)
+{
+    const openvdb::Coord origin = ijk & ~(int(LeafT::DIM) - 1);
+    const int offset = int(LeafT::coordToOffset(ijk));
+    for (int i = 0; i < mCached; ++i) {
+        if (mCache[i].origin == origin) return mCache[i].unit[std::size_t(offset)];
+    }
+    const LeafT* leaf = mAccessor.probeConstLeaf(ijk);
+    if (!leaf) {
+        // An active tile's kernels are unit kernels where its lattice spacing is 1.
+        if (!mAccessor.isValueOn(ijk)) return false;
+        float density = 0.0f;
+        const ValueClass vc = classify(mAccessor.getValue(ijk), mCutoff, density);
+        if (vc == ValueClass::BelowCutoff || vc == ValueClass::NotANumber || !(density > 0.0f)) return false;
+        const int depth = mAccessor.getValueDepth(ijk);
+        using Root = openvdb::FloatTree::RootNodeType;
+        const int dim = depth == 0 ? int(Root::ChildNodeType::DIM) : depth == 1 ? int(Root::ChildNodeType::ChildNodeType::DIM) : int(LeafT::DIM);
+        return tileLatticeSpacing(dim, mTileSpacing) == 1;
+    }
+    // The leaf's unit kernels as extractKernels makes them: every kept voxel, or where the
+    // level of detail merges, the voxels given a positive share at level 0.
+    CachedLeaf& entry = mCache[mNext];
+    mNext = (mNext + 1) % 8;
+    mCached = std::min(mCached + 1, 8);
+    entry.origin = origin;
+    entry.unit.reset();
+    LeafValues values;
+    readLeaf(*leaf, mCutoff, values, nullptr);
+    const LevelOfDetail::NodeLevels node = mLod ? mLod->nodeLevels(origin, int(LeafT::DIM)) : LevelOfDetail::NodeLevels{-1.0, -1.0};
+    if (mLod && node.merges()) {
+        float levels[LevelOfDetail::kBlocks];
+        mLod->blockLevels(values.density, node, levels);
+        forEachShare(values.active, levels, [&](int o, int level, double share) {
+            // As shareBetweenLevels writes the kernel and extractKernels keeps it.
+            if (level == 0 && float(share * double(values.density[o])) > 0.0f) entry.unit.set(std::size_t(o));
+        });
+    } else {
+        for (int o = 0; o < int(LeafT::SIZE); ++o) entry.unit[std::size_t(o)] = values.active[std::size_t(o)] && values.density[o] > 0.0f;
+    }
+    return entry.unit[std::size_t(offset)];
+}
+
+std::vector<Brick> listBricks(const GridSource::Impl& grid)
+{
+    const openvdb::FloatTree& tree = grid.grid->tree();
+    std::vector<const LeafT*> leaves;
+    leaves.reserve(tree.leafCount());
+    tree.getNodes(leaves);
+    std::vector<Brick> bricks;
+    bricks.reserve(leaves.size());
+    for (const LeafT* leaf : leaves) bricks.push_back({leaf->getNodeBoundingBox(), leaf, 0.0f});
+    auto it = tree.cbeginValueOn();
+    it.setMaxDepth(it.getLeafDepth() - 1); // tiles only, no leaf voxels
+    for (; it; ++it) {
+        if (it.isTileValue()) bricks.push_back({it.getBoundingBox(), nullptr, *it});
+    }
+    return bricks;
+}
+
 KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& settings, const LevelOfDetail* lod,
-    Progress* progress, const MemoryBudget* budget, const LevelSource* levelsFrom)
+    Progress* progress, const MemoryBudget* budget, const LevelSource* levelsFrom, const std::vector<const Brick*>* only)
 {
     const openvdb::FloatTree& tree = grid.grid->tree();
     const float cutoff = float(settings.cutoff);
 
     KernelSet set;
     std::vector<const LeafT*> leaves;
-    leaves.reserve(tree.leafCount());
-    tree.getNodes(leaves);
+    // Active tiles: where they are and their values (tree order).
+    std::vector<std::pair<openvdb::CoordBBox, float>> activeTiles;
+    if (only) {
+        for (const Brick* b : *only) {
+            if (b->leaf) leaves.push_back(b->leaf);
+            else activeTiles.emplace_back(b->box, b->tileValue);
+        }
+    } else {
+        leaves.reserve(tree.leafCount());
+        tree.getNodes(leaves);
+        auto it = tree.cbeginValueOn();
+        it.setMaxDepth(it.getLeafDepth() - 1); // tiles only, no leaf voxels
+        for (; it; ++it) {
+            if (it.isTileValue()) activeTiles.emplace_back(it.getBoundingBox(), *it);
+        }
+    }
 
     // Pass 1: each leaf writes its kernels into its own slot range: one slot per active voxel,
     // or, where the level of detail merges, per voxel or block given a share (sharedSlots;
@@ -241,14 +320,10 @@ KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& set
     };
     std::vector<Tile> tiles;
     std::size_t tileKernels = 0;
-    auto it = tree.cbeginValueOn();
-    it.setMaxDepth(it.getLeafDepth() - 1); // tiles only, no leaf voxels
-    for (; it; ++it) {
-        if (!it.isTileValue()) continue;
+    for (const auto& [box, value] : activeTiles) {
         ++set.activeTiles;
         float density = 0.0f;
-        const ValueClass vc = classify(*it, cutoff, density);
-        const openvdb::CoordBBox box = it.getBoundingBox();
+        const ValueClass vc = classify(value, cutoff, density);
         const int dim = box.dim().x();
         const std::uint64_t voxelsInTile = std::uint64_t(dim) * dim * dim;
         if (vc == ValueClass::BelowCutoff) set.belowCutoff += voxelsInTile;

@@ -12,6 +12,7 @@
 #include "support/progress.h"
 
 #include <array>
+#include <bitset>
 #include <cstdint>
 #include <limits>
 #include <algorithm>
@@ -74,6 +75,15 @@ struct KernelSet
 /// 64^3 kernels. See docs/equations.md#active-tiles.
 int tileLatticeSpacing(int tileDim, int maxSpacing);
 
+/// The streamed frame's unit of work (docs/architecture.md#the-streamed-frame): a leaf node of
+/// the grid, or one of its active tiles.
+struct Brick
+{
+    openvdb::CoordBBox box; ///< the index-space voxels it covers
+    const openvdb::FloatTree::LeafNodeType* leaf = nullptr; ///< null: an active tile
+    float tileValue = 0.0f; ///< an active tile's value
+};
+
 /// Build the kernels of every active voxel and tile, one TBB task per leaf node. With @a lod,
 /// a leaf node whose voxels project small enough becomes blocks of merged kernels (the
 /// block's mean density at the block's centre, spacing = block size: mass is kept).
@@ -82,6 +92,8 @@ int tileLatticeSpacing(int tileDim, int maxSpacing);
 /// @a levelsFrom: where given, the level of detail's blocks take the levels this grid's values
 /// give (values below its cutoff read as 0): an emission grid merges as the density does, so
 /// that their kernels keep the same shapes (docs/equations.md#emission-grids).
+/// @a only: the kernels of these bricks alone (in this order), as the whole grid's would be
+/// (the streamed frame's windows); null: every brick's, in tree order.
 struct LevelSource
 {
     const openvdb::FloatTree* tree;
@@ -89,7 +101,35 @@ struct LevelSource
 };
 KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& settings,
     const LevelOfDetail* lod = nullptr, Progress* progress = nullptr, const MemoryBudget* budget = nullptr,
-    const LevelSource* levelsFrom = nullptr);
+    const LevelSource* levelsFrom = nullptr, const std::vector<const Brick*>* only = nullptr);
+
+/// Every leaf node of @a grid in tree order, then every active tile in tree order.
+std::vector<Brick> listBricks(const GridSource::Impl& grid);
+
+/// Which voxels hold a unit kernel (isUnitKernel: a voxel at level 0 of the level of detail,
+/// or an active tile's kernel of spacing 1) as extractKernels makes them for the whole grid:
+/// quasiInterpolate's halo rule, for a window of bricks whose neighbours are not extracted.
+/// One probe per thread: it caches the leaf nodes it read.
+class UnitKernelProbe
+{
+public:
+    UnitKernelProbe(const GridSource::Impl& grid, const RenderSettings& settings, const LevelOfDetail* lod);
+    bool isUnit(const openvdb::Coord& ijk);
+
+private:
+    struct CachedLeaf
+    {
+        openvdb::Coord origin;
+        std::bitset<512> unit;
+    };
+    const GridSource::Impl& mGrid;
+    const LevelOfDetail* mLod;
+    float mCutoff;
+    int mTileSpacing;
+    openvdb::FloatGrid::ConstAccessor mAccessor;
+    CachedLeaf mCache[8];
+    int mCached = 0, mNext = 0;
+};
 
 } // namespace detail
 } // namespace vdb_ewa

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 namespace vdb_ewa {
 namespace detail {
@@ -30,13 +31,14 @@ double quasiInterpolationAlpha(double sigma)
     return std::max(0.0, 0.5 * sigma * sigma - 1.0 / 12.0);
 }
 
-std::uint64_t quasiInterpolate(const GridSource::Impl& grid, double alpha, KernelSet& set, const openvdb::MaskGrid* sampled)
+std::uint64_t quasiInterpolate(const GridSource::Impl& grid, double alpha, KernelSet& set, const openvdb::MaskGrid* sampled,
+    const UnitKernelRule* units)
 {
     if (!(alpha > 0.0)) return 0;
     LargeArray<Kernel>& kernels = set.kernels;
-    // Where the unit kernels are.
+    // Where the unit kernels are: the set's own, or the whole grid's (units).
     openvdb::MaskGrid mask(false);
-    {
+    if (!units) {
         auto acc = mask.getAccessor();
         for (const Kernel& k : kernels) {
             if (isUnitKernel(k)) acc.setValueOn(voxelOf(k));
@@ -52,6 +54,9 @@ std::uint64_t quasiInterpolate(const GridSource::Impl& grid, double alpha, Kerne
         auto inMask = mask.getConstAccessor();
         const openvdb::MaskGrid none(false);
         auto isSampled = (sampled ? *sampled : none).getConstAccessor();
+        std::optional<UnitKernelProbe> probe;
+        if (units) probe.emplace(grid, units->settings, units->lod);
+        const auto isUnit = [&](const openvdb::Coord& c) { return probe ? probe->isUnit(c) : inMask.isValueOn(c); };
         for (std::size_t c = range.begin(); c < range.end(); ++c) {
             for (std::size_t i = c * grain; i < std::min(n, (c + 1) * grain); ++i) {
                 const Kernel& k = kernels[i];
@@ -69,10 +74,10 @@ std::uint64_t quasiInterpolate(const GridSource::Impl& grid, double alpha, Kerne
                     // A halo voxel: inactive (active ones have kernels of their own: voxels,
                     // merged blocks, tiles) and not sampled by refinement, added once, by its
                     // first unit-kernel neighbour.
-                    if (inMask.isValueOn(h) || active.isValueOn(h) || isSampled.isValueOn(h)) continue;
+                    if (isUnit(h) || active.isValueOn(h) || isSampled.isValueOn(h)) continue;
                     openvdb::Coord first = ijk;
                     for (const openvdb::Coord& e : kFaceNeighbours) {
-                        if (inMask.isValueOn(h + e)) {
+                        if (isUnit(h + e)) {
                             first = h + e;
                             break;
                         }

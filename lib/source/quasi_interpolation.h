@@ -28,8 +28,16 @@ double quasiInterpolationAlpha(double sigma);
 /// halo kernel for each inactive face neighbour of theirs (in a deterministic order). Kernels
 /// on coarser lattices are left as they are; voxels in @a sampled (refineKernels) get no halo
 /// kernel. Returns the number of halo kernels added.
+/// @a units: where given, the unit kernels that own halos are the whole grid's (a window of
+/// bricks of the streamed frame: its halos are the ones the whole grid's kernels would have);
+/// null: the set's own.
+struct UnitKernelRule
+{
+    const RenderSettings& settings;
+    const LevelOfDetail* lod;
+};
 std::uint64_t quasiInterpolate(const GridSource::Impl& grid, double alpha, KernelSet& set,
-    const openvdb::MaskGrid* sampled = nullptr);
+    const openvdb::MaskGrid* sampled = nullptr, const UnitKernelRule* units = nullptr);
 
 } // namespace detail
 } // namespace vdb_ewa

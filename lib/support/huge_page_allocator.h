@@ -20,12 +20,15 @@ namespace detail {
 /// Blocks at least this large are mapped as huge pages.
 constexpr std::size_t kHugeBlockBytes = std::size_t(4) << 20;
 
-/// @a bytes (>= kHugeBlockBytes) of zeroed memory, 2 MiB-aligned (advised as huge pages where
-/// that cannot stall);
-/// throws std::bad_alloc.
+/// @a bytes (>= kHugeBlockBytes) of memory, 2 MiB-aligned (advised as huge pages where that
+/// cannot stall): a block given back earlier if one of its size class is kept, else a fresh
+/// mapping; throws std::bad_alloc.
 void* mapHugeBlock(std::size_t bytes);
-/// Unmap a block from mapHugeBlock of the same size.
+/// Give back a block from mapHugeBlock of the same size: kept for reuse (up to 1 GiB in all),
+/// else unmapped.
 void unmapHugeBlock(void* block, std::size_t bytes) noexcept;
+/// Unmap every block kept for reuse (the end of a render).
+void releaseCachedBlocks() noexcept;
 
 template <typename T>
 struct HugePageAllocator

@@ -287,7 +287,7 @@ class Module(unittest.TestCase):
             vdb_ewa.render(vdb_ewa.from_array(np.ones((2, 2, 2))), emission_grid="flame")
         with self.assertRaises(vdb_ewa.BudgetError) as raised:
             dense = np.random.default_rng(3).random((128, 128, 128), np.float32) + 0.1  # 2M voxels, no tiles
-            vdb_ewa.render(vdb_ewa.from_array(dense), max_memory="64M", res="64x64", translate=(64, 64, 300))
+            vdb_ewa.render(vdb_ewa.from_array(dense), max_memory="64M", res="64x64", translate=(64, 64, 300), cull=False)
         self.assertIsInstance(raised.exception, MemoryError)
 
     def test_write_refuses_what_the_cli_refuses(self):
