@@ -104,6 +104,18 @@ IsoSurface isoSurface(const RenderSettings& settings, const GridSource::Impl& gr
     return out;
 }
 
+/// The volume rasteriser's counters in the frame's stats.
+void addRasterStats(const detail::RasterStats& raster, RenderStats& stats)
+{
+    stats.splatTilePairs = raster.splatTilePairs;
+    stats.screenTiles = raster.tiles;
+    stats.screenTilesOpaque = raster.tilesOpaque;
+    stats.splatTilePairsSkipped = raster.pairsSkipped;
+    stats.footprintSamples = raster.footprintSamples;
+    stats.slabComposites = raster.slabComposites;
+    stats.rasterBackend = raster.backend;
+}
+
 /// The voxel values the kernels skipped or clamped, a line each.
 void valueWarnings(std::uint64_t notANumber, std::uint64_t clamped, std::vector<std::string>& warnings)
 {
@@ -293,13 +305,7 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     stats.mergedKernels = kernels.mergedKernels;
     stats.kernelsCulled = splats.culled;
     stats.splats = splats.splats.size();
-    stats.splatTilePairs = raster.splatTilePairs;
-    stats.screenTiles = raster.tiles;
-    stats.screenTilesOpaque = raster.tilesOpaque;
-    stats.splatTilePairsSkipped = raster.pairsSkipped;
-    stats.footprintSamples = raster.footprintSamples;
-    stats.slabComposites = raster.slabComposites;
-    stats.rasterBackend = raster.backend;
+    addRasterStats(raster, stats);
     if (kernels.activeVoxels == 0 && kernels.activeTiles == 0 && stats.emitterKernels == 0) {
         stats.warnings.push_back("the grid has no active values: the image is empty");
     }
@@ -470,16 +476,10 @@ void Renderer::renderStreamedFogVolume(const GridSource::Impl& g, const Camera& 
             windowVoxels = mostVoxels;
         }
     }
-    detail::RasterStats raster_;
-    frame = raster.finish(raster_);
+    detail::RasterStats rasterStats;
+    frame = raster.finish(rasterStats);
     stats.rasterSeconds += timer.lap();
-    stats.splatTilePairs = raster_.splatTilePairs;
-    stats.screenTiles = raster_.tiles;
-    stats.screenTilesOpaque = raster_.tilesOpaque;
-    stats.splatTilePairsSkipped = raster_.pairsSkipped;
-    stats.footprintSamples = raster_.footprintSamples;
-    stats.slabComposites = raster_.slabComposites;
-    stats.rasterBackend = raster_.backend;
+    addRasterStats(rasterStats, stats);
     if (outOfOrder) stats.warnings.push_back(countLine(outOfOrder, "splats started in front of their window (a bound of the streamed frame is wrong; --cull off renders without it)"));
     if (g.activeVoxels == 0 && g.activeTiles == 0) stats.warnings.push_back("the grid has no active values: the image is empty");
     // Counted in the bricks expanded: a hidden brick's values are never read.

@@ -144,8 +144,8 @@ public:
 
     /// Let the ring and the light rays go until the next splat (a streamed frame keeps its
     /// tiles between windows; a parked tile holds its pixels and the planes of its pending
-    /// slabs, spilled; an opaque one its pixels only). @a spare (if given, and empty): receives the ring's storage, every
-    /// slot cleared, instead of the allocator.
+    /// slabs, spilled; an opaque one its pixels only). @a spare (if given, and empty):
+    /// receives the ring's storage, every slot cleared, instead of the allocator.
     void park(Ring* spare = nullptr)
     {
         if (mRingSize == 0) return;
