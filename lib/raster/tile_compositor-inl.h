@@ -136,7 +136,7 @@ public:
     /// The first slab holding contributions not yet composited (none: the largest slab).
     std::int64_t firstPending() const
     {
-        return mPending.empty() ? std::numeric_limits<std::int64_t>::max() : *std::min_element(mPending.begin(), mPending.end());
+        return mPending.empty() ? std::numeric_limits<std::int64_t>::max() : mPending.front(); // kept in order (flushBefore)
     }
 
     /// Some slab holds contributions not yet composited.
@@ -753,7 +753,7 @@ public:
     TileSweepStream(const CompositeOptions& options, const StreamOutput& output)
         : mOptions(options), mOutput(output), mWidth(output.frame->beauty.width), mHeight(output.frame->beauty.height),
           mTilesX((mWidth + kTileSize - 1) / kTileSize), mTiles(std::size_t(mTilesX) * std::size_t((mHeight + kTileSize - 1) / kTileSize)),
-          mOpaque(mTiles.size(), 0), mSkipped(mTiles.size(), 0), mPending(mTiles.size(), 0), mWritten(mTiles.size(), 0)
+          mOpaque(mTiles.size(), 0), mSkipped(mTiles.size(), 0), mWritten(mTiles.size(), 0)
     {
     }
 
@@ -768,7 +768,7 @@ public:
                     continue;
                 }
                 // No splat, and nothing pending that this window's end lets composite: as it was.
-                if (count == 0 && (!mPending[std::size_t(t)] || mTiles[std::size_t(t)]->firstPending() >= windowEnd)) continue;
+                if (count == 0 && (!mTiles[std::size_t(t)] || mTiles[std::size_t(t)]->firstPending() >= windowEnd)) continue;
                 if (progress) progress->check();
                 std::unique_ptr<TileCompositor<C>>& tile = mTiles[std::size_t(t)];
                 if (!tile) tile = makeTile(t, 0);
@@ -792,7 +792,6 @@ public:
                 mSkipped[std::size_t(t)] += count - done;
                 tile->flushUpTo(windowEnd);
                 mOpaque[std::size_t(t)] = tile->opaque();
-                mPending[std::size_t(t)] = !tile->opaque() && tile->pending();
                 // The tile lends its ring to the next tile this thread sweeps (its pending
                 // slabs spilled), or to the allocator when the thread has kSpareRings.
                 Ring* spare = nullptr;
@@ -846,7 +845,6 @@ private:
     tbb::enumerable_thread_specific<std::vector<Ring>> mSpares; ///< each thread's rings lent between tiles
     std::vector<std::uint8_t> mOpaque;
     std::vector<std::uint64_t> mSkipped; ///< pairs skipped once the tile was opaque
-    std::vector<std::uint8_t> mPending;  ///< the tile holds slabs still to composite
     std::vector<std::uint8_t> mWritten;  ///< the tile is written to the output (and let go)
 };
 
