@@ -157,6 +157,7 @@ void OutputOptions::prepare(const std::string& output, const std::string& previe
                          output + " is scene-referred");
     }
     if (!output.empty()) checkOutputWritable(output);
+    if (!mPreview.empty() || mFormat != ImageFormat::Exr) loadImageModule(); // fails now, not after the render
 }
 
 void OutputOptions::toWorkingSpace(RenderSettings& rs, std::vector<std::string>& warnings) const

@@ -52,4 +52,10 @@ VDB_EWA_API void writeImage(const Image& beauty, const std::string& path, const 
 /// an 8-bit RGB PNG, whatever @a path's extension (--preview). @throw IoError naming the path.
 VDB_EWA_API void writePreviewPng(const Image& beauty, const ColorTransform& toDisplay, const std::string& path);
 
+/// Load the module through which every format but EXR is read and written (OpenImageIO's
+/// libraries take 0.3 s to load, so a process loads them on its first such image only). Call
+/// it before a long render whose output needs it, so that a broken installation fails first.
+/// @throw Error naming the module and why it cannot be loaded.
+VDB_EWA_API void loadImageModule();
+
 } // namespace vdb_ewa

@@ -255,17 +255,23 @@ void ColorTransform::apply(float* rgb, std::size_t count, std::size_t stride) co
 void ColorTransform::applyPremultiplied(float* rgba, std::size_t count) const
 {
     if (mImpl->noOp) return;
-    auto scale = [&](bool divide) {
-        for (std::size_t i = 0; i < count; ++i) {
-            float* p = rgba + 4 * i;
-            const float a = p[3];
-            if (!(a > 0.0f) || a == 1.0f) continue;
-            for (int c = 0; c < 3; ++c) p[c] = divide ? p[c] / a : p[c] * a;
-        }
-    };
-    scale(true);
-    apply(rgba, count, 4);
-    scale(false);
+    // Unpremultiply, transform and premultiply each block of pixels in one pass, in parallel.
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 16384), [&](const tbb::blocked_range<std::size_t>& r) {
+        auto scale = [&](bool divide) {
+            for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                float* p = rgba + 4 * i;
+                const float a = p[3];
+                if (!(a > 0.0f) || a == 1.0f) continue;
+                for (int c = 0; c < 3; ++c) p[c] = divide ? p[c] / a : p[c] * a;
+            }
+        };
+        scale(true);
+        const long n = long(r.size());
+        const auto bytes = std::ptrdiff_t(4 * sizeof(float));
+        OCIO::PackedImageDesc desc(rgba + r.begin() * 4, n, 1, 3, OCIO::BIT_DEPTH_F32, sizeof(float), bytes, bytes * n);
+        mImpl->cpu->apply(desc);
+        scale(false);
+    });
 }
 
 namespace {

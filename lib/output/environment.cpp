@@ -1,9 +1,9 @@
 /// @file environment.cpp
 #include <vdb_ewa/environment.h>
 
-#include <vdb_ewa/error.h>
+#include "output/image_codec.h"
 
-#include <OpenImageIO/imageio.h>
+#include <vdb_ewa/error.h>
 
 #include <algorithm>
 #include <cmath>
@@ -25,15 +25,6 @@ std::vector<Vec3d> fibonacciDirections(int count)
         out[std::size_t(i)] = Vec3d(r * std::cos(golden * i), y, r * std::sin(golden * i));
     }
     return out;
-}
-
-/// OpenImageIO's error text on one line of at most 160 characters.
-std::string oneLine(std::string text)
-{
-    for (char& ch : text) {
-        if (ch == '\n' || ch == '\r' || ch == '\t') ch = ' ';
-    }
-    return text.size() > 160 ? text.substr(0, 157) + "..." : text;
 }
 
 } // namespace
@@ -88,24 +79,22 @@ Image readLatLongImage(const std::string& path)
 {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) throw IoError(path + ": no such image file");
-    auto in = OIIO::ImageInput::open(path);
-    if (!in) throw IoError(path + ": cannot be read as an image (" + oneLine(OIIO::geterror()) + ")");
-    const OIIO::ImageSpec& spec = in->spec();
-    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels < 1) throw IoError(path + ": an empty image");
-    if (std::abs(double(spec.width) / double(spec.height) - 2.0) > 0.02) {
-        throw ValueError(path + ": a latitude-longitude image is twice as wide as high; this one is " + std::to_string(spec.width) + "x" +
-                         std::to_string(spec.height));
-    }
-    if (double(spec.width) * double(spec.height) > 1e8) throw ValueError(path + ": larger than 100 megapixels");
-    std::vector<float> pixels(std::size_t(spec.width) * std::size_t(spec.height) * std::size_t(spec.nchannels));
-    if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, pixels.data())) {
-        throw IoError(path + ": cannot read its pixels (" + oneLine(in->geterror()) + ")");
-    }
-    Image out(spec.width, spec.height);
-    for (std::size_t i = 0; i < std::size_t(spec.width) * std::size_t(spec.height); ++i) {
+    detail::CodecPixels pixels;
+    const std::string error = detail::imageCodec().read(path, pixels, [&](int width, int height, int channels) {
+        if (width <= 0 || height <= 0 || channels < 1) throw IoError(path + ": an empty image");
+        if (std::abs(double(width) / double(height) - 2.0) > 0.02) {
+            throw ValueError(path + ": a latitude-longitude image is twice as wide as high; this one is " + std::to_string(width) + "x" +
+                             std::to_string(height));
+        }
+        if (double(width) * double(height) > 1e8) throw ValueError(path + ": larger than 100 megapixels");
+    });
+    if (!error.empty()) throw IoError(path + ": " + error);
+    Image out(pixels.width, pixels.height);
+    const std::size_t channels = std::size_t(pixels.channels);
+    for (std::size_t i = 0; i < std::size_t(pixels.width) * std::size_t(pixels.height); ++i) {
         for (int c = 0; c < 3; ++c) {
             // Grey (and grey + alpha) images: every colour from the first channel.
-            const float v = pixels[i * std::size_t(spec.nchannels) + std::size_t(spec.nchannels >= 3 ? c : 0)];
+            const float v = pixels.floats[i * channels + std::size_t(channels >= 3 ? c : 0)];
             out.rgba[4 * i + std::size_t(c)] = std::isfinite(v) && v > 0.0f ? v : 0.0f;
         }
         out.rgba[4 * i + 3] = 1.0f;

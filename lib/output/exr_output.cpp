@@ -3,6 +3,7 @@
 #include <vdb_ewa/exr_output.h>
 
 #include "output/atomic_write.h"
+#include "support/huge_page_allocator.h"
 
 #include <vdb_ewa/error.h>
 
@@ -129,7 +130,8 @@ public:
         const std::size_t xStride = std::size_t(channels) * size, yStride = xStride * mWidth;
         char* base = reinterpret_cast<char*>(const_cast<float*>(data));
         if (type == Imf::HALF) {
-            std::vector<half>& h = mHalves.emplace_back(count);
+            std::vector<half>& h = mHalves.emplace_back();
+            detail::assignAdvised(h, count, half()); // 8-33 MB at 1080p: huge pages where they cannot stall
             tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1 << 16), [&](const tbb::blocked_range<std::size_t>& r) {
                 std::transform(data + r.begin(), data + r.end(), h.begin() + std::ptrdiff_t(r.begin()), toHalf);
             });

@@ -1,12 +1,12 @@
 /// @file image_output.cpp
-/// @brief Images other than EXR through OpenImageIO: 8-bit display-referred dailies and .hdr.
+/// @brief Images other than EXR through OpenImageIO (its module, image_codec.h): 8-bit
+///        display-referred dailies and .hdr.
 #include <vdb_ewa/image_output.h>
 
 #include "output/atomic_write.h"
+#include "output/image_codec.h"
 
 #include <vdb_ewa/error.h>
-
-#include <OpenImageIO/imageio.h>
 
 #include <algorithm>
 #include <cctype>
@@ -74,23 +74,19 @@ void writeAs(ImageFormat format, const Image& beauty, const std::string& path, c
     if (display != (toDisplay != nullptr)) {
         throw ValueError(path + (display ? ": an 8-bit image needs a display transform" : ": .hdr holds scene-referred values: no display transform"));
     }
-    OIIO::ImageSpec spec(beauty.width, beauty.height, 3, display ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::FLOAT);
-    for (const auto& [key, value] : options.attributes) spec.attribute(key, value);
+    std::vector<std::pair<std::string, std::string>> attributes = options.attributes;
     if (!options.colorSpace.empty()) {
         std::string lower = options.colorSpace.substr(0, 4);
         std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-        spec.attribute("oiio:ColorSpace", lower == "srgb" ? std::string("sRGB") : options.colorSpace);
+        attributes.emplace_back("oiio:ColorSpace", lower == "srgb" ? std::string("sRGB") : options.colorSpace);
     }
-    const std::vector<std::uint8_t> bytes = display ? displayBytes(beauty, *toDisplay) : std::vector<std::uint8_t>();
-    const std::vector<float> floats = display ? std::vector<float>() : radianceFloats(beauty);
+    detail::CodecPixels pixels{beauty.width, beauty.height, 3, {}, {}};
+    if (display) pixels.bytes = displayBytes(beauty, *toDisplay);
+    else pixels.floats = radianceFloats(beauty);
+    const detail::ImageCodec& codec = detail::imageCodec();
     detail::writeAtomically(path, info.writer, [&](const std::string& tmp) {
-        // By format name: the temporary file's name has no extension to go by.
-        std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create(info.writer);
-        if (!out) throw IoError(path + ": OpenImageIO has no " + info.writer + " writer (" + OIIO::geterror() + ")");
-        const bool ok = out->open(tmp, spec) &&
-                        (display ? out->write_image(OIIO::TypeDesc::UINT8, bytes.data()) : out->write_image(OIIO::TypeDesc::FLOAT, floats.data())) &&
-                        out->close();
-        if (!ok) throw IoError(path + ": cannot write " + info.writer + " (" + out->geterror() + ")");
+        const std::string error = codec.write(tmp, info.writer, pixels, attributes);
+        if (!error.empty()) throw IoError(path + ": " + error);
     });
 }
 
@@ -126,6 +122,11 @@ void writeImage(const Image& beauty, const std::string& path, const ColorTransfo
     const std::optional<ImageFormat> format = imageFormatOf(path);
     if (!format) throw ValueError(path + ": unknown image format (expected " + imageFormatExtensions() + ")");
     writeAs(*format, beauty, path, toDisplay, options);
+}
+
+void loadImageModule()
+{
+    detail::imageCodec();
 }
 
 void writePreviewPng(const Image& beauty, const ColorTransform& toDisplay, const std::string& path)

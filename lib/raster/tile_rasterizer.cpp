@@ -7,6 +7,7 @@
 #include "raster/frame_compositing.h"
 #include "support/blank_frame.h"
 
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
@@ -143,15 +144,18 @@ void addCounters(const std::vector<TileCounters>& counters, RasterStats& stats)
 std::vector<float> depthScales(const Camera& camera)
 {
     const int width = camera.width(), height = camera.height();
-    std::vector<float> scale(std::size_t(width) * std::size_t(height), 1.0f);
+    std::vector<float> scale;
+    assignAdvised(scale, std::size_t(width) * std::size_t(height), 1.0f);
     if (camera.projection() != Projection::Perspective) return scale;
     const double f = camera.focalPixels();
     const Vec2d c = camera.principalPoint();
-    for (int y = 0; y < height; ++y)
-        for (int x = 0; x < width; ++x) {
-            const double u = (x + 0.5 - c.x) / f, v = (y + 0.5 - c.y) / f;
-            scale[std::size_t(y) * std::size_t(width) + std::size_t(x)] = float(1.0 / std::sqrt(1.0 + u * u + v * v));
-        }
+    tbb::parallel_for(tbb::blocked_range<int>(0, height, 16), [&](const tbb::blocked_range<int>& rows) {
+        for (int y = rows.begin(); y < rows.end(); ++y)
+            for (int x = 0; x < width; ++x) {
+                const double u = (x + 0.5 - c.x) / f, v = (y + 0.5 - c.y) / f;
+                scale[std::size_t(y) * std::size_t(width) + std::size_t(x)] = float(1.0 / std::sqrt(1.0 + u * u + v * v));
+            }
+    });
     return scale;
 }
 

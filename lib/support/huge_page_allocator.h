@@ -1,13 +1,12 @@
 /// @file huge_page_allocator.h
 /// @brief Storage for the pipeline's large arrays (kernels, splats, slab shares, tile bins, the
-///        light map): blocks of kHugeBlockBytes or more are mapped 2 MiB-aligned, so that the
-///        kernel can back them with transparent huge pages, and are advised MADV_HUGEPAGE only
-///        where the kernel's defrag policy lets an advised fault fall back instead of compacting
-///        memory synchronously ("defer"). Where it does not (Debian's "madvise"), advising made
-///        the first touch 50 faults instead of 25,000 a 100 MB array but stalled for compaction
-///        on a busy machine: 1080p smoke 4.2x faster than vdb_render with the advice, 4.9x
-///        without (docs/performance.md). Smaller blocks use operator new; where MADV_HUGEPAGE is
-///        not defined, large blocks are still mapped, without the advice.
+///        light map) and the frame's: blocks of kHugeBlockBytes or more are mapped 2 MiB-aligned,
+///        so that the kernel can back them with transparent huge pages, and are advised
+///        MADV_HUGEPAGE where that cannot stall (huge_page_allocator.cpp, adviseHugePages):
+///        where the kernel's defrag policy is "defer", or while free 2 MiB blocks abound. A
+///        first touch in 4 KiB pages costs a page fault each, 18 us on this machine's virtual
+///        machine (docs/performance.md#fixed-costs). Smaller blocks use operator new; where
+///        MADV_HUGEPAGE is not defined, large blocks are still mapped, without the advice.
 #pragma once
 
 #include <cstddef>
@@ -27,6 +26,21 @@ void* mapHugeBlock(std::size_t bytes);
 /// Give back a block from mapHugeBlock of the same size: kept for reuse (up to 1 GiB in all),
 /// else unmapped.
 void unmapHugeBlock(void* block, std::size_t bytes) noexcept;
+/// Advise the whole 2 MiB pages inside [@a data, @a data + @a bytes) as huge pages where that
+/// cannot stall (as mapHugeBlock's blocks). For memory allocated but not yet touched.
+void adviseHugePagesFor(const void* data, std::size_t bytes) noexcept;
+
+/// @a v resized to @a n values of @a value, its storage advised as huge pages before the first
+/// touch (for arrays whose type is fixed, such as the frame's std::vector<float> planes).
+template <typename T, typename A>
+void assignAdvised(std::vector<T, A>& v, std::size_t n, const T& value)
+{
+    std::vector<T, A>().swap(v);
+    v.reserve(n);
+    adviseHugePagesFor(v.data(), n * sizeof(T));
+    v.assign(n, value);
+}
+
 /// Unmap every block kept for reuse (the end of a render).
 void releaseCachedBlocks() noexcept;
 
