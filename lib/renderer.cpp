@@ -135,8 +135,9 @@ void splatWarnings(std::uint64_t beforeNear, std::uint64_t clampedNear, std::uin
 
 /// Each light's light map. They take at most a quarter of the budget (4 bytes a lattice point),
 /// shared between the lights; a warning where that coarsened them.
+/// The lights' maps: marched whole, or @a onDemand (the streamed frame marches what its windows need).
 std::vector<detail::LightMap> lightMaps(const RenderSettings& settings, const GridSource::Impl& g, const detail::MemoryBudget& budget,
-    detail::Progress& progress, std::vector<std::string>& warnings)
+    detail::Progress& progress, std::vector<std::string>& warnings, bool onDemand = false)
 {
     const detail::OpticalModel model(settings);
     std::size_t lit = 0;
@@ -145,7 +146,7 @@ std::vector<detail::LightMap> lightMaps(const RenderSettings& settings, const Gr
     const double lightPoints = std::min(detail::kLightMapPointBudget, budget.itemsWithin(0.25, 4.0)) / lightCount;
     std::vector<detail::LightMap> lights;
     lights.reserve(settings.lights.size());
-    for (std::size_t l = 0; l < settings.lights.size(); ++l) lights.emplace_back(g, settings, l, &progress, lightPoints);
+    for (std::size_t l = 0; l < settings.lights.size(); ++l) lights.emplace_back(g, settings, l, &progress, lightPoints, onDemand);
     for (const detail::LightMap& light : lights) {
         if (light.shadowStep() == settings.shadow.step && light.shadowResolution() == settings.shadow.resolution) continue;
         std::ostringstream w;
@@ -271,6 +272,10 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     stats.kernelSeconds = timer.lap();
     progress.stage(10, 35);
     const std::vector<detail::LightMap> lights = lightMaps(mSettings, g, budget, progress, stats.warnings);
+    for (const detail::LightMap& light : lights) {
+        stats.lightRays += light.rays();
+        stats.lightRaysMarched += light.raysMarched();
+    }
     stats.shadowSeconds = timer.lap();
     if (emittersLowered) {
         std::ostringstream w;
@@ -374,12 +379,13 @@ void Renderer::renderStreamedFogVolume(const GridSource::Impl& g, const Camera& 
     std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return bounds[a].nearestSlab < bounds[b].nearestSlab; });
     stats.kernelSeconds += timer.lap();
 
-    progress.stage(5, 30);
-    const std::vector<detail::LightMap> lights = lightMaps(mSettings, g, budget, progress, stats.warnings);
+    // Light on demand: no ray is marched yet; each window marches the rays its splats look up.
+    std::vector<detail::LightMap> lights = lightMaps(mSettings, g, budget, progress, stats.warnings, true);
     stats.shadowSeconds = timer.lap();
 
-    progress.stage(30, 100);
+    progress.stage(5, 100);
     progress.setUnits(order.size());
+    progress.advance(0); // the windows' start is reported (the first window may take a while)
     detail::StreamedRaster raster(camera, mSettings, passes, lights, g.color != nullptr, greyFrame(mSettings, g), slabs, &budget);
     stats.rasterSeconds += timer.lap();
     const double alpha = mSettings.splat.prefilter ? detail::quasiInterpolationAlpha(mSettings.splat.kernelSigma) : 0.0;
@@ -460,6 +466,9 @@ void Renderer::renderStreamedFogVolume(const GridSource::Impl& g, const Camera& 
         } else {
             deferred = 0;
             carried = detail::splitSplatsAt(window, windowEnd);
+            stats.rasterSeconds += timer.lap();
+            detail::lightWindow(window, camera, lights, &progress);
+            stats.shadowSeconds += timer.lap();
             raster.composite(window, windowEnd, &progress);
             windowStart = windowEnd;
         }
@@ -480,6 +489,10 @@ void Renderer::renderStreamedFogVolume(const GridSource::Impl& g, const Camera& 
     frame = raster.finish(rasterStats);
     stats.rasterSeconds += timer.lap();
     addRasterStats(rasterStats, stats);
+    for (const detail::LightMap& light : lights) {
+        stats.lightRays += light.rays();
+        stats.lightRaysMarched += light.raysMarched();
+    }
     if (outOfOrder) stats.warnings.push_back(countLine(outOfOrder, "splats started in front of their window (a bound of the streamed frame is wrong; --cull off renders without it)"));
     if (g.activeVoxels == 0 && g.activeTiles == 0) stats.warnings.push_back("the grid has no active values: the image is empty");
     // Counted in the bricks expanded: a hidden brick's values are never read.

@@ -340,6 +340,7 @@ private:
         if (s.streamed) {
             out << "; streamed front to back: " << counted(s.bricks, "brick") << " in " << counted(s.windows, "depth window") << ", "
                 << s.bricksExpanded << " expanded, " << s.bricksHidden << " hidden behind opaque tiles, " << s.bricksOutside << " outside the frame";
+            if (s.lightRays > 0) out << "; light on demand: " << s.lightRaysMarched << " of " << s.lightRays << " light-map rays marched";
         }
         out << "\n"
                   << std::fixed << std::setprecision(3) << "vdb_ewa: timings (s): load " << loadSeconds << ", kernels "

@@ -52,6 +52,8 @@ struct RenderStats
     std::uint64_t bricksHidden = 0;   ///< streamed frame: bricks behind opaque screen tiles, never expanded
     std::uint64_t bricksExpanded = 0; ///< streamed frame: bricks whose kernels were built
     std::uint64_t windows = 0;        ///< streamed frame: depth windows composited
+    std::uint64_t lightRays = 0;      ///< light-map rays of all lights' lattices
+    std::uint64_t lightRaysMarched = 0; ///< of them, marched (all but where the streamed frame's light on demand needed none)
     std::string rasterBackend = "scalar"; ///< fog volumes: the slab compositor that ran ("scalar", or the SIMD target: "AVX3" (AVX-512), "AVX2")
     std::vector<std::string> warnings; ///< what was clamped or skipped, one line each
 };

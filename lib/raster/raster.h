@@ -7,6 +7,7 @@
 #pragma once
 
 #include "raster/disc_coverage.h"
+#include "raster/light_on_demand.h"
 #include "raster/slab_compositor.h"
 #include "raster/surface_rasterizer.h"
 #include "raster/streamed_raster.h"

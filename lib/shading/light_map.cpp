@@ -74,7 +74,8 @@ double shadowStopDepth(const float* extinction, double cutoff)
     return depth;
 }
 
-LightMap::LightMap(const GridSource::Impl& grid, const RenderSettings& settings, std::size_t light, Progress* progress, double pointBudget)
+LightMap::LightMap(const GridSource::Impl& grid, const RenderSettings& settings, std::size_t light, Progress* progress, double pointBudget,
+    bool onDemand)
     : mLogGreyFloor(0.5f * std::log(float(settings.cutoff) / 3.0f))
 {
     const OpticalModel model(settings);
@@ -131,95 +132,154 @@ LightMap::LightMap(const GridSource::Impl& grid, const RenderSettings& settings,
     // exponentials, each term a first-order recursive filter along the ray (ExponentialSum).
     // No gain is the one term 1 (ExponentialSum's own case).
     const ExponentialSum sum(settings.shadow.gain * step, double(mNw));
-    const std::vector<double>& weight = sum.a;
-    const std::vector<double>& decay = sum.decay;
-    const int terms = int(weight.size());
-    const int margin = int(std::ceil(2.0 / step)); // kept below a ray's lowest density
+    mWeight = sum.a;
+    mDecay = sum.decay;
+    mMargin = int(std::ceil(2.0 / step)); // kept below a ray's lowest density
+    mCutoff = settings.cutoff;
+    mGrid = &grid;
     // Index position of lattice point (i, j, k): affine grids p0 + i du + j dv + k dw.
-    const Vec3d p0 = grid.worldToIndex(mOrigin);
-    const Vec3d du = grid.worldToIndex(mOrigin + worldFromMap[0]) - p0;
-    const Vec3d dv = grid.worldToIndex(mOrigin + worldFromMap[1]) - p0;
-    const Vec3d dw = grid.worldToIndex(mOrigin + worldFromMap[2]) - p0;
-    const auto indexAt = [&](int i, int j, int k) {
-        return grid.linear ? p0 + double(i) * du + double(j) * dv + double(k) * dw
-                           : grid.worldToIndex(mOrigin + worldFromMap * Vec3d(i, j, k));
-    };
+    mWorldFromMap = worldFromMap;
+    mP0 = grid.worldToIndex(mOrigin);
+    mDu = grid.worldToIndex(mOrigin + worldFromMap[0]) - mP0;
+    mDv = grid.worldToIndex(mOrigin + worldFromMap[1]) - mP0;
+    mDw = grid.worldToIndex(mOrigin + worldFromMap[2]) - mP0;
 
-    std::vector<std::vector<float>> rows(static_cast<std::size_t>(mNv));
-    std::vector<Ray> rays(std::size_t(mNu) * std::size_t(mNv));
-    setUnits(progress, std::uint64_t(mNv));
-    tbb::parallel_for(tbb::blocked_range<int>(0, mNv), [&](const tbb::blocked_range<int>& range) {
+    const std::size_t rays = std::size_t(mNu) * std::size_t(mNv);
+    mRayKLo.assign(rays, 0);
+    mRayCount.assign(rays, 0);
+    mRayOffset.assign(rays, 0);
+    mTilesU = (mNu + kRayTile - 1) / kRayTile;
+    mTilesV = (mNv + kRayTile - 1) / kRayTile;
+    mTileState = std::make_unique<std::atomic<std::uint8_t>[]>(std::size_t(mTilesU) * std::size_t(mTilesV));
+    if (onDemand) return;
+    for (std::size_t t = 0; t < std::size_t(mTilesU) * std::size_t(mTilesV); ++t) mTileState[t].store(kRequired, std::memory_order_relaxed);
+    march(progress, true);
+}
+
+void LightMap::require(const Vec3d& lo, const Vec3d& hi)
+{
+    if (!mTileState) return;
+    // The bilinear lookup reads the rays at floor(u) and floor(u) + 1.
+    const auto first = [](double x, int n) { return int(std::clamp(std::floor(x), 0.0, double(n - 1))) / kRayTile; };
+    const auto last = [](double x, int n) { return int(std::clamp(std::floor(x) + 1.0, 0.0, double(n - 1))) / kRayTile; };
+    if (!(hi.x >= 0.0 && hi.y >= 0.0 && lo.x <= double(mNu) && lo.y <= double(mNv))) return; // off the lattice: no density
+    for (int tv = first(lo.y, mNv); tv <= last(hi.y, mNv); ++tv)
+        for (int tu = first(lo.x, mNu); tu <= last(hi.x, mNu); ++tu) {
+            std::atomic<std::uint8_t>& state = mTileState[std::size_t(tv) * std::size_t(mTilesU) + std::size_t(tu)];
+            if (state.load(std::memory_order_relaxed) == kUnused) state.store(kRequired, std::memory_order_relaxed);
+        }
+}
+
+std::uint64_t LightMap::marchRequired(Progress* progress)
+{
+    return march(progress, false);
+}
+
+std::uint64_t LightMap::march(Progress* progress, bool countUnits)
+{
+    if (!mTileState) return 0;
+    std::vector<int> tiles;
+    for (int t = 0; t < mTilesU * mTilesV; ++t) {
+        if (mTileState[std::size_t(t)].load(std::memory_order_relaxed) == kRequired) tiles.push_back(t);
+    }
+    if (tiles.empty()) return 0;
+    // Each tile's rays marched into a buffer of its own, in parallel; then appended in tile
+    // order. A ray's samples do not depend on which other rays are marched, or when: a map
+    // marched on demand looks up exactly what the whole map does.
+    struct TileRays
+    {
+        std::vector<float> depth;
+        std::vector<Ray> rays; ///< offsets within depth
+    };
+    std::vector<TileRays> marched(tiles.size());
+    if (countUnits) setUnits(progress, tiles.size());
+    const GridSource::Impl& grid = *mGrid;
+    const int terms = int(mWeight.size());
+    const auto indexAt = [&](int i, int j, int k) {
+        return grid.linear ? mP0 + double(i) * mDu + double(j) * mDv + double(k) * mDw
+                           : grid.worldToIndex(mOrigin + mWorldFromMap * Vec3d(i, j, k));
+    };
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tiles.size(), 1), [&](const tbb::blocked_range<std::size_t>& range) {
         EmptySpaceSkipper skipper(*grid.field, 0);
         std::vector<double> density(static_cast<std::size_t>(mNw));
         std::vector<double> f(static_cast<std::size_t>(terms));
-        for (int j = range.begin(); j < range.end(); ++j) {
-            std::vector<float>& row = rows[std::size_t(j)];
-            for (int i = 0; i < mNu; ++i) {
-                int kTop = -1, kBottom = -1; // samples holding density
-                for (int k = mNw - 1; k >= 0; --k) {
-                    const Vec3d p = indexAt(i, j, k);
-                    // In an empty node, every sample before the ray leaves it (p - t dw, t < exit) is 0.
-                    const double exit = grid.linear ? skipper.emptyExit(p, -dw) : 0.0;
-                    if (exit > 0.0) {
-                        const int empty = int(std::min(std::ceil(exit), double(k + 1)));
-                        std::fill_n(density.begin() + (k + 1 - empty), empty, 0.0);
-                        k -= empty - 1;
-                        continue;
+        for (std::size_t t = range.begin(); t < range.end(); ++t) {
+            if (progress) progress->check();
+            TileRays& out = marched[t];
+            const int tu = tiles[t] % mTilesU, tv = tiles[t] / mTilesU;
+            for (int j = tv * kRayTile; j < std::min((tv + 1) * kRayTile, mNv); ++j)
+                for (int i = tu * kRayTile; i < std::min((tu + 1) * kRayTile, mNu); ++i) {
+                    int kTop = -1, kBottom = -1; // samples holding density
+                    for (int k = mNw - 1; k >= 0; --k) {
+                        const Vec3d p = indexAt(i, j, k);
+                        // In an empty node, every sample before the ray leaves it (p - t dw, t < exit) is 0.
+                        const double exit = grid.linear ? skipper.emptyExit(p, -mDw) : 0.0;
+                        if (exit > 0.0) {
+                            const int empty = int(std::min(std::ceil(exit), double(k + 1)));
+                            std::fill_n(density.begin() + (k + 1 - empty), empty, 0.0);
+                            k -= empty - 1;
+                            continue;
+                        }
+                        double d = 0.0;
+                        float v = 0.0f;
+                        openvdb::tools::BoxSampler::sample(skipper.accessor(), openvdb::Vec3d(p.x, p.y, p.z), v);
+                        if (v >= mCutoff) d = v; // vdb_render skips samples below its cutoff
+                        density[std::size_t(k)] = d;
+                        if (d > 0.0) {
+                            if (kTop < 0) kTop = k;
+                            kBottom = k;
+                        }
                     }
-                    double d = 0.0;
-                    float v = 0.0f;
-                    openvdb::tools::BoxSampler::sample(skipper.accessor(), openvdb::Vec3d(p.x, p.y, p.z), v);
-                    if (v >= settings.cutoff) d = v; // vdb_render skips samples below its cutoff
-                    density[std::size_t(k)] = d;
-                    if (d > 0.0) {
-                        if (kTop < 0) kTop = k;
-                        kBottom = k;
+                    Ray ray;
+                    if (kTop >= 0) {
+                        // Stored: from a margin below the lowest density up to just below the highest
+                        // (above it the depth is 0). Filtered from the light side down over that range
+                        // only: depth(k) = sum_n a_n F_n(k), F_n(k) = decay_n (F_n(k + 1) + d(k + 1) step).
+                        ray.kLo = std::max(0, kBottom - mMargin);
+                        ray.count = std::max(0, kTop - ray.kLo);
+                        ray.offset = out.depth.size();
+                        out.depth.resize(out.depth.size() + std::size_t(ray.count));
+                        float* depth = out.depth.data() + ray.offset;
+                        std::fill(f.begin(), f.end(), 0.0);
+                        for (int k = kTop; k >= ray.kLo; --k) {
+                            if (k < kTop) {
+                                double tau = 0.0;
+                                for (int n = 0; n < terms; ++n) tau += mWeight[std::size_t(n)] * f[std::size_t(n)];
+                                depth[k - ray.kLo] = float(tau);
+                            }
+                            const double d = density[std::size_t(k)];
+                            for (int n = 0; n < terms; ++n) f[std::size_t(n)] = mDecay[std::size_t(n)] * (f[std::size_t(n)] + d * mShadowStep);
+                        }
                     }
+                    out.rays.push_back(ray);
                 }
-                Ray& ray = rays[std::size_t(j) * std::size_t(mNu) + std::size_t(i)];
-                if (kTop < 0) continue;
-                // Stored: from a margin below the lowest density up to just below the highest
-                // (above it the depth is 0). Filtered from the light side down over that range
-                // only: depth(k) = sum_n a_n F_n(k), F_n(k) = decay_n (F_n(k + 1) + d(k + 1) step).
-                ray.kLo = std::max(0, kBottom - margin);
-                ray.count = std::max(0, kTop - ray.kLo);
-                ray.offset = row.size();
-                row.resize(row.size() + std::size_t(ray.count));
-                float* depth = row.data() + ray.offset;
-                std::fill(f.begin(), f.end(), 0.0);
-                for (int k = kTop; k >= ray.kLo; --k) {
-                    if (k < kTop) {
-                        double tau = 0.0;
-                        for (int n = 0; n < terms; ++n) tau += weight[n] * f[std::size_t(n)];
-                        depth[k - ray.kLo] = float(tau);
-                    }
-                    const double d = density[std::size_t(k)];
-                    for (int n = 0; n < terms; ++n) f[std::size_t(n)] = decay[n] * (f[std::size_t(n)] + d * step);
-                }
-            }
-            advance(progress);
+            if (countUnits) advance(progress);
         }
     });
-    std::vector<std::uint64_t> rowStart(std::size_t(mNv) + 1, 0);
-    for (int j = 0; j < mNv; ++j) rowStart[std::size_t(j) + 1] = rowStart[std::size_t(j)] + rows[std::size_t(j)].size();
-    // The budget (5e8 points) keeps the samples' offsets within 32 bits (mRayOffset).
-    if (rowStart.back() > std::uint64_t(std::numeric_limits<std::int32_t>::max())) {
-        throw BudgetError("the light map would hold " + std::to_string(rowStart.back()) +
-                          " samples, past 2^31; raise --shadowstep or --shadow-res");
+    std::uint64_t total = mDepth.size();
+    for (const TileRays& t : marched) total += t.depth.size();
+    // The budget (2e8 points) keeps the samples' offsets within 32 bits (mRayOffset).
+    if (total > std::uint64_t(std::numeric_limits<std::int32_t>::max())) {
+        throw BudgetError("the light map would hold " + std::to_string(total) + " samples, past 2^31; raise --shadowstep or --shadow-res");
     }
-    mDepth.resize(rowStart.back());
-    for (int j = 0; j < mNv; ++j) {
-        std::copy(rows[std::size_t(j)].begin(), rows[std::size_t(j)].end(), mDepth.begin() + std::ptrdiff_t(rowStart[std::size_t(j)]));
-        for (int i = 0; i < mNu; ++i) rays[std::size_t(j) * std::size_t(mNu) + std::size_t(i)].offset += rowStart[std::size_t(j)];
+    mDepth.reserve(total);
+    for (std::size_t t = 0; t < tiles.size(); ++t) {
+        const std::uint64_t base = mDepth.size();
+        mDepth.insert(mDepth.end(), marched[t].depth.begin(), marched[t].depth.end());
+        const int tu = tiles[t] % mTilesU, tv = tiles[t] / mTilesU;
+        std::size_t n = 0;
+        for (int j = tv * kRayTile; j < std::min((tv + 1) * kRayTile, mNv); ++j)
+            for (int i = tu * kRayTile; i < std::min((tu + 1) * kRayTile, mNu); ++i) {
+                const Ray& ray = marched[t].rays[n++];
+                const std::size_t r = std::size_t(j) * std::size_t(mNu) + std::size_t(i);
+                mRayKLo[r] = ray.kLo;
+                mRayCount[r] = ray.count;
+                mRayOffset[r] = std::int32_t(base + ray.offset);
+                ++mRaysMarched;
+            }
+        mTileState[std::size_t(tiles[t])].store(kMarched, std::memory_order_relaxed);
     }
-    mRayKLo.resize(rays.size());
-    mRayCount.resize(rays.size());
-    mRayOffset.resize(rays.size());
-    for (std::size_t r = 0; r < rays.size(); ++r) {
-        mRayKLo[r] = rays[r].kLo;
-        mRayCount[r] = rays[r].count;
-        mRayOffset[r] = std::int32_t(rays[r].offset);
-    }
+    return tiles.size();
 }
 
 LightMap::Lattice LightMap::lattice() const

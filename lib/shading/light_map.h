@@ -17,6 +17,8 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
+#include <memory>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -56,10 +58,34 @@ double shadowStopDepth(const float* extinction, double cutoff);
 class LightMap
 {
 public:
-    /// March the lattice rays of settings.lights[@a light] through @a grid's field.
-    /// @a progress: one unit per lattice row; throws Cancelled.
+    /// March the lattice rays of settings.lights[@a light] through @a grid's field (which must
+    /// outlive the map). @a progress: one unit per tile of kRayTile x kRayTile rays; throws
+    /// Cancelled. @a onDemand: march none yet; rays are marched where require()d, by
+    /// marchRequired() (light on demand: the streamed frame marches only the rays its windows'
+    /// splats can look up, docs/architecture.md#light-on-demand).
     LightMap(const GridSource::Impl& grid, const RenderSettings& settings, std::size_t light = 0, Progress* progress = nullptr,
-        double pointBudget = kLightMapPointBudget);
+        double pointBudget = kLightMapPointBudget, bool onDemand = false);
+
+    /// Rays are marched on demand in square tiles of this many rays a side.
+    static constexpr int kRayTile = 16;
+    /// Mark the rays that lookups in the map-coordinate box [@a lo, @a hi] (u and v; w is not
+    /// used) read, for the next marchRequired(). Thread-safe against other require() calls.
+    void require(const Vec3d& lo, const Vec3d& hi);
+    /// March the rays require()d and not marched yet (in parallel; not while lookups run).
+    /// Returns the tiles marched. @a progress: checked for cancellation only (throws Cancelled).
+    std::uint64_t marchRequired(Progress* progress);
+    /// Whether lattice ray (@a i, @a j) has been marched (false off the lattice).
+    bool marched(int i, int j) const
+    {
+        if (!mTileState || i < 0 || j < 0 || i >= mNu || j >= mNv) return false;
+        return mTileState[std::size_t(j / kRayTile) * std::size_t(mTilesU) + std::size_t(i / kRayTile)].load(std::memory_order_relaxed) == kMarched;
+    }
+    /// The lattice's rays across the light (u) and along v.
+    int raysU() const { return mNu; }
+    int raysV() const { return mNv; }
+    /// Rays marched so far, and the lattice's rays in all.
+    std::uint64_t raysMarched() const { return mRaysMarched; }
+    std::uint64_t rays() const { return std::uint64_t(mNu) * std::uint64_t(mNv); }
 
     /// The shadow step and ray spacing used (voxel lengths): the settings', unless the budget
     /// raised them.
@@ -131,6 +157,8 @@ private:
     Cell cell(const Vec3d& q) const;
     float depthInCell(const Cell& cell, double w) const;
 
+    std::uint64_t march(Progress* progress, bool countUnits);
+
     Mat3d mFromWorld{1.0}; ///< rows: e1 / h, e2 / h, l / step (world units)
     Vec3d mOrigin{0.0};    ///< world position of map coordinates (0, 0, 0)
     int mNu = 0, mNv = 0, mNw = 0;
@@ -144,6 +172,18 @@ private:
     float mLogGreyFloor; ///< ln sqrt(cutoff / 3): a grey medium's floor (-extinction x mStopDepth)
     bool mGrey = true;   ///< the same extinction in R, G and B
     bool mUnlit;
+
+    // What marching a ray needs, kept for rays marched on demand.
+    const GridSource::Impl* mGrid = nullptr;
+    double mCutoff = 0.0;
+    std::vector<double> mWeight, mDecay; ///< ExponentialSum's terms
+    int mMargin = 0;                     ///< steps kept below a ray's lowest density
+    Vec3d mP0{0.0}, mDu{0.0}, mDv{0.0}, mDw{0.0}; ///< index position of lattice points (affine grids)
+    Mat3d mWorldFromMap{1.0};
+    static constexpr std::uint8_t kUnused = 0, kRequired = 1, kMarched = 2;
+    int mTilesU = 0, mTilesV = 0;
+    std::unique_ptr<std::atomic<std::uint8_t>[]> mTileState; ///< per tile of rays: kUnused, kRequired, kMarched
+    std::uint64_t mRaysMarched = 0;
 };
 
 // The lookups, inline: the rasteriser makes one per lit (pixel, slab) sample.

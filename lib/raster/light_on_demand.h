@@ -1,0 +1,25 @@
+/// @file light_on_demand.h
+/// @brief Light on demand (docs/architecture.md#light-on-demand): before a window of the
+///        streamed frame is composited, the light-map rays its splats can look up are marked
+///        and marched, and no others. A splat is looked up on the pixel rays of its box, in the
+///        slabs it overlaps: the frustum piece between those slabs' planes over the box, whose
+///        eight corners bound it in the light map's (linear) coordinates.
+#pragma once
+
+#include "projection/projection.h"
+#include "shading/shading.h"
+
+#include <vdb_ewa/camera.h>
+
+#include <cstdint>
+#include <vector>
+
+namespace vdb_ewa {
+namespace detail {
+
+/// Mark and march, in each of @a lights, the rays @a window's splats can look up. Returns the
+/// tiles of rays marched. @a progress: checked for cancellation (throws Cancelled).
+std::uint64_t lightWindow(const SplatSet& window, const Camera& camera, std::vector<LightMap>& lights, Progress* progress);
+
+} // namespace detail
+} // namespace vdb_ewa
