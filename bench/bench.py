@@ -440,15 +440,16 @@ def cmd_targets(args):
 
 
 def cmd_cull(args):
-    """Issue 37's streamed frame: --cull on against --cull off (the whole frame) and vdb_render's
+    """The streamed frame: --cull on against --cull off (the whole frame) and vdb_render's
     defaults, interleaved round by round, from each scene's README camera and from the default
-    camera (vdb_render's framing); the counters of the streamed frame and the two images' PSNR."""
+    camera (vdb_render's framing); the counters of the streamed frame (bricks, kernels, light-map
+    rays marched on demand) and the two images' PSNR."""
     tmp = tempfile.mkdtemp(prefix="vdb_ewa_cull_")
     print(f"# --cull on / off against vdb_render's defaults, {args.res}, median of {args.repeat} interleaved rounds, "
           f"{os.cpu_count()} cores")
     print("| scene | camera | vdb_render (s) | cull off (s) | cull on (s) | on vs off | on vs vdb_render | bricks expanded / hidden / outside "
-          "| kernels on / off | stages on: kernels, shadows, project, rasterise | peak MB on / off | PSNR on vs off (dB) |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+          "| kernels on / off | light rays marched on | stages on: kernels, shadows, project, rasterise | peak MB on / off | PSNR on vs off (dB) |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for label, path, cam in SCENES:
         if not os.path.exists(path) or "grids/" in label:
             continue
@@ -468,11 +469,13 @@ def cmd_cull(args):
             m = re.search(r"(\d+) bricks in \d+ depth windows?, (\d+) expanded, (\d+) hidden behind opaque tiles, (\d+) outside", outs["on"])
             bricks = f"{m.group(2)} / {m.group(3)} / {m.group(4)} of {m.group(1)}" if m else "not streamed"
             kernels = [re.search(r"; (\d+) kernels \(", outs[k]).group(1) for k in ("on", "off")]
+            lm = re.search(r"light on demand: (\d+) of (\d+) light-map rays marched", outs["on"])
+            light = f"{int(lm.group(1)) / int(lm.group(2)):.0%} of {lm.group(2)}" if lm else "all"
             peaks = [re.search(r"peak memory (\d+) MB", outs[k]).group(1) for k in ("on", "off")]
             st = stages(outs["on"])
             psnr = diff(os.path.join(tmp, "on.exr"), os.path.join(tmp, "off.exr"))[1]
             print(f"| {label} | {camera} | {med['vdb_render']:.2f} | {med['off']:.2f} | {med['on']:.2f} | {med['off'] / med['on']:.2f}x | "
-                  f"{med['vdb_render'] / med['on']:.1f}x | {bricks} | {kernels[0]} / {kernels[1]} | {st.get('kernels', nan):.3f}, "
+                  f"{med['vdb_render'] / med['on']:.1f}x | {bricks} | {kernels[0]} / {kernels[1]} | {light} | {st.get('kernels', nan):.3f}, "
                   f"{st.get('shadows', nan):.3f}, {st.get('project', nan):.3f}, {st.get('rasterise', nan):.3f} | {peaks[0]} / {peaks[1]} | "
                   f"{psnr:.1f} |", flush=True)
 

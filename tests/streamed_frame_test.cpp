@@ -231,8 +231,9 @@ TEST(StreamedFrame, EqualsTheWholeFrameOnTheSharedAssets)
 
 
 // Light on demand (lib/raster/light_on_demand.h): one splat at a time, every light-map ray a
-// lookup can read (the four around a point on a pixel ray of the splat's box, at a depth within
-// its slabs) is marched, for a light across the view; and far fewer than all rays are.
+// lookup can read (the four around a point on a pixel ray of the splat's box, at a distance
+// within its slabs) is marched, for a light across the view, from a perspective and an
+// orthographic camera; and far fewer than all rays are.
 TEST(StreamedFrame, LightOnDemandMarchesEveryRayItsSplatsLookUp)
 {
     const GridSource cloud = makeSampleGrid(SampleGrid::Cloud, 0.05);
@@ -240,42 +241,48 @@ TEST(StreamedFrame, LightOnDemandMarchesEveryRayItsSplatsLookUp)
     RenderSettings s;
     s.lights[0].direction = Vec3d(1.0, 0.3, 0.2); // across the view: deeper points move across the map
     s.shadow.resolution = 0.25;                   // rays a quarter voxel apart: many tiles of rays
-    const Camera camera(lookAtCamera(Vec3d(0.3, 0.2, 1.2), Vec3d(0.0), 128, 96), cloud.worldCentre());
     const detail::KernelSet kernels = detail::extractKernels(fog, s);
-    const detail::SplatSet all = detail::projectSplats(fog, kernels, {}, camera, s);
-    ASSERT_GT(all.splats.size(), 1000u);
+    const Camera cameras[] = {Camera(lookAtCamera(Vec3d(0.3, 0.2, 1.2), Vec3d(0.0), 128, 96), cloud.worldCentre()),
+        Camera(orthoDownZ(0.0, 0.0, 5.0, 3.0, 96), cloud.worldCentre())};
     std::uint64_t checked = 0, spanning = 0;
-    for (std::size_t n = 0; n < all.splats.size(); n += 97) {
-        detail::SplatSet one;
-        one.slabs = all.slabs;
-        one.splats.push_back(all.splats[n]);
-        std::vector<detail::LightMap> lights;
-        lights.emplace_back(fog, s, 0, nullptr, detail::kLightMapPointBudget, true);
-        detail::lightWindow(one, camera, lights, nullptr);
-        const detail::LightMap& map = lights[0];
-        ASSERT_LT(map.raysMarched(), map.rays() / 4) << "splat " << n;
-        const detail::Splat& sp = one.splats[0];
-        spanning += sp.slabCount > 1 ? 1 : 0;
-        const double z0 = all.slabs.start(sp.firstSlab), z1 = all.slabs.start(sp.firstSlab + std::int64_t(sp.slabCount));
-        for (int y = sp.y0; y <= sp.y1; y += std::max(1, (sp.y1 - sp.y0) / 4))
-            for (int x = sp.x0; x <= sp.x1; x += std::max(1, (sp.x1 - sp.x0) / 4))
-                for (int k = 0; k <= 8; ++k) {
-                    Vec3d origin, direction;
-                    camera.worldRay(x + 0.5, y + 0.5, origin, direction);
-                    const Vec3d forward = glm::transpose(camera.cameraFromWorld())[2];
-                    const double z = z0 + (z1 - z0) * k / 8.0;
-                    const double t = (z - glm::dot(forward, origin - camera.eye())) / glm::dot(forward, direction);
-                    const Vec3d q = map.coordinates(origin + t * direction);
-                    const int i = int(std::floor(q.x)), j = int(std::floor(q.y));
-                    for (int dj = 0; dj <= 1; ++dj)
-                        for (int di = 0; di <= 1; ++di) {
-                            const int ri = i + di, rj = j + dj;
-                            if (ri < 0 || rj < 0 || ri >= map.raysU() || rj >= map.raysV()) continue;
-                            ASSERT_TRUE(map.marched(ri, rj)) << "splat " << n << " pixel " << x << "," << y << " depth " << z << ": ray " << ri << "," << rj;
-                            ++checked;
-                        }
-                }
+    for (const Camera& camera : cameras) {
+        const bool perspective = camera.projection() == Projection::Perspective;
+        const detail::SplatSet all = detail::projectSplats(fog, kernels, {}, camera, s);
+        ASSERT_GT(all.splats.size(), 1000u);
+        for (std::size_t n = 0; n < all.splats.size(); n += 97) {
+            detail::SplatSet one;
+            one.slabs = all.slabs;
+            one.splats.push_back(all.splats[n]);
+            std::vector<detail::LightMap> lights;
+            lights.emplace_back(fog, s, 0, nullptr, detail::kLightMapPointBudget, true);
+            detail::lightWindow(one, camera, lights, nullptr);
+            const detail::LightMap& map = lights[0];
+            ASSERT_LT(map.raysMarched(), map.rays() / 4) << "splat " << n;
+            const detail::Splat& sp = one.splats[0];
+            spanning += sp.slabCount > 1 ? 1 : 0;
+            const double z0 = all.slabs.start(sp.firstSlab), z1 = all.slabs.start(sp.firstSlab + std::int64_t(sp.slabCount));
+            for (int y = sp.y0; y <= sp.y1; y += std::max(1, (sp.y1 - sp.y0) / 4))
+                for (int x = sp.x0; x <= sp.x1; x += std::max(1, (sp.x1 - sp.x0) / 4))
+                    for (int k = 0; k <= 8; ++k) {
+                        // A perspective camera's slabs are in distance along the pixel's ray, an
+                        // orthographic one's in camera depth.
+                        Vec3d origin, direction;
+                        camera.worldRay(x + 0.5, y + 0.5, origin, direction);
+                        const double z = z0 + (z1 - z0) * k / 8.0;
+                        const Vec3d p = perspective ? camera.eye() + z * glm::normalize(direction)
+                                                    : origin + (z - camera.cameraFromWorldPoint(origin).z) * direction;
+                        const Vec3d q = map.coordinates(p);
+                        const int i = int(std::floor(q.x)), j = int(std::floor(q.y));
+                        for (int dj = 0; dj <= 1; ++dj)
+                            for (int di = 0; di <= 1; ++di) {
+                                const int ri = i + di, rj = j + dj;
+                                if (ri < 0 || rj < 0 || ri >= map.raysU() || rj >= map.raysV()) continue;
+                                ASSERT_TRUE(map.marched(ri, rj)) << "splat " << n << " pixel " << x << "," << y << " distance " << z << ": ray " << ri << "," << rj;
+                                ++checked;
+                            }
+                    }
+        }
     }
-    EXPECT_GT(checked, 1000u);
-    EXPECT_GT(spanning, 10u); // splats over several slabs, whose deeper lookups move across the map
+    EXPECT_GT(checked, 2000u);
+    EXPECT_GT(spanning, 20u); // splats over several slabs, whose deeper lookups move across the map
 }

@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cmath>
 
 namespace vdb_ewa {
 namespace detail {
@@ -15,7 +16,7 @@ std::uint64_t lightWindow(const SplatSet& window, const Camera& camera, std::vec
     const Vec2d centre = camera.principalPoint();
     const double f = camera.focalPixels();
     const bool perspective = camera.projection() == Projection::Perspective;
-    // The world point at raster (x, y) and camera depth z (the slabs' coordinate, t2).
+    // The world point at raster (x, y) and camera depth z (t2).
     const auto worldAt = [&](double x, double y, double z) {
         const Vec2d plane = (Vec2d(x, y) - centre) / f;
         const Vec3d t = perspective ? Vec3d(plane.x * z, plane.y * z, z) : Vec3d(plane.x, plane.y, z);
@@ -27,7 +28,17 @@ std::uint64_t lightWindow(const SplatSet& window, const Camera& camera, std::vec
                 const Splat& sp = window.splats[s];
                 // Pixel edges around the box (lookups are at pixel centres), the slabs' planes.
                 const double x[2] = {double(sp.x0), double(sp.x1) + 1.0}, y[2] = {double(sp.y0), double(sp.y1) + 1.0};
-                const double z[2] = {window.slabs.start(sp.firstSlab), window.slabs.start(sp.firstSlab + std::int64_t(sp.slabCount))};
+                double z[2] = {window.slabs.start(sp.firstSlab), window.slabs.start(sp.firstSlab + std::int64_t(sp.slabCount))};
+                if (perspective) {
+                    // A perspective camera's slabs are in distance s along the pixel's ray: there
+                    // t2 = s cos(theta), between s0 cos(theta) at the box's widest corner and s1.
+                    double widest = 1.0;
+                    for (int c = 0; c < 4; ++c) {
+                        const Vec2d plane = (Vec2d(x[c & 1], y[c >> 1]) - centre) / f;
+                        widest = std::min(widest, 1.0 / std::sqrt(1.0 + glm::dot(plane, plane)));
+                    }
+                    z[0] *= widest;
+                }
                 Vec3d lo(1e300), hi(-1e300);
                 for (int c = 0; c < 8; ++c) {
                     const Vec3d q = light.coordinates(worldAt(x[c & 1], y[(c >> 1) & 1], z[c >> 2]));

@@ -2,8 +2,10 @@
 /// @brief Light on demand (docs/architecture.md#light-on-demand): before a window of the
 ///        streamed frame is composited, the light-map rays its splats can look up are marked
 ///        and marched, and no others. A splat is looked up on the pixel rays of its box, in the
-///        slabs it overlaps: the frustum piece between those slabs' planes over the box, whose
-///        eight corners bound it in the light map's (linear) coordinates.
+///        slabs it overlaps. Those points lie in a frustum piece over the box between two planes
+///        of camera depth (a perspective camera's slabs are distances along the ray: the near
+///        plane is taken at the nearest slab distance times the box's smallest cos(theta)),
+///        whose eight corners bound it in the light map's (linear) coordinates.
 #pragma once
 
 #include "projection/projection.h"
