@@ -43,6 +43,10 @@ done
 
 echo "== installed CLI"
 "$prefix/bin/vdb_ewa" --version
+# A .png goes through OpenImageIO's module, libvdb_ewa_images.so, found beside the installed library.
+[ -f "$prefix/$libdir/libvdb_ewa_images.so" ] || { echo "FAIL: libvdb_ewa_images.so is not installed" >&2; exit 1; }
+LD_LIBRARY_PATH= "$prefix/bin/vdb_ewa" "$here/../../grids/cloud.vdb" "$work/installed.png" -res 32x18 -q || exit 1
+[ -s "$work/installed.png" ] || { echo "FAIL: the installed CLI wrote no .png" >&2; exit 1; }
 
 # The Python module, where the build has one: imported from the prefix alone (its RPATH finds
 # libvdb_ewa.so there), its stub beside it.
