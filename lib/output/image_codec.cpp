@@ -38,20 +38,15 @@ const ImageCodec* load(std::string& why)
         beside.push_back((folder / kModule).string());
         beside.push_back((folder.parent_path() / "lib" / kModule).string()); // the build tree's tests/
     }
-    std::vector<std::string> candidates;
-    for (const std::string& path : beside) {
+    // Only there: not through the dynamic loader's search path, where another build's or
+    // version's module could be found first.
+    for (const std::string& candidate : beside) {
         std::error_code ec;
-        if (std::filesystem::exists(path, ec)) candidates.push_back(path);
-    }
-    candidates.push_back(kModule); // the loader's search path
-    for (const std::string& candidate : candidates) {
+        if (!std::filesystem::exists(candidate, ec)) continue;
         void* handle = dlopen(candidate.c_str(), RTLD_NOW | RTLD_LOCAL);
         if (!handle) {
-            if (candidate == kModule && candidates.size() > 1) continue; // keep the error of the one found
             const char* error = dlerror();
-            why = candidate == kModule ? std::string(kModule) + " is not in " + (folder.empty() ? std::string("vdb_ewa's folder") : folder.string()) +
-                                             " nor on the loader's path"
-                                       : std::string(error ? error : candidate.c_str());
+            why = error ? error : candidate + ": cannot be loaded";
             continue;
         }
         using Entry = const ImageCodec* (*)();
@@ -63,6 +58,7 @@ const ImageCodec* load(std::string& why)
         }
         return entry(); // the handle stays open for the process's life
     }
+    if (why.empty()) why = std::string(kModule) + " is not in " + (folder.empty() ? std::string("vdb_ewa's folder") : folder.string());
     return nullptr;
 }
 

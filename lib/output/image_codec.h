@@ -44,8 +44,8 @@ struct ImageCodec
 #define VDB_EWA_IMAGE_CODEC_ENTRY vdb_ewa_image_codec_v1
 
 /// The module's codec, loaded on first use (thread-safe): from the folder of the binary that
-/// holds this code (libvdb_ewa.so, or a program linked statically), then that folder's ../lib,
-/// then the dynamic loader's search path. Throws Error (an installation fault, the CLI's exit
+/// holds this code (libvdb_ewa.so, or a program linked statically), then that folder's ../lib;
+/// never through the dynamic loader's search path. Throws Error (an installation fault, the CLI's exit
 /// 4) naming the module if none loads.
 const ImageCodec& imageCodec();
 
