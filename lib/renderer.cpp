@@ -135,6 +135,15 @@ void splatWarnings(std::uint64_t beforeNear, std::uint64_t clampedNear, std::uin
 
 /// Each light's light map. They take at most a quarter of the budget (4 bytes a lattice point),
 /// shared between the lights; a warning where that coarsened them.
+/// The light maps' rays in all and marched, into @a stats.
+void addLightStats(const std::vector<detail::LightMap>& lights, RenderStats& stats)
+{
+    for (const detail::LightMap& light : lights) {
+        stats.lightRays += light.rays();
+        stats.lightRaysMarched += light.raysMarched();
+    }
+}
+
 /// The lights' maps: marched whole, or @a onDemand (the streamed frame marches what its windows need).
 std::vector<detail::LightMap> lightMaps(const RenderSettings& settings, const GridSource::Impl& g, const detail::MemoryBudget& budget,
     detail::Progress& progress, std::vector<std::string>& warnings, bool onDemand = false)
@@ -272,10 +281,7 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     stats.kernelSeconds = timer.lap();
     progress.stage(10, 35);
     const std::vector<detail::LightMap> lights = lightMaps(mSettings, g, budget, progress, stats.warnings);
-    for (const detail::LightMap& light : lights) {
-        stats.lightRays += light.rays();
-        stats.lightRaysMarched += light.raysMarched();
-    }
+    addLightStats(lights, stats);
     stats.shadowSeconds = timer.lap();
     if (emittersLowered) {
         std::ostringstream w;
@@ -489,10 +495,7 @@ void Renderer::renderStreamedFogVolume(const GridSource::Impl& g, const Camera& 
     frame = raster.finish(rasterStats);
     stats.rasterSeconds += timer.lap();
     addRasterStats(rasterStats, stats);
-    for (const detail::LightMap& light : lights) {
-        stats.lightRays += light.rays();
-        stats.lightRaysMarched += light.raysMarched();
-    }
+    addLightStats(lights, stats);
     if (outOfOrder) stats.warnings.push_back(countLine(outOfOrder, "splats started in front of their window (a bound of the streamed frame is wrong; --cull off renders without it)"));
     if (g.activeVoxels == 0 && g.activeTiles == 0) stats.warnings.push_back("the grid has no active values: the image is empty");
     // Counted in the bricks expanded: a hidden brick's values are never read.
