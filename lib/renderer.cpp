@@ -9,9 +9,10 @@
 #include "reference/reference.h"
 #include "shading/shading.h"
 #include "source/source.h"
-#include "support/huge_page_allocator.h"
 #include "support/memory_budget.h"
 #include "support/progress.h"
+
+#include <sys/resource.h>
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -398,9 +399,12 @@ void Renderer::renderStreamedFogVolume(const GridSource::Impl& g, const Camera& 
     const detail::UnitKernelRule units{mSettings, &lod};
     // Windows grow front to back: the first holds about 1/kFirstWindow of the visible voxels,
     // each next one kGrowth times more (fine windows where the front turns opaque, few in all:
-    // each costs a pass over the open tiles), none more than the memory budget's share.
-    constexpr double kFirstWindow = 256.0, kGrowth = 2.0, kSmallestWindow = 16384.0;
-    const double mostVoxels = std::max(budget.itemsWithin(0.25, detail::kBytesPerKernel), 4096.0);
+    // each costs a pass over the open tiles), none more than kWindowBytes of kernels in flight
+    // or the memory budget's share. On the 10M-voxel cloud at 1080p, windows of 256, 128 and
+    // 64 MiB peaked at 482, 408 and 387 MB, and 128 was the fastest
+    // (docs/performance.md#memory-bounded-by-the-window).
+    constexpr double kFirstWindow = 256.0, kGrowth = 2.0, kSmallestWindow = 16384.0, kWindowBytes = 128.0 * 1024.0 * 1024.0;
+    const double mostVoxels = std::max(std::min(budget.itemsWithin(0.25, detail::kBytesPerKernel), kWindowBytes / detail::kBytesPerKernel), 4096.0);
     double windowVoxels = std::min(std::max(voxels / kFirstWindow, kSmallestWindow), mostVoxels), done = 0.0;
     constexpr double kFewOpaque = 0.05;
     const double tiles = double(raster.tilesX()) * double(raster.tilesY());
@@ -454,6 +458,7 @@ void Renderer::renderStreamedFogVolume(const GridSource::Impl& g, const Camera& 
             for (const detail::Splat& sp : window.splats) outOfOrder += sp.firstSlab < windowStart;
         }
         detail::appendSplats(window, carried);
+        stats.splatsInFlight = std::max<std::uint64_t>(stats.splatsInFlight, window.splats.size());
         stats.projectSeconds += timer.lap();
         // Ending a window here leaves the slabs of the splats crossing its end pending in every
         // tile they cover, copied aside until the next window. Where a few large splats (near
@@ -525,11 +530,6 @@ Frame Renderer::renderFrame(const GridSource& grid, const Camera& camera, const 
         }
     } bracket(interrupter, grid.name());
     detail::Progress progress(interrupter);
-    // Large blocks kept for reuse between the stages and windows go back at the end.
-    struct ReleaseBlocks
-    {
-        ~ReleaseBlocks() { detail::releaseCachedBlocks(); }
-    } releaseBlocks;
     RenderStats stats;
     Frame frame;
     const GridSource::Impl& g = grid.impl();
@@ -565,6 +565,8 @@ Frame Renderer::renderFrame(const GridSource& grid, const Camera& camera, const 
     if (!grid.isLevelSet() && mSettings.surface.isovalue != surfaceDefaults.isovalue) {
         stats.warnings.push_back("--isovalue changes nothing here: it picks a level set's surface; a fog volume's surface is --iso");
     }
+    rusage usage{};
+    if (getrusage(RUSAGE_SELF, &usage) == 0) stats.peakResidentBytes = std::uint64_t(usage.ru_maxrss) * 1024u; // KiB on Linux
     if (statsOut) *statsOut = std::move(stats);
     return frame;
 }

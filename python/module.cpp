@@ -118,6 +118,18 @@ py::dict statsOf(const RenderStats& s)
     d["merged_kernels"] = s.mergedKernels;
     d["kernels_culled"] = s.kernelsCulled;
     d["splats"] = s.splats;
+    d["splat_tile_pairs"] = s.splatTilePairs;
+    d["splat_tile_pairs_skipped"] = s.splatTilePairsSkipped;
+    d["streamed"] = s.streamed;
+    d["bricks"] = s.bricks;
+    d["bricks_expanded"] = s.bricksExpanded;
+    d["bricks_hidden"] = s.bricksHidden;
+    d["bricks_outside"] = s.bricksOutside;
+    d["depth_windows"] = s.windows;
+    d["splats_in_flight"] = s.splatsInFlight;
+    d["light_rays"] = s.lightRays;
+    d["light_rays_marched"] = s.lightRaysMarched;
+    d["peak_resident_bytes"] = s.peakResidentBytes;
     d["raster_backend"] = s.rasterBackend;
     return d;
 }

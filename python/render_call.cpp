@@ -230,7 +230,7 @@ std::unique_ptr<ParsedOptions> RenderedFrame::prepared(const std::string& path) 
 
 cli::Attributes RenderedFrame::metadata() const
 {
-    return options->options.headerAttributes(grid, camera, given, input, seconds, std::nullopt);
+    return options->options.headerAttributes(grid, camera, given, input, seconds, std::nullopt, stats);
 }
 
 void RenderedFrame::write(const std::string& path) const
@@ -240,7 +240,7 @@ void RenderedFrame::write(const std::string& path) const
     const std::string& preview = options.output().previewOption();
     options.output().refuseInputs(path, preview, {input, options.environment(), options.cameraFile()});
     Frame copy = working; // write() converts in place
-    options.output().write(copy, camera, path, preview, options.headerAttributes(grid, camera, given, input, seconds, std::nullopt));
+    options.output().write(copy, camera, path, preview, options.headerAttributes(grid, camera, given, input, seconds, std::nullopt, stats));
 }
 
 std::shared_ptr<RenderedFrame> render(const py::object& gridOrPath, const py::object& progress,

@@ -50,7 +50,7 @@ protected:
 };
 
 /// Two image files with the same channels bit for bit and the same attributes, but for the
-/// render time (vdb_ewa/render-seconds).
+/// render time and the process's peak memory (vdb_ewa/render-seconds, vdb_ewa/peak-*).
 void expectSameFile(const std::string& a, const std::string& b)
 {
     const ImageFile x = readImageFile(a), y = readImageFile(b);
@@ -60,7 +60,8 @@ void expectSameFile(const std::string& a, const std::string& b)
     const auto attributes = [](const OIIO::ImageSpec& spec) {
         std::map<std::string, std::string> out;
         for (const OIIO::ParamValue& p : spec.extra_attribs) {
-            if (p.name() != "vdb_ewa/render-seconds") out[p.name().string()] = p.get_string();
+            const std::string name = p.name().string();
+            if (name != "vdb_ewa/render-seconds" && name.rfind("vdb_ewa/peak-", 0) != 0) out[name] = p.get_string();
         }
         return out;
     };
@@ -97,6 +98,21 @@ TEST_F(Cli, RendersAnExr)
     const double mb = std::stod(r.out.substr(at + 12));
     EXPECT_GT(mb, 5.0);
     EXPECT_LT(mb, 5000.0);
+    // The header's counters are -v's: kernels made and projected, the streamed frame's bricks,
+    // the light-map rays marched, the peak memory per active voxel.
+    const auto counter = [&](const char* name) { return std::stod(file.spec.get_string_attribute(std::string("vdb_ewa/") + name, "-1")); };
+    const double voxels = counter("active-voxels");
+    EXPECT_NE(r.out.find(std::to_string(std::llround(voxels)) + " active voxels"), std::string::npos) << r.out;
+    EXPECT_GT(counter("kernels"), 0.0);
+    EXPECT_GT(counter("kernels-projected"), 0.0);
+    EXPECT_LE(counter("kernels-projected"), counter("kernels"));
+    EXPECT_LE(counter("splat-tile-pairs-composited"), counter("splat-tile-pairs"));
+    EXPECT_GT(counter("bricks-expanded"), 0.0);
+    EXPECT_EQ(counter("bricks-expanded") + counter("bricks-hidden") + counter("bricks-outside"), counter("bricks"));
+    EXPECT_GT(counter("light-rays-marched"), 0.0);
+    EXPECT_LE(counter("light-rays-marched"), counter("light-rays"));
+    EXPECT_GT(counter("peak-memory-mb"), 5.0);
+    EXPECT_NEAR(counter("peak-bytes-per-active-voxel"), counter("peak-memory-mb") * 1e6 / voxels, 0.01 * counter("peak-bytes-per-active-voxel") + 0.1);
 }
 
 TEST_F(Cli, VdbRenderCommandLineWorksWithoutASubcommand)

@@ -195,6 +195,28 @@ TEST(StreamedFrame, RendersWithinABudgetTheWholeFrameExceeds)
     EXPECT_GT(alphaSum(whole), 0.5 * 64 * 48);
 }
 
+// Memory follows the window, not the grid: a 2.1M-voxel block whose kernels (256 bytes each,
+// 537 MB) fit the machine's budget many times over is still composited in windows of about
+// kWindowBytes (128 MiB, 524,288 kernels), plus the brick layer that ends a window on one slab,
+// halo kernels and the splats carried from the window before: 679k splats at most. Without
+// that bound the block, translucent, goes in one window after the first three: 2.0M splats.
+TEST(StreamedFrame, HoldsAWindowOfSplatsWhateverTheGridsSize)
+{
+    const GridSource block = gridSourceFromOpenVDB(makeFogGrid({0, 0, 0}, {127, 127, 127}, [](const openvdb::Coord& c) {
+        return 0.02f + 0.001f * float((c.x() * 7 + c.y() * 3 + c.z()) % 20); // above --cutoff, translucent
+    }, 0.01));
+    const Camera camera(lookAtCamera(Vec3d(0.64, 0.64, 4.0), Vec3d(0.64), 48, 48), block.worldCentre());
+    RenderSettings s;
+    s.splat.lodPixels = 0.0; // a kernel a voxel
+    s.lights.clear();
+    RenderStats stats;
+    Renderer(s).render(block, camera, &stats);
+    ASSERT_TRUE(stats.streamed);
+    EXPECT_GE(stats.splats, 2000000u);
+    EXPECT_GT(stats.splatsInFlight, 100000u);
+    EXPECT_LE(stats.splatsInFlight, 524288u * 3u / 2u);
+}
+
 // Every shared fog asset, from the assets' README cameras, at a small size: the streamed
 // frame is the whole frame within 1e-5. Skipped without the assets.
 TEST(StreamedFrame, EqualsTheWholeFrameOnTheSharedAssets)

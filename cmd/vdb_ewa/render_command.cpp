@@ -269,7 +269,7 @@ private:
             for (const std::string& w : stats.warnings) report.line("vdb_ewa: warning: " + input + ": " + w, stderr);
         }
         const auto t1 = std::chrono::steady_clock::now();
-        const Attributes attributes = mOptions.headerAttributes(grid, camera, rs, input, seconds(t0), frameOf(frameNumber));
+        const Attributes attributes = mOptions.headerAttributes(grid, camera, rs, input, seconds(t0), frameOf(frameNumber), stats);
         try {
             mOptions.output().write(frame, camera, output, preview, attributes);
         } catch (const IoError& e) {
@@ -339,7 +339,8 @@ private:
                   << s.footprintSamples << " footprint samples, " << s.slabComposites << " slab composites (" << s.rasterBackend << " rasteriser)";
         if (s.streamed) {
             out << "; streamed front to back: " << counted(s.bricks, "brick") << " in " << counted(s.windows, "depth window") << ", "
-                << s.bricksExpanded << " expanded, " << s.bricksHidden << " hidden behind opaque tiles, " << s.bricksOutside << " outside the frame";
+                << s.bricksExpanded << " expanded, " << s.bricksHidden << " hidden behind opaque tiles, " << s.bricksOutside << " outside the frame, "
+                << s.splatsInFlight << " splats in flight at most";
             if (s.lightRays > 0) out << "; light on demand: " << s.lightRaysMarched << " of " << s.lightRays << " light-map rays marched";
         }
         out << "\n"
@@ -347,6 +348,7 @@ private:
                   << s.kernelSeconds << ", shadows " << s.shadowSeconds << ", project " << s.projectSeconds
                   << ", rasterise " << s.rasterSeconds << ", write " << writeSeconds << "; peak memory "
                   << std::setprecision(0) << peakMegabytes() << " MB";
+        if (s.activeVoxels > 0) out << " (" << std::setprecision(1) << peakMegabytes() * 1e6 / double(s.activeVoxels) << " bytes per active voxel)";
         return out.str();
     }
 

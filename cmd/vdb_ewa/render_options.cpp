@@ -326,7 +326,7 @@ GridSource RenderOptions::withExtraGrids(const GridSource& opened) const
 }
 
 Attributes RenderOptions::headerAttributes(const GridSource& grid, const Camera& camera, const RenderSettings& settings,
-    const std::string& input, double renderSeconds, std::optional<int> frame) const
+    const std::string& input, double renderSeconds, std::optional<int> frame, const RenderStats& stats) const
 {
     // What a lighter looks for in a file: the version, preset, host and render time.
     Attributes attributes{{"software", std::string("vdb_ewa ") + versionString()}, {"vdb_ewa/input", input},
@@ -340,7 +340,29 @@ Attributes RenderOptions::headerAttributes(const GridSource& grid, const Camera&
             // two thread counts the same (but for the render time).
             if (key != "threads") attributes.emplace_back("vdb_ewa/" + key, value);
         }
+    for (auto& counter : statsAttributes(stats)) attributes.push_back(std::move(counter));
     return attributes;
+}
+
+Attributes RenderOptions::statsAttributes(const RenderStats& s)
+{
+    const auto n = [](std::uint64_t v) { return std::to_string(v); };
+    Attributes out{{"active-voxels", n(s.activeVoxels)}, {"active-tiles", n(s.activeTiles)}, {"kernels", n(s.kernels)},
+        {"kernels-projected", n(s.splats)}, {"splat-tile-pairs", n(s.splatTilePairs)},
+        {"splat-tile-pairs-composited", n(s.splatTilePairs - std::min(s.splatTilePairs, s.splatTilePairsSkipped))}};
+    if (s.streamed) {
+        out.insert(out.end(), {{"bricks", n(s.bricks)}, {"bricks-expanded", n(s.bricksExpanded)}, {"bricks-hidden", n(s.bricksHidden)},
+                                  {"bricks-outside", n(s.bricksOutside)}, {"depth-windows", n(s.windows)},
+                                  {"splats-in-flight", n(s.splatsInFlight)}});
+    }
+    if (s.lightRays > 0) out.insert(out.end(), {{"light-rays", n(s.lightRays)}, {"light-rays-marched", n(s.lightRaysMarched)}});
+    // Not deterministic (the process's, and the allocator's): left out where files are compared.
+    out.emplace_back("peak-memory-mb", fmt(std::round(double(s.peakResidentBytes) / 1e5) / 10.0));
+    if (s.activeVoxels > 0) {
+        out.emplace_back("peak-bytes-per-active-voxel", fmt(std::round(double(s.peakResidentBytes) / double(s.activeVoxels) * 10.0) / 10.0));
+    }
+    for (auto& [key, value] : out) key = "vdb_ewa/" + key;
+    return out;
 }
 
 std::vector<Attributes> RenderOptions::resolvedOptions(const GridSource& grid, const Camera& camera, const RenderSettings& rs) const

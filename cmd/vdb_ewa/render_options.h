@@ -56,9 +56,14 @@ public:
 
     /// The EXR header of a frame rendered from @a input (empty for a host's grid) in
     /// @a renderSeconds: the software, input, grid, preset, host, time, @a frame (of a
-    /// sequence), the camera's exact record and every resolved option as vdb_ewa/NAME.
+    /// sequence), the camera's exact record, every resolved option as vdb_ewa/NAME, and the
+    /// render's counters (statsAttributes).
     Attributes headerAttributes(const GridSource& grid, const Camera& camera, const RenderSettings& settings,
-        const std::string& input, double renderSeconds, std::optional<int> frame) const;
+        const std::string& input, double renderSeconds, std::optional<int> frame, const RenderStats& stats) const;
+    /// The counters a render reports (what -v prints), as vdb_ewa/NAME: what was read, built,
+    /// projected, binned and composited, the streamed frame's bricks and the light-map rays
+    /// marched, and the peak resident memory, also per active voxel (docs/output.md#the-exr-header).
+    static Attributes statsAttributes(const RenderStats& stats);
     /// The resolved options in groups (camera, optical model, method and splatting, output),
     /// as (option, value): printed by -v and written to the EXR header.
     std::vector<Attributes> resolvedOptions(const GridSource& grid, const Camera& camera, const RenderSettings& settings) const;

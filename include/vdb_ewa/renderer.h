@@ -52,8 +52,12 @@ struct RenderStats
     std::uint64_t bricksHidden = 0;   ///< streamed frame: bricks behind opaque screen tiles, never expanded
     std::uint64_t bricksExpanded = 0; ///< streamed frame: bricks whose kernels were built
     std::uint64_t windows = 0;        ///< streamed frame: depth windows composited
+    std::uint64_t splatsInFlight = 0; ///< streamed frame: the most splats one window composited (what its memory holds)
     std::uint64_t lightRays = 0;      ///< light-map rays of all lights' lattices
     std::uint64_t lightRaysMarched = 0; ///< of them, marched (all but where the streamed frame's light on demand needed none)
+    /// The process's peak resident memory when the render ended (getrusage: what the render
+    /// held at most, with the process's own, and earlier renders' where they held more).
+    std::uint64_t peakResidentBytes = 0;
     std::string rasterBackend = "scalar"; ///< fog volumes: the slab compositor that ran ("scalar", or the SIMD target: "AVX3" (AVX-512), "AVX2")
     std::vector<std::string> warnings; ///< what was clamped or skipped, one line each
 };

@@ -151,7 +151,13 @@ LightMap::LightMap(const GridSource::Impl& grid, const RenderSettings& settings,
     mTilesU = (mNu + kRayTile - 1) / kRayTile;
     mTilesV = (mNv + kRayTile - 1) / kRayTile;
     mTileState = std::make_unique<std::atomic<std::uint8_t>[]>(std::size_t(mTilesU) * std::size_t(mTilesV));
-    if (onDemand) return;
+    if (onDemand) {
+        // Room for every lattice point, mapped but not touched until marched: windows append
+        // their rays without moving what earlier windows marched (a copy of the whole map per
+        // window, 200 windows on a 100M-voxel cloud).
+        mDepth.reserve(std::size_t(std::min(latticePoints(), double(std::numeric_limits<std::int32_t>::max()))));
+        return;
+    }
     for (std::size_t t = 0; t < std::size_t(mTilesU) * std::size_t(mTilesV); ++t) mTileState[t].store(kRequired, std::memory_order_relaxed);
     march(progress, true);
 }

@@ -6,9 +6,7 @@
 #include <cstdint>
 #include <fstream>
 #include <sstream>
-#include <mutex>
 #include <string>
-#include <vector>
 
 namespace vdb_ewa {
 namespace detail {
@@ -64,31 +62,10 @@ bool adviseHugePages(std::size_t bytes)
     return freeHugePages() >= bytes / kHugePage + 256;
 }
 
-/// Blocks given back, kept for the next request of their size class (a streamed frame's windows
-/// allocate alike arrays again and again; a fresh mapping costs a page fault every 4 KiB
-/// touched, 5-10 us each on a virtual machine), up to kCachedBytes in all.
-constexpr std::size_t kCachedBytes = std::size_t(1) << 30;
-
-struct BlockCache
+/// The mapped size of a block of @a bytes: whole huge pages.
+std::size_t mappedSize(std::size_t bytes)
 {
-    std::mutex mutex;
-    std::vector<std::pair<void*, std::size_t>> blocks; ///< block, its mapped size
-    std::size_t bytes = 0;
-};
-
-BlockCache& blockCache()
-{
-    static BlockCache* cache = new BlockCache; // never destroyed: blocks may be freed at exit
-    return *cache;
-}
-
-/// The mapped size of a block of @a bytes: a power of two (so that a block freed by one array
-/// serves the next of about its size).
-std::size_t sizeClass(std::size_t bytes)
-{
-    std::size_t size = kHugePage;
-    while (size < bytes) size *= 2; // bytes <= SIZE_MAX / 4 (mapHugeBlock)
-    return size;
+    return (bytes + kHugePage - 1) / kHugePage * kHugePage;
 }
 
 void* mapFresh(std::size_t size)
@@ -113,38 +90,12 @@ void* mapFresh(std::size_t size)
 void* mapHugeBlock(std::size_t bytes)
 {
     if (bytes > std::size_t(-1) / 4) throw std::bad_alloc();
-    const std::size_t size = sizeClass(bytes);
-    {
-        BlockCache& cache = blockCache();
-        const std::lock_guard<std::mutex> lock(cache.mutex);
-        for (std::size_t i = 0; i < cache.blocks.size(); ++i) {
-            if (cache.blocks[i].second != size) continue;
-            void* block = cache.blocks[i].first;
-            cache.blocks.erase(cache.blocks.begin() + std::ptrdiff_t(i));
-            cache.bytes -= size;
-            return block;
-        }
-    }
-    return mapFresh(size);
+    return mapFresh(mappedSize(bytes));
 }
 
 void unmapHugeBlock(void* block, std::size_t bytes) noexcept
 {
-    if (!block) return;
-    const std::size_t size = sizeClass(bytes);
-    BlockCache& cache = blockCache();
-    {
-        const std::lock_guard<std::mutex> lock(cache.mutex);
-        if (cache.bytes + size <= kCachedBytes) {
-            try {
-                cache.blocks.emplace_back(block, size);
-                cache.bytes += size;
-                return;
-            } catch (...) {
-            }
-        }
-    }
-    munmap(block, size);
+    if (block) munmap(block, mappedSize(bytes));
 }
 
 void adviseHugePagesFor(const void* data, std::size_t bytes) noexcept
@@ -159,15 +110,6 @@ void adviseHugePagesFor(const void* data, std::size_t bytes) noexcept
     (void)data;
     (void)bytes;
 #endif
-}
-
-void releaseCachedBlocks() noexcept
-{
-    BlockCache& cache = blockCache();
-    const std::lock_guard<std::mutex> lock(cache.mutex);
-    for (const auto& [block, size] : cache.blocks) munmap(block, size);
-    cache.blocks.clear();
-    cache.bytes = 0;
 }
 
 } // namespace detail
