@@ -12,14 +12,15 @@
 #include "support/memory_budget.h"
 #include "support/progress.h"
 
-#include <sys/resource.h>
-
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <limits>
 #include <optional>
 #include <sstream>
@@ -508,6 +509,22 @@ void Renderer::renderStreamedFogVolume(const GridSource::Impl& g, const Camera& 
     splatWarnings(beforeNear, clampedNear, clampedGrazing, clippedSpan, stats.warnings);
 }
 
+std::uint64_t peakResidentBytes()
+{
+    std::FILE* status = std::fopen("/proc/self/status", "r");
+    if (!status) return 0;
+    char line[256];
+    std::uint64_t kB = 0;
+    while (std::fgets(line, sizeof line, status)) {
+        if (std::strncmp(line, "VmHWM:", 6) == 0) {
+            kB = std::strtoull(line + 6, nullptr, 10);
+            break;
+        }
+    }
+    std::fclose(status);
+    return kB * 1024u;
+}
+
 Image Renderer::render(const GridSource& grid, const Camera& camera, RenderStats* statsOut, Interrupter* interrupter) const
 {
     return renderFrame(grid, camera, PassRequest{}, statsOut, interrupter).beauty;
@@ -565,8 +582,7 @@ Frame Renderer::renderFrame(const GridSource& grid, const Camera& camera, const 
     if (!grid.isLevelSet() && mSettings.surface.isovalue != surfaceDefaults.isovalue) {
         stats.warnings.push_back("--isovalue changes nothing here: it picks a level set's surface; a fog volume's surface is --iso");
     }
-    rusage usage{};
-    if (getrusage(RUSAGE_SELF, &usage) == 0) stats.peakResidentBytes = std::uint64_t(usage.ru_maxrss) * 1024u; // KiB on Linux
+    stats.peakResidentBytes = peakResidentBytes();
     if (statsOut) *statsOut = std::move(stats);
     return frame;
 }

@@ -115,6 +115,26 @@ TEST_F(Cli, RendersAnExr)
     EXPECT_NEAR(counter("peak-bytes-per-active-voxel"), counter("peak-memory-mb") * 1e6 / voxels, 0.01 * counter("peak-bytes-per-active-voxel") + 0.1);
 }
 
+// The peak memory -v and the header report is the render's own, not that of the process that
+// started it: getrusage's maxrss survives exec, and a CLI run from a Python process holding
+// 365 MB (bench.py after making a grid) reported 365 MB for every render.
+TEST_F(Cli, PeakMemoryIsTheRendersOwnNotItsParents)
+{
+    std::vector<char> held(std::size_t(800) << 20);
+    for (std::size_t i = 0; i < held.size(); i += 4096) held[i] = 1; // resident: touched
+    const std::string out = mDir.file("small.exr");
+    // Spawned straight from this process (posix_spawn), as Python's subprocess does: a shell
+    // between them would start a fresh maxrss.
+    BackgroundCli cli(mDir, {"render", mGrid, out, "--res", "32x24", "-translate", "0,0,5", "-v"});
+    ASSERT_EQ(cli.wait(), 0) << cli.err();
+    const std::string text = cli.out();
+    const std::size_t at = text.find("peak memory ");
+    ASSERT_NE(at, std::string::npos) << text;
+    EXPECT_LT(std::stod(text.substr(at + 12)), 500.0) << text;
+    EXPECT_LT(std::stod(readImageFile(out).spec.get_string_attribute("vdb_ewa/peak-memory-mb", "1e9")), 500.0);
+    EXPECT_NE(held[4096], 0);
+}
+
 TEST_F(Cli, VdbRenderCommandLineWorksWithoutASubcommand)
 {
     // A vdb_render command line as it is: no subcommand, one-dash options, -cpus, -compression.

@@ -4,6 +4,7 @@
 #include "exit_codes.h"
 
 #include <vdb_ewa/output_file.h>
+#include <vdb_ewa/renderer.h>
 
 #include <fcntl.h>
 #include <semaphore.h>
@@ -120,7 +121,8 @@ std::string clock(double seconds)
 
 double peakMegabytes()
 {
-    rusage usage{};
+    if (const std::uint64_t bytes = peakResidentBytes()) return double(bytes) / 1e6;
+    rusage usage{}; // no /proc: the process's, with what the process that exec'd it held
     return getrusage(RUSAGE_SELF, &usage) == 0 ? double(usage.ru_maxrss) * 1024.0 / 1e6 : 0.0;
 }
 
@@ -132,19 +134,6 @@ bool resetPeakMemory()
     const bool reset = ::write(fd, "5", 1) == 1;
     ::close(fd);
     return reset;
-}
-
-double peakMegabytesSinceReset()
-{
-    std::FILE* status = std::fopen("/proc/self/status", "r");
-    if (!status) return peakMegabytes();
-    char line[256];
-    double kB = -1.0;
-    while (kB < 0.0 && std::fgets(line, sizeof line, status)) {
-        if (std::strncmp(line, "VmHWM:", 6) == 0) kB = std::atof(line + 6);
-    }
-    std::fclose(status);
-    return kB < 0.0 ? peakMegabytes() : kB * 1024.0 / 1e6;
 }
 
 std::string counted(long long count, const std::string& noun)

@@ -61,16 +61,13 @@ private:
     double mStart; ///< seconds (steady clock) when the job began
 };
 
-/// The process's peak resident memory so far (getrusage's maxrss), in MB.
+/// The process's peak resident memory (vdb_ewa::peakResidentBytes: since it started, or since
+/// resetPeakMemory()), in MB.
 double peakMegabytes();
 
 /// Start a new peak (a frame's): reset the kernel's high-water mark of resident memory.
 /// @return false where it cannot (not Linux, no /proc): then the peaks are the process's.
 bool resetPeakMemory();
-
-/// The peak resident memory since resetPeakMemory() (VmHWM), in MB; peakMegabytes() where
-/// /proc cannot be read.
-double peakMegabytesSinceReset();
 
 /// "@a count @a noun" with an English plural: "1 frame", "2 frames".
 std::string counted(long long count, const std::string& noun);

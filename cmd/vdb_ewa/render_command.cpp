@@ -248,7 +248,7 @@ private:
         const std::string preview = pathOf(mOptions.output().previewOption(), frameNumber);
         mOptions.output().refuseInputs(output, preview, {input, mJob, mOptions.environment()});
         const auto t0 = std::chrono::steady_clock::now();
-        const bool framePeak = resetPeakMemory();
+        resetPeakMemory(); // each frame reports its own peak
         stallForTests("read");
         const GridSource grid = mOptions.open(input);
         const double loadSeconds = seconds(t0);
@@ -279,7 +279,7 @@ private:
         if (isSequence() && verbosity >= Verbosity::Normal) {
             std::ostringstream line;
             line << frameLogLine(frameNumber, FrameEntry::Done, output) << " (" << std::fixed << std::setprecision(2) << seconds(t0)
-                 << " s, peak " << std::setprecision(0) << (framePeak ? peakMegabytesSinceReset() : peakMegabytes()) << " MB)";
+                 << " s, peak " << std::setprecision(0) << peakMegabytes() << " MB)";
             report.line(line.str());
         }
     }

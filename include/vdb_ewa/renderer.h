@@ -55,12 +55,18 @@ struct RenderStats
     std::uint64_t splatsInFlight = 0; ///< streamed frame: the most splats one window composited (what its memory holds)
     std::uint64_t lightRays = 0;      ///< light-map rays of all lights' lattices
     std::uint64_t lightRaysMarched = 0; ///< of them, marched (all but where the streamed frame's light on demand needed none)
-    /// The process's peak resident memory when the render ended (getrusage: what the render
-    /// held at most, with the process's own, and earlier renders' where they held more).
+    /// The process's peak resident memory when the render ended (peakResidentBytes(): what the
+    /// render held at most, with the process's own, and earlier renders' where they held more).
     std::uint64_t peakResidentBytes = 0;
     std::string rasterBackend = "scalar"; ///< fog volumes: the slab compositor that ran ("scalar", or the SIMD target: "AVX3" (AVX-512), "AVX2")
     std::vector<std::string> warnings; ///< what was clamped or skipped, one line each
 };
+
+/// The process's peak resident memory in bytes: the high-water mark of its own address space
+/// (VmHWM), since it started or since /proc/self/clear_refs last reset it. Not getrusage's
+/// maxrss, which keeps the peak of the process that exec'd it: a CLI run from a Python process
+/// holding 365 MB reported 365 MB for every render. 0 where /proc cannot be read.
+VDB_EWA_API std::uint64_t peakResidentBytes();
 
 class VDB_EWA_API Renderer
 {
