@@ -1,0 +1,97 @@
+/// @file frame_parts.cpp
+#include "frame_parts.h"
+
+#include "raster/raster.h"
+#include "shading/shading.h"
+
+#include <sstream>
+
+namespace vdb_ewa {
+namespace detail {
+
+MemoryBudget budgetFor(const GridSource::Impl& grid, const RenderSettings& settings)
+{
+    return MemoryBudget(settings.maxMemory,
+        (grid.path.empty() ? std::string("host grid") : grid.path) + ": grid '" + grid.name + "'");
+}
+
+std::string countLine(std::uint64_t n, const std::string& what)
+{
+    std::ostringstream s;
+    s << n << " " << what;
+    return s.str();
+}
+
+void addRasterStats(const RasterStats& raster, RenderStats& stats)
+{
+    stats.splatTilePairs = raster.splatTilePairs;
+    stats.screenTiles = raster.tiles;
+    stats.screenTilesOpaque = raster.tilesOpaque;
+    stats.splatTilePairsSkipped = raster.pairsSkipped;
+    stats.footprintSamples = raster.footprintSamples;
+    stats.slabComposites = raster.slabComposites;
+    stats.rasterBackend = raster.backend;
+}
+
+void valueWarnings(std::uint64_t notANumber, std::uint64_t clamped, std::vector<std::string>& warnings)
+{
+    if (notANumber) warnings.push_back(countLine(notANumber, "NaN voxel values skipped"));
+    if (clamped) warnings.push_back(countLine(clamped, "voxel values above 1e6 (or +Inf) clamped to 1e6"));
+}
+
+void splatWarnings(std::uint64_t beforeNear, std::uint64_t clampedNear, std::uint64_t clampedGrazing, std::uint64_t clippedSpan,
+    std::vector<std::string>& warnings)
+{
+    if (beforeNear) warnings.push_back(countLine(beforeNear, "voxels in front of the near plane left out (lower --near to see them)"));
+    if (clampedNear) warnings.push_back(countLine(clampedNear, "voxels around the camera drawn as if a little further away (the camera is inside the volume; move it out for an exact image)"));
+    if (clampedGrazing) warnings.push_back(countLine(clampedGrazing, "voxels far outside the frame drawn with the perspective of its edge (only the image's border can show it; widen --fov to include them)"));
+    if (clippedSpan) warnings.push_back(countLine(clippedSpan, "voxels crossed more than 1024 depth slabs and were cut short (raise --slab)"));
+}
+
+void addLightStats(const std::vector<LightMap>& lights, RenderStats& stats)
+{
+    for (const LightMap& light : lights) {
+        stats.lightRays += light.rays();
+        stats.lightRaysMarched += light.raysMarched();
+    }
+}
+
+std::vector<LightMap> lightMaps(const RenderSettings& settings, const GridSource::Impl& g, const MemoryBudget& budget,
+    Progress& progress, std::vector<std::string>& warnings, bool onDemand)
+{
+    const OpticalModel model(settings);
+    std::size_t lit = 0;
+    for (std::size_t l = 0; l < settings.lights.size(); ++l) lit += model.dark(l) ? 0 : 1;
+    const double lightCount = double(std::max<std::size_t>(lit, 1));
+    const double lightPoints = std::min(kLightMapPointBudget, budget.itemsWithin(0.25, 4.0)) / lightCount;
+    std::vector<LightMap> lights;
+    lights.reserve(settings.lights.size());
+    for (std::size_t l = 0; l < settings.lights.size(); ++l) lights.emplace_back(g, settings, l, &progress, lightPoints, onDemand);
+    for (const LightMap& light : lights) {
+        if (light.shadowStep() == settings.shadow.step && light.shadowResolution() == settings.shadow.resolution) continue;
+        std::ostringstream w;
+        w << "--shadowstep raised from " << settings.shadow.step << " to " << light.shadowStep() << " and --shadow-res from "
+          << settings.shadow.resolution << " to " << light.shadowResolution()
+          << " voxels: finer shadows would need more than their share of memory (" << lightPoints << " light-map points a light; raise --max-memory)";
+        warnings.push_back(w.str());
+        break;
+    }
+    return lights;
+}
+
+bool greyFrame(const RenderSettings& settings, const GridSource::Impl& g)
+{
+    const OpticalModel model(settings);
+    const auto grey = [](double r, double gr, double b) { return float(r) == float(gr) && float(r) == float(b); };
+    if (g.color || !grey(model.extinction(0), model.extinction(1), model.extinction(2))) return false;
+    if (!grey(model.emitted(0), model.emitted(1), model.emitted(2)) || !grey(model.ambient(0, 1.0), model.ambient(1, 1.0), model.ambient(2, 1.0))) {
+        return false;
+    }
+    for (std::size_t l = 0; l < settings.lights.size(); ++l) {
+        if (!grey(model.lightScale(l, 0), model.lightScale(l, 1), model.lightScale(l, 2))) return false;
+    }
+    return true;
+}
+
+} // namespace detail
+} // namespace vdb_ewa

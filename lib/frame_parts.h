@@ -1,0 +1,70 @@
+/// @file frame_parts.h
+/// @brief What the whole frame and the streamed frame share (renderer.cpp, streamed_frame.cpp):
+///        the stage timer, the memory budget, the light maps, and the stats and warning lines
+///        they fill from the stages' counters.
+#pragma once
+
+#include <vdb_ewa/renderer.h>
+
+#include "shading/shading.h"
+#include "support/memory_budget.h"
+#include "support/progress.h"
+
+#include <chrono>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace vdb_ewa {
+namespace detail {
+
+struct RasterStats;
+
+/// Seconds between laps, for RenderStats' stage timings.
+class StageTimer
+{
+public:
+    double lap()
+    {
+        const auto now = std::chrono::steady_clock::now();
+        const double s = std::chrono::duration<double>(now - mStart).count();
+        mStart = now;
+        return s;
+    }
+
+private:
+    std::chrono::steady_clock::time_point mStart = std::chrono::steady_clock::now();
+};
+
+/// The frame's memory budget, naming the grid in its errors.
+MemoryBudget budgetFor(const GridSource::Impl& grid, const RenderSettings& settings);
+
+/// "@a n @a what": a warning line.
+std::string countLine(std::uint64_t n, const std::string& what);
+
+/// The volume rasteriser's counters in the frame's stats.
+void addRasterStats(const RasterStats& raster, RenderStats& stats);
+
+/// The voxel values the kernels skipped or clamped, a line each.
+void valueWarnings(std::uint64_t notANumber, std::uint64_t clamped, std::vector<std::string>& warnings);
+
+/// What the projection clamped or left out, a line each.
+void splatWarnings(std::uint64_t beforeNear, std::uint64_t clampedNear, std::uint64_t clampedGrazing, std::uint64_t clippedSpan,
+    std::vector<std::string>& warnings);
+
+/// The light maps' rays in all and marched, into @a stats.
+void addLightStats(const std::vector<LightMap>& lights, RenderStats& stats);
+
+/// Each light's light map. They take at most a quarter of the budget (4 bytes a lattice point),
+/// shared between the lights; a warning where that coarsened them. Marched whole, or
+/// @a onDemand (the streamed frame marches what its windows need).
+std::vector<LightMap> lightMaps(const RenderSettings& settings, const GridSource::Impl& g, const MemoryBudget& budget,
+    Progress& progress, std::vector<std::string>& warnings, bool onDemand = false);
+
+/// Every splat's optical depth and source terms will be the same in R, G and B (the raster's
+/// one-channel path), known from the settings before any splat exists: a grey medium and
+/// lights, no material colours.
+bool greyFrame(const RenderSettings& settings, const GridSource::Impl& g);
+
+} // namespace detail
+} // namespace vdb_ewa

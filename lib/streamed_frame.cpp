@@ -1,0 +1,190 @@
+/// @file streamed_frame.cpp
+/// @brief The streamed frame (--cull on): bricks front to back in depth windows, each window's
+///        bricks expanded, projected, lit on demand and composited through the stages' doors,
+///        those behind opaque tiles never expanded (docs/architecture.md#the-streamed-frame).
+#include <vdb_ewa/renderer.h>
+
+#include "frame_parts.h"
+#include "projection/projection.h"
+#include "raster/raster.h"
+#include "shading/shading.h"
+#include "source/source.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <limits>
+#include <vector>
+
+namespace vdb_ewa {
+
+using detail::StageTimer;
+
+void Renderer::renderStreamedFogVolume(const GridSource::Impl& g, const Camera& camera, const PassRequest& passes, Frame& frame,
+    RenderStats& stats, detail::Progress& progress) const
+{
+    StageTimer timer;
+    progress.stage(0, 5);
+    const detail::MemoryBudget budget = detail::budgetFor(g, mSettings);
+    const detail::LevelOfDetail lod(g, camera, mSettings);
+    const std::vector<detail::Brick> bricks = detail::listBricks(g);
+    // The slabs every window shares: --slab thick, unless some kernel could span more than
+    // kSlabSpanTarget of them (the whole frame raises the thickness from the kernels it made;
+    // it renders those grids).
+    const SlabGrid slabs = detail::frameSlabs(g, camera, mSettings);
+    {
+        int widest = mSettings.splat.lodPixels > 0.0 ? detail::LevelOfDetail::kLeafDim : 1;
+        for (const detail::Brick& b : bricks) {
+            if (!b.leaf) widest = std::max(widest, detail::tileLatticeSpacing(b.box.dim().x(), mSettings.splat.tileKernelSpacing));
+        }
+        const Mat3d& a = g.indexToWorldLinear;
+        const double norm = std::sqrt(glm::dot(a[0], a[0]) + glm::dot(a[1], a[1]) + glm::dot(a[2], a[2])); // >= the largest stretch
+        const double sd = norm * detail::kernelSigmaVoxels(detail::Kernel{Vec3d(0.0), 0.0f, float(widest)}, mSettings.splat.kernelSigma);
+        if (2.0 * detail::kDepthTruncation * sd / double(detail::kSlabSpanTarget) > slabs.thickness) return;
+    }
+    stats.streamed = true;
+    stats.bricks = bricks.size();
+    stats.activeVoxels = g.activeVoxels;
+    stats.activeTiles = g.activeTiles;
+
+    // Every brick's screen rectangle and first slab, before any kernel exists.
+    const detail::BrickBounder bounder(g, camera, mSettings, &lod, slabs);
+    std::vector<detail::BrickBounds> bounds(bricks.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, bricks.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i) bounds[i] = bounder.bound(bricks[i]);
+    });
+    // Front to back: by first slab, ties in tree order.
+    std::vector<std::uint32_t> order;
+    double voxels = 0.0;
+    for (std::uint32_t i = 0; i < bricks.size(); ++i) {
+        if (!bounds[i].visible) continue;
+        order.push_back(i);
+        voxels += bricks[i].leaf ? double(bricks[i].leaf->onVoxelCount()) : double(bricks[i].box.volume());
+    }
+    stats.bricksOutside = bricks.size() - order.size();
+    std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return bounds[a].nearestSlab < bounds[b].nearestSlab; });
+    stats.kernelSeconds += timer.lap();
+
+    // Light on demand: no ray is marched yet; each window marches the rays its splats look up.
+    std::vector<detail::LightMap> lights = detail::lightMaps(mSettings, g, budget, progress, stats.warnings, true);
+    stats.shadowSeconds = timer.lap();
+
+    progress.stage(5, 100);
+    progress.setUnits(order.size());
+    progress.advance(0); // the windows' start is reported (the first window may take a while)
+    detail::StreamedRaster raster(camera, mSettings, passes, lights, g.color != nullptr, detail::greyFrame(mSettings, g), slabs, &budget);
+    stats.rasterSeconds += timer.lap();
+    const double alpha = mSettings.splat.prefilter ? detail::quasiInterpolationAlpha(mSettings.splat.kernelSigma) : 0.0;
+    const detail::UnitKernelRule units{mSettings, &lod};
+    // Windows grow front to back: the first holds about 1/kFirstWindow of the visible voxels,
+    // each next one kGrowth times more (fine windows where the front turns opaque, few in all:
+    // each costs a pass over the open tiles), none more than kWindowBytes of kernels in flight
+    // or the memory budget's share. On the 10M-voxel cloud at 1080p, windows of 256, 128 and
+    // 64 MiB peaked at 482, 408 and 387 MB, and 128 was the fastest
+    // (docs/performance.md#memory-bounded-by-the-window).
+    constexpr double kFirstWindow = 256.0, kGrowth = 2.0, kSmallestWindow = 16384.0, kWindowBytes = 128.0 * 1024.0 * 1024.0;
+    const double mostVoxels = std::max(std::min(budget.itemsWithin(0.25, detail::kBytesPerKernel), kWindowBytes / detail::kBytesPerKernel), 4096.0);
+    double windowVoxels = std::min(std::max(voxels / kFirstWindow, kSmallestWindow), mostVoxels), done = 0.0;
+    constexpr double kFewOpaque = 0.05;
+    const double tiles = double(raster.tilesX()) * double(raster.tilesY());
+    constexpr double kCrossingShare = 0.5, kLargeSplatTiles = 64.0;
+    constexpr int kMaxDeferred = 2;
+    int deferred = 0;
+    detail::SplatSet carried;
+    std::uint64_t outOfOrder = 0, beforeNear = 0, clampedNear = 0, clampedGrazing = 0, clippedSpan = 0, notANumber = 0, clamped = 0;
+    std::int64_t windowStart = std::numeric_limits<std::int64_t>::min();
+    for (std::size_t begin = 0; begin < order.size();) {
+        // The window: bricks up to about windowVoxels, ending between two first slabs.
+        std::size_t end = begin;
+        double held = 0.0;
+        while (end < order.size() && (held < windowVoxels || bounds[order[end]].nearestSlab == bounds[order[end - 1]].nearestSlab)) {
+            const detail::Brick& b = bricks[order[end++]];
+            held += b.leaf ? double(b.leaf->onVoxelCount()) : double(b.box.volume());
+        }
+        const std::int64_t windowEnd = end < order.size() ? bounds[order[end]].nearestSlab : std::numeric_limits<std::int64_t>::max();
+        ++stats.windows;
+        // Bricks whose every tile is opaque already are never expanded (the occlusion summary).
+        std::vector<const detail::Brick*> expanded;
+        for (std::size_t k = begin; k < end; ++k) {
+            const detail::BrickBounds& b = bounds[order[k]];
+            if (raster.hidden(b.x0 / detail::kTileSize, b.y0 / detail::kTileSize, b.x1 / detail::kTileSize, b.y1 / detail::kTileSize)) {
+                ++stats.bricksHidden;
+                continue;
+            }
+            expanded.push_back(&bricks[order[k]]);
+        }
+        stats.bricksExpanded += expanded.size();
+        // The window's splats: its bricks', then those earlier windows made for it (carried).
+        detail::SplatSet window;
+        if (!expanded.empty()) {
+            detail::KernelSet kernels = detail::extractKernels(g, mSettings, &lod, nullptr, &budget, nullptr, &expanded);
+            if (alpha > 0.0) stats.haloKernels += detail::quasiInterpolate(g, alpha, kernels, nullptr, &units);
+            stats.kernels += kernels.kernels.size();
+            stats.kernelsSkipped += kernels.belowCutoff + kernels.notANumber;
+            notANumber += kernels.notANumber;
+            clamped += kernels.clamped;
+            stats.voxelsMerged += kernels.mergedVoxels;
+            stats.mergedKernels += kernels.mergedKernels;
+            const std::vector<detail::Rgb> colors = detail::kernelColors(g, kernels, mSettings.inputToWorking);
+            stats.kernelSeconds += timer.lap();
+            window = detail::projectSplats(g, kernels, colors, camera, mSettings, passes, nullptr, &slabs);
+            stats.kernelsCulled += window.culled;
+            stats.splats += window.splats.size();
+            beforeNear += window.beforeNear;
+            clampedNear += window.clampedNear;
+            clampedGrazing += window.clampedGrazing;
+            clippedSpan += window.clippedSpan;
+            for (const detail::Splat& sp : window.splats) outOfOrder += sp.firstSlab < windowStart;
+        }
+        detail::appendSplats(window, carried);
+        stats.splatsInFlight = std::max<std::uint64_t>(stats.splatsInFlight, window.splats.size());
+        stats.projectSeconds += timer.lap();
+        // Ending a window here leaves the slabs of the splats crossing its end pending in every
+        // tile they cover, copied aside until the next window. Where a few large splats (near
+        // the eye) cross it over most of the image, the window goes on into the next, up to
+        // kMaxDeferred times (culling needs windows to end): pig's first windows, 200 MB of
+        // pending slabs at 1080p, 0.5 s in page faults (docs/performance.md).
+        double crossing = 0.0, crossingSplats = 0.0;
+        for (const detail::Splat& sp : window.splats) {
+            if (sp.firstSlab + std::int64_t(sp.slabCount) <= windowEnd) continue;
+            crossing += double(sp.x1 / detail::kTileSize - sp.x0 / detail::kTileSize + 1) * double(sp.y1 / detail::kTileSize - sp.y0 / detail::kTileSize + 1);
+            crossingSplats += 1.0;
+        }
+        if (crossing > kCrossingShare * tiles && crossing > kLargeSplatTiles * crossingSplats && deferred < kMaxDeferred && end < order.size()) {
+            ++deferred;
+            carried = std::move(window);
+        } else {
+            deferred = 0;
+            carried = detail::splitSplatsAt(window, windowEnd);
+            stats.rasterSeconds += timer.lap();
+            detail::lightWindow(window, camera, lights, &progress);
+            stats.shadowSeconds += timer.lap();
+            raster.composite(window, windowEnd, &progress);
+            windowStart = windowEnd;
+        }
+        stats.rasterSeconds += timer.lap();
+        progress.advance(end - begin);
+        begin = end;
+        windowVoxels = std::min(windowVoxels * kGrowth, mostVoxels);
+        // Where three windows and an eighth of the voxels left fewer than kFewOpaque of the tiles
+        // opaque, little will be hidden: the rest in as few windows as the budget allows. (A
+        // window composites only in front of the next one's first slab, a brick's reach in front
+        // of its voxels: the first window may composite nothing yet.)
+        done += held;
+        if (stats.windows >= 3 && done >= voxels / 8.0 && double(raster.opaqueTiles()) < kFewOpaque * tiles) {
+            windowVoxels = mostVoxels;
+        }
+    }
+    detail::RasterStats rasterStats;
+    frame = raster.finish(rasterStats);
+    stats.rasterSeconds += timer.lap();
+    detail::addRasterStats(rasterStats, stats);
+    detail::addLightStats(lights, stats);
+    if (outOfOrder) stats.warnings.push_back(detail::countLine(outOfOrder, "splats started in front of their window (a bound of the streamed frame is wrong; --cull off renders without it)"));
+    if (g.activeVoxels == 0 && g.activeTiles == 0) stats.warnings.push_back("the grid has no active values: the image is empty");
+    // Counted in the bricks expanded: a hidden brick's values are never read.
+    detail::valueWarnings(notANumber, clamped, stats.warnings);
+    detail::splatWarnings(beforeNear, clampedNear, clampedGrazing, clippedSpan, stats.warnings);
+}
+
+} // namespace vdb_ewa
