@@ -41,7 +41,6 @@ void assignAdvised(std::vector<T, A>& v, std::size_t n, const T& value)
     v.assign(n, value);
 }
 
-
 template <typename T>
 struct HugePageAllocator
 {
