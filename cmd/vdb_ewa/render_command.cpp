@@ -346,9 +346,10 @@ private:
         out << "\n"
                   << std::fixed << std::setprecision(3) << "vdb_ewa: timings (s): load " << loadSeconds << ", kernels "
                   << s.kernelSeconds << ", shadows " << s.shadowSeconds << ", project " << s.projectSeconds
-                  << ", rasterise " << s.rasterSeconds << ", write " << writeSeconds << "; peak memory "
-                  << std::setprecision(0) << peakMegabytes() << " MB";
-        if (s.activeVoxels > 0) out << " (" << std::setprecision(1) << peakMegabytes() * 1e6 / double(s.activeVoxels) << " bytes per active voxel)";
+                  << ", rasterise " << s.rasterSeconds << ", write " << writeSeconds << "; peak memory ";
+        const double peak = peakMegabytes();
+        out << std::setprecision(0) << peak << " MB";
+        if (s.activeVoxels > 0) out << " (" << std::setprecision(1) << peak * 1e6 / double(s.activeVoxels) << " bytes per active voxel)";
         return out.str();
     }
 

@@ -62,7 +62,7 @@ public:
         const std::string& input, double renderSeconds, std::optional<int> frame, const RenderStats& stats) const;
     /// The counters a render reports (what -v prints), as vdb_ewa/NAME: what was read, built,
     /// projected, binned and composited, the streamed frame's bricks and the light-map rays
-    /// marched, and the peak resident memory, also per active voxel (docs/output.md#the-exr-header).
+    /// marched, and the peak resident memory, also per active voxel (docs/output.md#flat-exr-the-default).
     static Attributes statsAttributes(const RenderStats& stats);
     /// The resolved options in groups (camera, optical model, method and splatting, output),
     /// as (option, value): printed by -v and written to the EXR header.
