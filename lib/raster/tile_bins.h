@@ -44,8 +44,9 @@ TileBins binInOrder(std::size_t n, const BoxOf& boxOf, const IndexOf& indexOf, c
         for (int ty = s.y0 / kTileSize; ty <= s.y1 / kTileSize; ++ty)
             for (int tx = s.x0 / kTileSize; tx <= s.x1 / kTileSize; ++tx) f(std::size_t(ty) * std::size_t(bins.tilesX) + std::size_t(tx));
     };
-    // Chunks of the order: each counts its pairs per tile, then writes them from its own cursor.
-    constexpr std::size_t kChunks = 32;
+    // Chunks of the order: each counts its pairs per tile, then writes them from its own cursor
+    // (a few for a few splats: each chunk's cursors cover every tile).
+    const std::size_t kChunks = std::clamp<std::size_t>(n / 4096, 1, 32);
     const std::size_t chunk = (n + kChunks - 1) / kChunks;
     std::vector<std::uint64_t> cursor(kChunks * tiles, 0); // [chunk][tile]: count, then position
     std::vector<std::uint32_t> chunkSpan(kChunks * tiles, 0);
