@@ -46,11 +46,11 @@ TileBins binInOrder(std::size_t n, const BoxOf& boxOf, const IndexOf& indexOf, c
     };
     // Chunks of the order: each counts its pairs per tile, then writes them from its own cursor
     // (a few for a few splats: each chunk's cursors cover every tile).
-    const std::size_t kChunks = std::clamp<std::size_t>(n / 4096, 1, 32);
-    const std::size_t chunk = (n + kChunks - 1) / kChunks;
-    std::vector<std::uint64_t> cursor(kChunks * tiles, 0); // [chunk][tile]: count, then position
-    std::vector<std::uint32_t> chunkSpan(kChunks * tiles, 0);
-    tbb::parallel_for(std::size_t(0), kChunks, [&](std::size_t c) {
+    const std::size_t chunks = std::clamp<std::size_t>(n / 4096, 1, 32);
+    const std::size_t chunk = (n + chunks - 1) / chunks;
+    std::vector<std::uint64_t> cursor(chunks * tiles, 0); // [chunk][tile]: count, then position
+    std::vector<std::uint32_t> chunkSpan(chunks * tiles, 0);
+    tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
         std::uint64_t* count = cursor.data() + c * tiles;
         std::uint32_t* most = chunkSpan.data() + c * tiles;
         for (std::size_t k = c * chunk; k < std::min(n, (c + 1) * chunk); ++k) {
@@ -66,7 +66,7 @@ TileBins binInOrder(std::size_t n, const BoxOf& boxOf, const IndexOf& indexOf, c
     std::uint64_t next = 0;
     for (std::size_t t = 0; t < tiles; ++t) {
         bins.offsets[t] = next;
-        for (std::size_t c = 0; c < kChunks; ++c) {
+        for (std::size_t c = 0; c < chunks; ++c) {
             const std::uint64_t count = cursor[c * tiles + t];
             cursor[c * tiles + t] = next;
             next += count;
@@ -76,7 +76,7 @@ TileBins binInOrder(std::size_t n, const BoxOf& boxOf, const IndexOf& indexOf, c
     bins.offsets[tiles] = next;
     if (budget) budget->check(double(next), "splat-tile pairs", double(sizeof(std::uint32_t)));
     bins.indices.resize(next);
-    tbb::parallel_for(std::size_t(0), kChunks, [&](std::size_t c) {
+    tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
         std::uint64_t* position = cursor.data() + c * tiles;
         for (std::size_t k = c * chunk; k < std::min(n, (c + 1) * chunk); ++k) {
             const std::uint32_t i = indexOf(k);
