@@ -157,7 +157,9 @@ void Renderer::renderStreamedFogVolume(const GridSource::Impl& g, const Camera& 
             deferred = 0;
             carried = detail::splitSplatsAt(window, windowEnd);
             stats.rasterSeconds += timer.lap();
-            detail::lightWindow(window, camera, lights, &progress);
+            // Splats whose tiles all turned opaque in earlier windows look nothing up.
+            detail::lightWindow(window, camera, lights, &progress,
+                [&raster](int tx0, int ty0, int tx1, int ty1) { return raster.hidden(tx0, ty0, tx1, ty1); });
             stats.shadowSeconds += timer.lap();
             raster.composite(window, windowEnd, &progress);
             windowStart = windowEnd;

@@ -1,6 +1,8 @@
 /// @file light_on_demand.cpp
 #include "raster/light_on_demand.h"
 
+#include "raster/tile_bins.h"
+
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -9,7 +11,8 @@
 namespace vdb_ewa {
 namespace detail {
 
-std::uint64_t lightWindow(const SplatSet& window, const Camera& camera, std::vector<LightMap>& lights, Progress* progress)
+std::uint64_t lightWindow(const SplatSet& window, const Camera& camera, std::vector<LightMap>& lights, Progress* progress,
+    const TilesOpaque& opaque)
 {
     if (lights.empty() || window.splats.empty()) return 0;
     const Mat3d worldFromCamera = glm::transpose(camera.cameraFromWorld());
@@ -26,6 +29,7 @@ std::uint64_t lightWindow(const SplatSet& window, const Camera& camera, std::vec
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, window.splats.size(), 4096), [&](const tbb::blocked_range<std::size_t>& r) {
             for (std::size_t s = r.begin(); s < r.end(); ++s) {
                 const Splat& sp = window.splats[s];
+                if (opaque && opaque(sp.x0 / kTileSize, sp.y0 / kTileSize, sp.x1 / kTileSize, sp.y1 / kTileSize)) continue;
                 // Pixel edges around the box (lookups are at pixel centres), the slabs' planes.
                 const double x[2] = {double(sp.x0), double(sp.x1) + 1.0}, y[2] = {double(sp.y0), double(sp.y1) + 1.0};
                 double z[2] = {window.slabs.start(sp.firstSlab), window.slabs.start(sp.firstSlab + std::int64_t(sp.slabCount))};
