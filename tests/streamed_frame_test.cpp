@@ -50,12 +50,13 @@ Pair renderBoth(const GridSource& grid, const Camera& camera, RenderSettings set
     return p;
 }
 
-/// An opaque wall (z 60..67) over a fog block (x, y 40..87, z 0..55) behind it, seen from
-/// above (+z): orthoDownZ(64, 64, 200, 160, 128) sees the wall over the fog's tiles and beyond.
-openvdb::FloatGrid::Ptr wallOverFog(openvdb::FloatGrid::Ptr* wallOnly = nullptr, openvdb::FloatGrid::Ptr* fogOnly = nullptr)
+/// An opaque wall (x 0..@a wallEnd, y 0..127, z 60..67) over a fog block (x, y 40..87, z 0..55)
+/// behind it, seen from above (+z): orthoDownZ(64, 64, 200, 160, 128) sees the wall over the
+/// fog's tiles and beyond (all of them for the default @a wallEnd, half for 63).
+openvdb::FloatGrid::Ptr wallOverFog(openvdb::FloatGrid::Ptr* wallOnly = nullptr, openvdb::FloatGrid::Ptr* fogOnly = nullptr, int wallEnd = 127)
 {
     const auto wall = [](const openvdb::Coord& c) { return c.z() >= 60 ? 50.0f : 0.5f; };
-    auto grid = makeFogGrid({0, 0, 60}, {127, 127, 67}, wall, 1.0);
+    auto grid = makeFogGrid({0, 0, 60}, {wallEnd, 127, 67}, wall, 1.0);
     auto fog = makeFogGrid({40, 40, 0}, {87, 87, 55}, wall, 1.0);
     if (wallOnly) *wallOnly = grid->deepCopy();
     if (fogOnly) *fogOnly = fog;
@@ -157,12 +158,7 @@ TEST(StreamedFrame, SplatsOverOpaqueTilesMarchNoLight)
 {
     // The wall covers half the fog (x < 64): the bricks across its edge are expanded, and their
     // splats under the wall lie over opaque tiles.
-    const auto wall = [](const openvdb::Coord& c) { return c.z() >= 60 ? 50.0f : 0.5f; };
-    auto halfWall = makeFogGrid({0, 0, 60}, {63, 127, 67}, wall, 1.0);
-    auto fog = makeFogGrid({40, 40, 0}, {87, 87, 55}, wall, 1.0);
-    auto acc = halfWall->getAccessor();
-    for (auto it = fog->cbeginValueOn(); it; ++it) acc.setValueOn(it.getCoord(), *it);
-    const GridSource grid = gridSourceFromOpenVDB(halfWall);
+    const GridSource grid = gridSourceFromOpenVDB(wallOverFog(nullptr, nullptr, 63));
     const Camera camera(orthoDownZ(64.0, 64.0, 200.0, 160.0, 128), grid.worldCentre());
     RenderSettings s;
     s.splat.lodPixels = 0.0;
