@@ -11,6 +11,7 @@
 #include "source/source.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <limits>
@@ -65,7 +66,7 @@ void Renderer::renderStreamedFogVolume(const GridSource::Impl& g, const Camera& 
     std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return bounds[a].nearestSlab < bounds[b].nearestSlab; });
     stats.kernelSeconds += timer.lap();
 
-    // Light on demand: no ray is marched yet; each window marches the rays its splats look up.
+    // Light on demand: no ray is marched yet; the compositor marches those its lookups read.
     std::vector<detail::LightMap> lights = detail::lightMaps(mSettings, g, budget, progress, stats.warnings, true);
     stats.shadowSeconds = timer.lap();
 
@@ -157,11 +158,7 @@ void Renderer::renderStreamedFogVolume(const GridSource::Impl& g, const Camera& 
             deferred = 0;
             carried = detail::splitSplatsAt(window, windowEnd);
             stats.rasterSeconds += timer.lap();
-            // Splats whose tiles all turned opaque in earlier windows look nothing up.
-            detail::lightWindow(window, camera, lights, &progress,
-                [&raster](int tx0, int ty0, int tx1, int ty1) { return raster.hidden(tx0, ty0, tx1, ty1); });
-            stats.shadowSeconds += timer.lap();
-            raster.composite(window, windowEnd, &progress);
+            raster.composite(window, windowEnd, &progress); // marches the light its live pixels look up
             windowStart = windowEnd;
         }
         stats.rasterSeconds += timer.lap();
@@ -180,6 +177,13 @@ void Renderer::renderStreamedFogVolume(const GridSource::Impl& g, const Camera& 
     detail::RasterStats rasterStats;
     frame = raster.finish(rasterStats);
     stats.rasterSeconds += timer.lap();
+    // The light was marched inside the compositing: its thread-time, shared out over the
+    // threads, moves from the rasteriser's stage to the shadows'.
+    double marching = 0.0;
+    for (const detail::LightMap& light : lights) marching += light.marchThreadSeconds();
+    marching = std::min(marching / double(tbb::this_task_arena::max_concurrency()), stats.rasterSeconds);
+    stats.shadowSeconds += marching;
+    stats.rasterSeconds -= marching;
     detail::addRasterStats(rasterStats, stats);
     detail::addLightStats(lights, stats);
     if (outOfOrder) stats.warnings.push_back(detail::countLine(outOfOrder, "splats started in front of their window (a bound of the streamed frame is wrong; --cull off renders without it)"));

@@ -1,20 +1,14 @@
 /// @file light_on_demand.cpp
 #include "raster/light_on_demand.h"
 
-#include "raster/tile_bins.h"
-
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <cmath>
 
 namespace vdb_ewa {
 namespace detail {
 
-std::uint64_t lightWindow(const SplatSet& window, const Camera& camera, std::vector<LightMap>& lights, Progress* progress,
-    const TilesOpaque& opaque)
+void lookupBox(const Camera& camera, const LightMap& map, int x0, int y0, int x1, int y1, double z0, double z1, Vec3d& lo, Vec3d& hi)
 {
-    if (lights.empty() || window.splats.empty()) return 0;
     const Mat3d worldFromCamera = glm::transpose(camera.cameraFromWorld());
     const Vec2d centre = camera.principalPoint();
     const double f = camera.focalPixels();
@@ -25,38 +19,34 @@ std::uint64_t lightWindow(const SplatSet& window, const Camera& camera, std::vec
         const Vec3d t = perspective ? Vec3d(plane.x * z, plane.y * z, z) : Vec3d(plane.x, plane.y, z);
         return camera.eye() + worldFromCamera * t;
     };
-    for (LightMap& light : lights) {
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, window.splats.size(), 4096), [&](const tbb::blocked_range<std::size_t>& r) {
-            for (std::size_t s = r.begin(); s < r.end(); ++s) {
-                const Splat& sp = window.splats[s];
-                if (opaque && opaque(sp.x0 / kTileSize, sp.y0 / kTileSize, sp.x1 / kTileSize, sp.y1 / kTileSize)) continue;
-                // Pixel edges around the box (lookups are at pixel centres), the slabs' planes.
-                const double x[2] = {double(sp.x0), double(sp.x1) + 1.0}, y[2] = {double(sp.y0), double(sp.y1) + 1.0};
-                double z[2] = {window.slabs.start(sp.firstSlab), window.slabs.start(sp.firstSlab + std::int64_t(sp.slabCount))};
-                if (perspective) {
-                    // A perspective camera's slabs are in distance s along the pixel's ray: there
-                    // t2 = s cos(theta), between s0 cos(theta) at the box's widest corner and s1.
-                    double widest = 1.0;
-                    for (int c = 0; c < 4; ++c) {
-                        const Vec2d plane = (Vec2d(x[c & 1], y[c >> 1]) - centre) / f;
-                        widest = std::min(widest, 1.0 / std::sqrt(1.0 + glm::dot(plane, plane)));
-                    }
-                    z[0] *= widest;
-                }
-                Vec3d lo(1e300), hi(-1e300);
-                for (int c = 0; c < 8; ++c) {
-                    const Vec3d q = light.coordinates(worldAt(x[c & 1], y[(c >> 1) & 1], z[c >> 2]));
-                    lo = glm::min(lo, q);
-                    hi = glm::max(hi, q);
-                }
-                // Half a ray's spacing more: lookups in float may round across a ray.
-                light.require(lo - Vec3d(0.5), hi + Vec3d(0.5));
-            }
-        });
+    // The rectangle's pixel centres (where the lookups' rays are traced), the slabs' planes.
+    const double x[2] = {double(x0) + 0.5, double(x1) + 0.5}, y[2] = {double(y0) + 0.5, double(y1) + 0.5};
+    double z[2] = {z0, z1};
+    if (perspective) {
+        // A perspective camera's slabs are in distance s along the pixel's ray: there
+        // t2 = s cos(theta), between s0 cos(theta) at the rectangle's widest corner and s1
+        // cos(theta) at its point nearest the image centre.
+        const auto cosAt = [&](double px, double py) {
+            const Vec2d plane = (Vec2d(px, py) - centre) / f;
+            return 1.0 / std::sqrt(1.0 + glm::dot(plane, plane));
+        };
+        double widest = 1.0;
+        for (int c = 0; c < 4; ++c) widest = std::min(widest, cosAt(x[c & 1], y[c >> 1]));
+        z[0] *= widest;
+        z[1] *= cosAt(std::clamp(centre.x, x[0], x[1]), std::clamp(centre.y, y[0], y[1]));
     }
-    std::uint64_t tiles = 0;
-    for (LightMap& light : lights) tiles += light.marchRequired(progress);
-    return tiles;
+    lo = Vec3d(1e300);
+    hi = Vec3d(-1e300);
+    for (int c = 0; c < 8; ++c) {
+        const Vec3d q = map.coordinates(worldAt(x[c & 1], y[(c >> 1) & 1], z[c >> 2]));
+        lo = glm::min(lo, q);
+        hi = glm::max(hi, q);
+    }
+    // A hundredth of a ray's spacing more: the lookups form their points in double from the
+    // same camera, on layers whose ends (floats) the two rasteriser backends may round an ulp
+    // apart.
+    lo -= Vec3d(0.01);
+    hi += Vec3d(0.01);
 }
 
 } // namespace detail

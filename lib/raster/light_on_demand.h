@@ -1,36 +1,26 @@
 /// @file light_on_demand.h
-/// @brief Light on demand (docs/architecture.md#light-on-demand): before a window of the
-///        streamed frame is composited, the light-map rays its splats can look up are marked
-///        and marched, and no others. A splat is looked up on the pixel rays of its box, in the
-///        slabs it overlaps. Those points lie in a frustum piece over the box between two planes
-///        of camera depth (a perspective camera's slabs are distances along the ray: the near
-///        plane is taken at the nearest slab distance times the box's smallest cos(theta)),
-///        whose eight corners bound it in the light map's (linear) coordinates.
+/// @brief Light on demand (docs/architecture.md#light-on-demand): before a slab of a screen
+///        tile is lit, the light-map rays its live pixels' lookups read are marched, and no
+///        others (LightMap::ensureMarched). The lookups lie on the pixel rays of a screen
+///        rectangle, between two slab distances: in the frustum piece over the rectangle between
+///        two planes of camera depth (a perspective camera's slabs are distances along the ray:
+///        the near plane is taken at the nearer distance times the rectangle's smallest
+///        cos(theta), the far one at the farther distance times its largest), whose eight
+///        corners bound it in the light map's (linear) coordinates.
 #pragma once
 
-#include "projection/projection.h"
 #include "shading/shading.h"
 
 #include <vdb_ewa/camera.h>
 
-#include <cstdint>
-#include <functional>
-#include <vector>
-
 namespace vdb_ewa {
 namespace detail {
 
-/// Whether every screen tile of the inclusive tile rectangle (tx0, ty0, tx1, ty1) is opaque
-/// (StreamedRaster::hidden).
-using TilesOpaque = std::function<bool(int tx0, int ty0, int tx1, int ty1)>;
-
-/// Mark and march, in each of @a lights, the rays @a window's splats can look up. Returns the
-/// tiles of rays marched. @a progress: checked for cancellation (throws Cancelled).
-/// @a opaque: where given, a splat whose tiles are all opaque already marks nothing (none of
-/// its pixels composites again: pig from its README camera marches 35,088 rays instead of
-/// 42,000, docs/performance.md#the-streamed-frame---cull-1920x1080).
-std::uint64_t lightWindow(const SplatSet& window, const Camera& camera, std::vector<LightMap>& lights, Progress* progress,
-    const TilesOpaque& opaque = {});
+/// The box of @a map's coordinates [@a lo, @a hi] holding every point that a lookup on a pixel
+/// ray of the pixels (@a x0..@a x1, @a y0..@a y1) reads at a slab coordinate between @a z0 and
+/// @a z1 (distance along the ray for a perspective @a camera, camera depth for an orthographic
+/// one), with a hundredth of a ray's spacing more for rounding (u, v; w as computed).
+void lookupBox(const Camera& camera, const LightMap& map, int x0, int y0, int x1, int y1, double z0, double z1, Vec3d& lo, Vec3d& hi);
 
 } // namespace detail
 } // namespace vdb_ewa

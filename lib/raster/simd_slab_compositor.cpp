@@ -122,6 +122,19 @@ inline MapPoints mapPoints(const LightMap::Lattice& map, const double (*base)[kT
         hn::Combine(d, a[1], a[0]), hn::Combine(d, b[1], b[0]), hn::Combine(d, fw[1], fw[0])};
 }
 
+/// Lanes not lit look up nothing: their points go off the lattice (i = nu, j = nv, so the four
+/// rays around them are off it too). Their gathers then read ray 0, which a map marched on
+/// demand marches first; no lane reads a ray that another thread may be marching
+/// (raster/light_on_demand.h).
+template <typename M>
+inline void offLatticeUnless(const LightMap::Lattice& map, M lit, MapPoints& q)
+{
+    const IntTag di;
+    const auto on = hn::RebindMask(di, lit);
+    q.i = hn::IfThenElse(on, q.i, hn::Set(di, map.nu));
+    q.j = hn::IfThenElse(on, q.j, hn::Set(di, map.nv));
+}
+
 /// LightMap::depthOnRay for lattice ray (i, j) at each lane's points (0 off the lattice, on a
 /// ray without density, or past its stored samples).
 inline Floats depthOnRays(const LightMap::Lattice& map, Ints i, Ints j, Ints kw, Floats fw)
@@ -300,8 +313,11 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
             const double z = mOptions.slabs.start(slab), thickness = mOptions.slabs.thickness;
             const LightRays& rays = mRays[light];
             Floats log0[3], log1[3];
-            logTransmittances(map, densityDepths(map, mapPoints(map, rays.base, rays.dir, p, u0, z, thickness)), C, log0);
-            logTransmittances(map, densityDepths(map, mapPoints(map, rays.base, rays.dir, p, u1, z, thickness)), C, log1);
+            MapPoints q0 = mapPoints(map, rays.base, rays.dir, p, u0, z, thickness), q1 = mapPoints(map, rays.base, rays.dir, p, u1, z, thickness);
+            offLatticeUnless(map, lightedLanes, q0);
+            offLatticeUnless(map, lightedLanes, q1);
+            logTransmittances(map, densityDepths(map, q0), C, log0);
+            logTransmittances(map, densityDepths(map, q1), C, log1);
             const Floats floor = hn::Set(d, kLogLightFloor); // as lightLogRatio
             for (int c = 0; c < C; ++c) {
                 const Floats front = hn::Exp(d, log0[c]);

@@ -6,6 +6,7 @@
 #pragma once
 
 #include "projection/projection.h"
+#include "raster/light_on_demand.h"
 #include "raster/surface_layer.h"
 #include "raster/tile_bins.h"
 #include "shading/shading.h"

@@ -523,8 +523,54 @@ private:
     void flush(std::int64_t slab)
     {
         Dirty& d = mDirty[slot(slab)];
+        if (!mOptions.lights.empty()) ensureLight(slab, d);
         for (int ly = d.y0; ly <= d.y1; ++ly) flushRow(slab, ly, d.x0, d.x1);
         d.on = false;
+    }
+
+    /// Light on demand (raster/light_on_demand.h): before @a slab is lit, the light-map rays
+    /// that its lookups read are marched, where a map is marched on demand. Only the live
+    /// pixels of its dirty box @a d holding optical depth are lit, on their layers (layerOf):
+    /// a slab behind pixels that stopped marches nothing.
+    void ensureLight(std::int64_t slab, const Dirty& d) const
+    {
+        int x0 = kTileSize, x1 = -1, y0 = kTileSize, y1 = -1;
+        float u0 = 1.0f, u1 = 0.0f;
+        const std::size_t base = slot(slab) * C * kTilePixels;
+        for (int y = d.y0; y <= d.y1; ++y)
+            for (int x = std::max(d.x0, mRowFirst[y]); x <= std::min(d.x1, mRowLast[y]); ++x) {
+                const int p = y * kTileSize + x;
+                const float mass = slabMass(base, p);
+                if (!mAlive[p] || !(mass > 0.0f)) continue;
+                x0 = std::min(x0, x);
+                x1 = std::max(x1, x);
+                y0 = std::min(y0, y);
+                y1 = std::max(y1, y);
+                float a, b;
+                layerOf(slab, p, mass, a, b);
+                u0 = std::min(u0, a);
+                u1 = std::max(u1, b);
+            }
+        if (x0 > x1) return;
+        const double z = mOptions.slabs.start(slab), thickness = mOptions.slabs.thickness;
+        for (const CompositeLight& light : mOptions.lights) {
+            if (!light.map->onDemand()) continue;
+            Vec3d lo, hi;
+            lookupBox(*mOptions.camera, *light.map, mX0 + x0, mY0 + y0, mX0 + x1, mY0 + y1, z + double(u0) * thickness,
+                z + double(u1) * thickness, lo, hi);
+            light.map->ensureMarched(lo, hi);
+        }
+    }
+
+    /// Where pixel p's @a mass (> 0) of @a slab lies, as a uniform layer with the mean and
+    /// variance of its position: from fraction @a u0 to @a u1 of the slab's thickness.
+    void layerOf(std::int64_t slab, int p, float mass, float& u0, float& u1) const
+    {
+        const std::size_t m = slot(slab) * kTilePixels + std::size_t(p);
+        const float mean = std::clamp(mMoment[m] / mass, 0.0f, 1.0f);
+        const float half = std::sqrt(3.0f * std::max(mMoment2[m] / mass - mean * mean, 0.0f));
+        u0 = std::max(mean - half, 0.0f);
+        u1 = std::min(mean + half, 1.0f);
     }
 
     /// Composite @a slab at pixels (x0..x1, y) of the tile (flushPixel's result at each) and
@@ -621,10 +667,8 @@ private:
     void lightSlab(std::int64_t slab, int p, float mass, float* lit, float* lighted) const
     {
         const std::size_t base = slot(slab) * C * kTilePixels;
-        const std::size_t m = slot(slab) * kTilePixels + std::size_t(p);
-        const float mean = std::clamp(mMoment[m] / mass, 0.0f, 1.0f);
-        const float half = std::sqrt(3.0f * std::max(mMoment2[m] / mass - mean * mean, 0.0f));
-        const float u0 = std::max(mean - half, 0.0f), u1 = std::min(mean + half, 1.0f);
+        float u0, u1;
+        layerOf(slab, p, mass, u0, u1);
         for (std::size_t l = 0; l < mOptions.lights.size(); ++l) {
             std::array<float, 3> front, logRatio;
             lightAt(l, p, slab, u0, u1, front, logRatio);

@@ -11,6 +11,7 @@
 
 #include <cstddef>
 #include <new>
+#include <utility>
 #include <vector>
 
 namespace vdb_ewa {
@@ -72,6 +73,34 @@ struct HugePageAllocator
 /// A std::vector for the pipeline's large arrays (HugePageAllocator).
 template <typename T>
 using LargeArray = std::vector<T, HugePageAllocator<T>>;
+
+/// @a n values of a trivial type, uninitialised, from HugePageAllocator: memory is touched
+/// only where written (the light map's samples, marched on demand in any order, each tile's
+/// into a range of its own).
+template <typename T>
+class UntouchedArray
+{
+public:
+    UntouchedArray() = default;
+    explicit UntouchedArray(std::size_t n) : mData(n > 0 ? HugePageAllocator<T>().allocate(n) : nullptr), mSize(n) {}
+    ~UntouchedArray()
+    {
+        if (mData) HugePageAllocator<T>().deallocate(mData, mSize);
+    }
+    UntouchedArray(UntouchedArray&& other) noexcept : mData(std::exchange(other.mData, nullptr)), mSize(std::exchange(other.mSize, 0)) {}
+    UntouchedArray& operator=(UntouchedArray&& other) noexcept
+    {
+        std::swap(mData, other.mData);
+        std::swap(mSize, other.mSize);
+        return *this;
+    }
+    T* data() const { return mData; }
+    std::size_t size() const { return mSize; }
+
+private:
+    T* mData = nullptr;
+    std::size_t mSize = 0;
+};
 
 } // namespace detail
 } // namespace vdb_ewa
