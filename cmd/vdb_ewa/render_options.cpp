@@ -114,7 +114,7 @@ void RenderOptions::add(CLI::App* app)
     mApp->add_option("--lowpass", mLowpass, "screen-space low-pass filter variance in pixels^2, range [0, 100], > 0 unless --aa none (default: " + fmt(rs.splat.lowpass) + ")");
     mApp->add_option("--aa", mAa, "anti-aliasing: floor (each footprint axis at least --lowpass wide), ewa (resampling filter, Eq. 33: always adds --lowpass), swan (uniform scaling) or none (default: floor)");
     mApp->add_option("--cutoff-radius", mCutoffRadius, "footprint cut-off radius in std. deviations, range [1, 6] (default: " + fmt(rs.splat.cutoffRadius) + ")");
-    mApp->add_option("--slab", mSlab, "image-aligned slab thickness in voxel lengths, range [0.05, 10000] (default: " + fmt(rs.splat.slab) + ")");
+    mApp->add_option("--slab", mSlab, "image-aligned slab thickness in voxel lengths, range [0.05, 10000]; with --lod > 0 no thinner than --lod/16 pixel widths at the nearest active voxel (default: " + fmt(rs.splat.slab) + ")");
     mApp->add_option("--quality", mQuality,
         "preset of the speed/accuracy knobs: draft, default, high or final (refined kernels); explicit options override it "
         "(values in docs/performance.md) (default: default)");

@@ -106,8 +106,9 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels, c
     const Camera& camera, const RenderSettings& settings, const PassRequest& passes = {}, Progress* progress = nullptr,
     const SlabGrid* slabs = nullptr);
 
-/// The frame's slabs before any raise: --slab voxel lengths thick, from the eye (perspective:
-/// distance along the ray) or the near plane (orthographic: depth).
+/// The frame's slabs before any raise: --slab voxel lengths thick, or with --lod > 0 no thinner
+/// than --lod / 16 pixel widths at the nearest active voxel (docs/equations.md#slabs-that-follow-the-pixels-far-away),
+/// from the eye (perspective: distance along the ray) or the near plane (orthographic: depth).
 SlabGrid frameSlabs(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings);
 
 } // namespace detail
