@@ -217,7 +217,8 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
         filter, Eq. 33: always adds --lowpass), swan (uniform scaling) or none (default: floor)
     cutoff_radius (--cutoff-radius): footprint cut-off radius in std. deviations, range [1, 6] (default:
         3)
-    slab (--slab): image-aligned slab thickness in voxel lengths, range [0.05, 10000] (default: 2)
+    slab (--slab): image-aligned slab thickness in voxel lengths, range [0.05, 10000]; with --lod > 0 no
+        thinner than --lod/16 pixel widths at the nearest active voxel (default: 2)
     quality (--quality): preset of the speed/accuracy knobs: draft, default, high or final (refined
         kernels); explicit options override it (values in docs/performance.md) (default: default)
     exp (--exp): footprint exp(-r/2): incremental (forward differencing), exact or table (default:
