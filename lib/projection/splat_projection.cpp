@@ -80,8 +80,9 @@ SlabGrid frameSlabs(const GridSource::Impl& grid, const Camera& camera, const Re
     const bool perspective = camera.projection() == Projection::Perspective;
     slabs.zBase = perspective ? 0.0 : camera.near();
     slabs.thickness = settings.splat.slab * grid.voxelLength;
-    const openvdb::CoordBBox box = grid.grid->evalActiveVoxelBoundingBox();
-    if (!(settings.splat.lodPixels > 0.0) || !grid.linear || box.empty()) return slabs;
+    if (!(settings.splat.lodPixels > 0.0) || !grid.linear) return slabs;
+    const openvdb::CoordBBox box = grid.grid->evalActiveVoxelBoundingBox(); // a walk of the tree: only where used
+    if (box.empty()) return slabs;
     // A pixel's width at the nearest active value: from the eye to the world box around the
     // active voxels' box (padded half a voxel), which lies no farther (orthographic: the same
     // everywhere).

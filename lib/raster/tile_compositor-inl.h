@@ -534,6 +534,8 @@ private:
     /// a slab behind pixels that stopped marches nothing.
     void ensureLight(std::int64_t slab, const Dirty& d) const
     {
+        // The whole frame's maps are marched already: no pass over the pixels for them.
+        if (std::none_of(mOptions.lights.begin(), mOptions.lights.end(), [](const CompositeLight& l) { return l.map->onDemand(); })) return;
         int x0 = kTileSize, x1 = -1, y0 = kTileSize, y1 = -1;
         float u0 = 1.0f, u1 = 0.0f;
         const std::size_t base = slot(slab) * C * kTilePixels;
@@ -554,7 +556,6 @@ private:
         if (x0 > x1) return;
         const double z = mOptions.slabs.start(slab), thickness = mOptions.slabs.thickness;
         for (const CompositeLight& light : mOptions.lights) {
-            if (!light.map->onDemand()) continue;
             Vec3d lo, hi;
             lookupBox(*mOptions.camera, *light.map, mX0 + x0, mY0 + y0, mX0 + x1, mY0 + y1, z + double(u0) * thickness,
                 z + double(u1) * thickness, lo, hi);
