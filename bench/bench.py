@@ -44,6 +44,11 @@
   bench/bench.py cull [--res 1920x1080] [--repeat 3]      issue 37's streamed frame: --cull on against off
                                                          and vdb_render's defaults, README and default
                                                          cameras, with the streamed frame's counters
+  bench/bench.py blur [--res 480x270] [--repeat 3] [--ref-samples 64] [--keep DIR]
+                                                         issue 38: motion blur (generated velocities) and
+                                                         depth of field on pyro and the cloud, default and
+                                                         high against the reference integrator's shutter
+                                                         and lens samples, time against the still frame
   bench/bench.py output [--scene smoke] [--res 1920x1080] [--repeat 3]
                                                          issue 4's output stage: EXR pixel types,
                                                          compressions, passes and deep files, with
@@ -508,6 +513,78 @@ def cmd_cull(args):
                   f"{psnr:.1f} |", flush=True)
 
 
+def with_velocity(src, folder, label, spin, rise):
+    """@a src's density with a generated velocity grid "v" (world units per second) on its
+    active voxels dilated by 2: a rising plume turning about the vertical axis through the
+    active box's centre, v = (-spin (z - cz), rise, spin (x - cx)). Written once into @a folder."""
+    path = os.path.join(folder, f"{label}_v.vdb")
+    if os.path.exists(path):
+        return path
+    script = f"""
+import numpy as np, pyopenvdb as vdb
+grids, _ = vdb.readAll({src!r})
+density = next(g for g in grids if g.valueTypeName == 'float')
+lo, hi = density.evalActiveVoxelBoundingBox()
+cw = density.transform.indexToWorld(tuple((a + b) / 2.0 for a, b in zip(lo, hi)))
+v = vdb.Vec3SGrid()
+v.name = 'v'
+v.transform = density.transform
+pad = 2
+shape = tuple(b - a + 1 + 2 * pad for a, b in zip(lo, hi))
+ijk = np.stack(np.meshgrid(*[np.arange(a - pad, b + pad + 1) for a, b in zip(lo, hi)], indexing='ij'), axis=-1).reshape(-1, 3)
+o = np.array(density.transform.indexToWorld((0.0, 0.0, 0.0)))
+A = np.array([np.array(density.transform.indexToWorld(e)) - o for e in ((1.0, 0, 0), (0, 1.0, 0), (0, 0, 1.0))])
+w = ijk @ A + o  # the map is affine
+vel = np.stack([-{spin} * (w[:, 2] - cw[2]), np.full(len(w), {rise}), {spin} * (w[:, 0] - cw[0])], axis=-1).astype(np.float32)
+v.copyFromArray(vel.reshape(shape + (3,)), ijk=tuple(a - pad for a in lo), tolerance=(0.0, 0.0, 0.0))
+vdb.write({path!r}, grids=[density, v])
+"""
+    subprocess.run([sys.executable, "-c", script], check=True)
+    return path
+
+
+BLUR_SCENES = [("pyro", f"{ASSETS}/pyro.vdb", "-translate 0.225,2.175,15.75 -lookat 0.225,2.175,-0.225", 3.0, 10.0),
+               ("cloud (grids/)", f"{ROOT}/grids/cloud.vdb", "-translate 1.5,0.8,4.5 -lookat 0,0,0", 1.5, 3.0)]
+
+
+def cmd_blur(args):
+    """Issue 38's motion blur and depth of field: on pyro and the sample cloud, each with a generated
+    velocity grid (with_velocity), `default` and `high` against our reference integrator with
+    --blur-samples shutter times and lens points (the converged image: vdb_render has neither),
+    and each frame's time against the same frame without the effect, interleaved round by round."""
+    tmp = args.keep or tempfile.mkdtemp(prefix="vdb_ewa_blur_")
+    os.makedirs(tmp, exist_ok=True)
+    print(f"# {args.res}, median of {args.repeat} interleaved rounds, {os.cpu_count()} cores; reference: --method raymarch "
+          f"--step {args.ref_step} --shadowstep {args.ref_step} --blur-samples {args.ref_samples}")
+    print("| scene | effect | quality | time with (s) | time without (s) | with / without | PSNR vs reference (dB) | PSNR of the frame without (dB) |")
+    print("|---|---|---|---|---|---|---|---|")
+    for label, src, cam, spin, rise in BLUR_SCENES:
+        if not os.path.exists(src):
+            continue
+        key = label.split()[0]
+        path = with_velocity(src, tmp, key, spin, rise)
+        common = ["-res", args.res, *cam.split()]
+        focus = float(cam.split()[1].split(",")[2]) - float(cam.split()[3].split(",")[2])  # eye z - target z
+        effects = [("motion blur", ["--velocity-grid", "v"]),
+                   ("depth of field", ["--fstop", str(args.fstop), "--focus-distance", f"{0.8 * focus:g}"])]
+        for effect, opts in effects:
+            ref = os.path.join(tmp, f"{key}_{effect.replace(' ', '_')}_{args.res}_ref.exr")
+            if not os.path.exists(ref):
+                run([*EWA_RENDER, path, ref, *common, *opts, "--method", "raymarch", "--step", str(args.ref_step),
+                     "--shadowstep", str(args.ref_step), "--blur-samples", str(args.ref_samples)])
+            for q in ("default", "high"):
+                out_with, out_without = os.path.join(tmp, "with.exr"), os.path.join(tmp, "without.exr")
+                cmds = {"with": [*EWA_RENDER, path, out_with, *common, "--quality", q, *opts],
+                        "without": [*EWA_RENDER, path, out_without, *common, "--quality", q]}
+                times = {k: [] for k in cmds}
+                for _ in range(args.repeat):
+                    for k, c in cmds.items():
+                        times[k].append(run(c)[0])
+                t = {k: statistics.median(v) for k, v in times.items()}
+                print(f"| {label} | {effect} | {q} | {t['with']:.2f} | {t['without']:.2f} | {t['with'] / t['without']:.2f}x | "
+                      f"{diff(out_with, ref)[1]:.1f} | {diff(out_without, ref)[1]:.1f} |", flush=True)
+
+
 def cmd_python(args):
     label, path, camera = next(s for s in SCENES if s[0] == args.scene)
     pythonpath = os.environ.get("VDB_EWA_PYTHONPATH", os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(EWA))), "python"))
@@ -933,6 +1010,13 @@ def main():
     sc = sub.add_parser("cull")
     sc.add_argument("--res", default="1920x1080")
     sc.add_argument("--repeat", type=int, default=3)
+    sbl = sub.add_parser("blur")
+    sbl.add_argument("--res", default="480x270")
+    sbl.add_argument("--repeat", type=int, default=3)
+    sbl.add_argument("--ref-samples", type=int, default=64)
+    sbl.add_argument("--ref-step", type=float, default=0.25)
+    sbl.add_argument("--fstop", type=float, default=0.05)
+    sbl.add_argument("--keep", default="", help="folder that keeps the grids and references between runs")
     so = sub.add_parser("output")
     so.add_argument("--scene", default="smoke")
     so.add_argument("--res", default="1920x1080")
@@ -979,7 +1063,7 @@ def main():
     {"speed": cmd_speed, "sigma": cmd_sigma, "tradeoff": cmd_tradeoff, "targets": cmd_targets,
      "output": cmd_output, "surfaces": cmd_surfaces, "holes": cmd_holes, "plot": cmd_plot, "ladder": cmd_ladder,
      "analytic": cmd_analytic, "roofline": cmd_roofline, "scaling": cmd_scaling,
-     "stability": cmd_stability, "python": cmd_python, "cull": cmd_cull}[a.cmd](a)
+     "stability": cmd_stability, "python": cmd_python, "cull": cmd_cull, "blur": cmd_blur}[a.cmd](a)
 
 
 if __name__ == "__main__":

@@ -56,6 +56,9 @@ void validate(const CameraSettings& s)
     } else if (!(s.frame > 0.0) || !std::isfinite(s.frame)) {
         fail("--frame must be > 0 world units");
     }
+    if (!(s.fstop >= 0.0) || !(s.fstop <= 1e6)) fail("--fstop must be in [0, 1e6] (0: a pinhole)");
+    if (s.fstop > 0.0 && s.projection != Projection::Perspective) fail("--fstop: depth of field needs a perspective camera");
+    if (s.focusDistance && !(*s.focusDistance > 0.0 && std::isfinite(*s.focusDistance))) fail("--focus-distance must be > 0 world units and finite");
     if (!(s.near > 0.0) || !std::isfinite(s.near)) fail("--near must be > 0");
     if (!(s.far > s.near)) fail("--far must be greater than --near");
 }
@@ -132,6 +135,22 @@ Camera::Camera(const CameraSettings& settings, const Vec3d& defaultTarget) : mSe
         ? 0.5 * mSettings.aperture / mSettings.focal  // tan of the half field of view
         : 0.5 * mSettings.frame;                      // world units
     mFocalPixels = 0.5 * double(mSettings.width) / halfWidth;
+
+    // Depth of field: a thin lens focal / fstop wide (mm, world units taken as metres), in
+    // focus at --focus-distance or at the depth of the point looked at.
+    if (mSettings.fstop > 0.0) {
+        mLensRadius = mSettings.focal / (2000.0 * mSettings.fstop);
+        if (mSettings.focusDistance) {
+            mFocusDepth = *mSettings.focusDistance;
+        } else {
+            const Vec3d target = mSettings.lookAt ? *mSettings.lookAt : defaultTarget;
+            mFocusDepth = finite3(target) ? cameraFromWorldPoint(target).z : 0.0;
+            if (!(mFocusDepth > mSettings.near)) {
+                throw ValueError("impossible camera: --fstop without --focus-distance focuses at the point looked at, which lies at depth " +
+                                 std::to_string(mFocusDepth) + ", not in front of the camera: give --focus-distance");
+            }
+        }
+    }
 }
 
 Vec2d Camera::rasterFromCamera(const Vec3d& t) const
@@ -140,6 +159,20 @@ Vec2d Camera::rasterFromCamera(const Vec3d& t) const
         return principalPoint() + mFocalPixels * Vec2d(t.x / t.z, t.y / t.z);
     }
     return principalPoint() + mFocalPixels * Vec2d(t.x, t.y);
+}
+
+void Camera::lensRay(double xRaster, double yRaster, double lensX, double lensY, Vec3d& origin, Vec3d& direction) const
+{
+    worldRay(xRaster, yRaster, origin, direction);
+    if (!(mLensRadius > 0.0)) return;
+    // The pinhole ray's point at the focus depth, seen from the lens point (camera space).
+    const Mat3d worldFromCamera = glm::transpose(mCameraFromWorld);
+    const Vec2d plane = (Vec2d(xRaster, yRaster) - principalPoint()) / mFocalPixels;
+    const Vec3d focus = Vec3d(plane.x, plane.y, 1.0) * mFocusDepth;
+    const Vec3d lens(lensX * mLensRadius, lensY * mLensRadius, 0.0);
+    const Vec3d d = glm::normalize(focus - lens);
+    direction = worldFromCamera * d;
+    origin = mEye + worldFromCamera * (lens + d * (mSettings.near / d.z)); // on the near plane
 }
 
 void Camera::worldRay(double xRaster, double yRaster, Vec3d& origin, Vec3d& direction) const

@@ -39,6 +39,24 @@ void valueWarnings(std::uint64_t notANumber, std::uint64_t clamped, std::vector<
     if (clamped) warnings.push_back(countLine(clamped, "voxel values above 1e6 (or +Inf) clamped to 1e6"));
 }
 
+void addMotionStats(const MotionStats& motion, RenderStats& stats)
+{
+    stats.movingKernels += motion.moving;
+    stats.motionSubKernels += motion.subKernels;
+}
+
+void motionWarnings(const MotionStats& motion, std::vector<std::string>& warnings)
+{
+    if (motion.clamped) {
+        warnings.push_back(countLine(motion.clamped, "kernels travelled more than 4096 voxel lengths over the shutter and were slowed to it "
+                                                     "(check --velocity-scale, --velocity-unit and --fps)"));
+    }
+    if (motion.longPaths) {
+        warnings.push_back(countLine(motion.longPaths, "kernels travelled so far that 64 sub-kernels each stand for more than 2 of their "
+                                                       "standard deviations of the path (the blur is smoother than a box there)"));
+    }
+}
+
 void splatWarnings(std::uint64_t beforeNear, std::uint64_t clampedNear, std::uint64_t clampedGrazing, std::uint64_t clippedSpan,
     std::vector<std::string>& warnings)
 {

@@ -7,6 +7,7 @@
 #include <vdb_ewa/renderer.h>
 
 #include "shading/shading.h"
+#include "source/source.h"
 #include "support/memory_budget.h"
 #include "support/progress.h"
 
@@ -51,6 +52,12 @@ void valueWarnings(std::uint64_t notANumber, std::uint64_t clamped, std::vector<
 /// What the projection clamped or left out, a line each.
 void splatWarnings(std::uint64_t beforeNear, std::uint64_t clampedNear, std::uint64_t clampedGrazing, std::uint64_t clippedSpan,
     std::vector<std::string>& warnings);
+
+/// Motion blur's counters, added to @a stats.
+void addMotionStats(const MotionStats& motion, RenderStats& stats);
+
+/// What motion blur clamped or stretched, a line each.
+void motionWarnings(const MotionStats& motion, std::vector<std::string>& warnings);
 
 /// The light maps' rays in all and marched, into @a stats.
 void addLightStats(const std::vector<LightMap>& lights, RenderStats& stats);

@@ -61,6 +61,11 @@ void RenderSettings::validate() const
     if (!(shadow.step >= 1e-3) || !std::isfinite(shadow.step)) fail("--shadowstep must be finite and >= 0.001 voxels");
     if (!(shadow.resolution >= 0.25 && shadow.resolution <= 16.0)) fail("--shadow-res must be in [0.25, 16] voxels");
     if (!(step >= 1e-3) || !std::isfinite(step)) fail("--step must be >= 0.001 voxels");
+    if (!(blurSamples >= 1 && blurSamples <= 4096)) fail("--blur-samples must be in [1, 4096]");
+    if (!(std::abs(motionBlur.velocityScale) <= 1e6)) fail("--velocity-scale must be finite and within 1e6");
+    if (!(motionBlur.fps >= 1e-3 && motionBlur.fps <= 1e6)) fail("--fps must be in [0.001, 1e6] frames per second");
+    if (!(std::abs(motionBlur.shutterOpen) <= 1e3 && std::abs(motionBlur.shutterClose) <= 1e3)) fail("--shutter times must be finite and within 1000 frames of the frame");
+    if (!(motionBlur.shutterClose >= motionBlur.shutterOpen)) fail("--shutter: the close time must not come before the open time");
     if (!(splat.kernelSigma >= 0.1 && splat.kernelSigma <= 4.0)) fail("--kernel-sigma must be in [0.1, 4] voxels");
     if (!(surface.sigma >= 0.1 && surface.sigma <= 4.0)) fail("--surface-sigma must be in [0.1, 4] voxels");
     if (!(splat.lowpass >= 0.0 && splat.lowpass <= 100.0)) fail("--lowpass must be in [0, 100] pixels^2");

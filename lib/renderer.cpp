@@ -118,6 +118,9 @@ void Renderer::renderLevelSet(const GridSource::Impl& grid, const Camera& camera
     if (grid.emission || grid.temperature) {
         throw ValueError("--emission-grid and --temperature light fog volumes; '" + grid.name + "' is a level set");
     }
+    if (grid.velocity) {
+        stats.warnings.push_back("--velocity-grid changes nothing here: motion blur moves a fog volume's kernels; the level set renders at the frame's time");
+    }
     StageTimer timer;
     progress.stage(0, 60);
     // At most one surface kernel an active voxel.
@@ -167,7 +170,6 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
         &progress, refinedWithin);
     stats.refinedVoxels = refinement.sampledVoxels;
     if (alpha > 0.0) stats.haloKernels = detail::quasiInterpolate(g, alpha, kernels, &sampled);
-    const std::uint64_t densityKernels = kernels.kernels.size();
     // Emission grids' kernels after the density's (KernelSet::emitterBegin).
     detail::EmitterKernels emitters = detail::emitterKernels(g, mSettings, &lod, &progress, &budget, {refinement.n, &sampled, kernels.kernels.size()});
     const bool emittersLowered = emitters.refinementLowered;
@@ -196,7 +198,8 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
         stats.warnings.push_back(w.str());
     }
     progress.stage(35, 45);
-    const std::vector<detail::Rgb> colors = detail::kernelColors(g, kernels, mSettings.inputToWorking);
+    std::vector<detail::Rgb> colors = detail::kernelColors(g, kernels, mSettings.inputToWorking);
+    const detail::MotionStats motion = detail::moveKernels(g, mSettings, camera, kernels, colors, &budget);
     detail::SplatSet splats = detail::projectSplats(g, kernels, colors, camera, mSettings, passes, &progress);
     std::optional<IsoSurface> iso;
     if (!std::isnan(mSettings.surface.iso)) iso = isoSurface(mSettings, g, camera, passes, lights, progress, budget);
@@ -210,10 +213,11 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     stats.activeVoxels = kernels.activeVoxels;
     stats.activeTiles = kernels.activeTiles;
     stats.kernels = kernels.kernels.size();
-    stats.emitterKernels = kernels.kernels.size() - densityKernels;
+    stats.emitterKernels = kernels.emitterBegin < kernels.kernels.size() ? kernels.kernels.size() - kernels.emitterBegin : 0;
     stats.kernelsSkipped = kernels.belowCutoff + kernels.notANumber;
     stats.voxelsMerged = kernels.mergedVoxels;
     stats.mergedKernels = kernels.mergedKernels;
+    detail::addMotionStats(motion, stats);
     stats.kernelsCulled = splats.culled;
     stats.splats = splats.splats.size();
     addRasterStats(raster, stats);
@@ -230,6 +234,7 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
         stats.warnings.push_back(w.str());
     }
     valueWarnings(kernels.notANumber, kernels.clamped, stats.warnings);
+    detail::motionWarnings(motion, stats.warnings);
     splatWarnings(splats.beforeNear, splats.clampedNear, splats.clampedGrazing, 0, stats.warnings);
     if (splats.requestedThickness > 0.0) {
         std::ostringstream w;

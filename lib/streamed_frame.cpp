@@ -92,6 +92,7 @@ void Renderer::renderStreamedFogVolume(const GridSource::Impl& g, const Camera& 
     constexpr int kMaxDeferred = 2;
     int deferred = 0;
     detail::SplatSet carried;
+    detail::MotionStats motion;
     std::uint64_t outOfOrder = 0, beforeNear = 0, clampedNear = 0, clampedGrazing = 0, clippedSpan = 0, notANumber = 0, clamped = 0;
     std::int64_t windowStart = std::numeric_limits<std::int64_t>::min();
     for (std::size_t begin = 0; begin < order.size();) {
@@ -126,7 +127,12 @@ void Renderer::renderStreamedFogVolume(const GridSource::Impl& g, const Camera& 
             clamped += kernels.clamped;
             stats.voxelsMerged += kernels.mergedVoxels;
             stats.mergedKernels += kernels.mergedKernels;
-            const std::vector<detail::Rgb> colors = detail::kernelColors(g, kernels, mSettings.inputToWorking);
+            std::vector<detail::Rgb> colors = detail::kernelColors(g, kernels, mSettings.inputToWorking);
+            const detail::MotionStats moved = detail::moveKernels(g, mSettings, camera, kernels, colors, &budget);
+            detail::addMotionStats(moved, stats);
+            motion.clamped += moved.clamped;
+            motion.longPaths += moved.longPaths;
+            stats.kernels += moved.subKernels;
             stats.kernelSeconds += timer.lap();
             window = detail::projectSplats(g, kernels, colors, camera, mSettings, passes, nullptr, &slabs);
             stats.kernelsCulled += window.culled;
@@ -190,6 +196,7 @@ void Renderer::renderStreamedFogVolume(const GridSource::Impl& g, const Camera& 
     if (g.activeVoxels == 0 && g.activeTiles == 0) stats.warnings.push_back("the grid has no active values: the image is empty");
     // Counted in the bricks expanded: a hidden brick's values are never read.
     detail::valueWarnings(notANumber, clamped, stats.warnings);
+    detail::motionWarnings(motion, stats.warnings);
     detail::splatWarnings(beforeNear, clampedNear, clampedGrazing, clippedSpan, stats.warnings);
 }
 

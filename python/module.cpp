@@ -113,6 +113,8 @@ py::dict statsOf(const RenderStats& s)
     d["halo_kernels"] = s.haloKernels;
     d["emitter_kernels"] = s.emitterKernels;
     d["refined_voxels"] = s.refinedVoxels;
+    d["moving_kernels"] = s.movingKernels;
+    d["motion_sub_kernels"] = s.motionSubKernels;
     d["kernels_skipped"] = s.kernelsSkipped;
     d["voxels_merged"] = s.voxelsMerged;
     d["merged_kernels"] = s.mergedKernels;

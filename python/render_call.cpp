@@ -272,7 +272,7 @@ std::shared_ptr<RenderedFrame> render(const py::object& gridOrPath, const py::ob
     } else {
         const GridSource& opened = gridOrPath.cast<const GridSource&>();
         input = opened.path();
-        for (const char* keyword : {"color", "emission_grid", "temperature"}) {
+        for (const char* keyword : {"color", "emission_grid", "temperature", "velocity_grid"}) {
             if (opened.path().empty() && kwargs.contains(keyword) && !kwargs[keyword].is_none()) {
                 throw ValueError(std::string(keyword) + ": the grid came from an array, with no file to read grids from (from_array takes "
                                  "emission= and temperature= arrays)");

@@ -87,6 +87,8 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
            focal: Optional[Number] = None,
            aperture: Optional[Number] = None,
            frame: Optional[Number] = None,
+           fstop: Optional[Number] = None,
+           focus_distance: Optional[Number] = None,
            near: Optional[Number] = None,
            far: Optional[Number] = None,
            absorb: OptionValue = None,
@@ -132,6 +134,12 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
            temperature_scale: Optional[Number] = None,
            temperature_offset: Optional[Number] = None,
            blackbody_intensity: Optional[Number] = None,
+           velocity_grid: OptionValue = None,
+           velocity_scale: Optional[Number] = None,
+           velocity_unit: OptionValue = None,
+           fps: Optional[Number] = None,
+           shutter: OptionValue = None,
+           blur_samples: Optional[int] = None,
            samples: Optional[int] = None,
            threads: Optional[int] = None,
            cpus: Optional[int] = None,
@@ -174,6 +182,11 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
     focal (--focal): perspective focal length in mm, > 0 (default: 50)
     aperture (--aperture): perspective frame width in mm, > 0 (default: 41.2136)
     frame (--frame): orthographic frame width in world units, > 0 (default: 1)
+    fstop (--fstop): depth of field: the thin lens's f-number, in [0, 1e6]; the lens is --focal / fstop
+        wide, world units taken as metres (Houdini's and Blender's); 0: a pinhole, no depth of field;
+        perspective cameras (default: 0)
+    focus_distance (--focus-distance): depth of field: the depth in focus, world units along the view
+        axis, > 0 (default: the depth of the point looked at, --lookat or the grid's centre)
     near (--near): near plane depth in world units, > 0 (default: 0.001)
     far (--far): far plane depth in world units, > --near; inf: none (default: 3.40282e+38)
     absorb (--absorb): absorption R,G,B per unit density per voxel length, each in [0, 1e6] (default:
@@ -274,6 +287,19 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
     temperature_offset (--temperature-offset): Kelvin at value 0 (Houdini: T0), within 1e6 (default: 0)
     blackbody_intensity (--blackbody-intensity): multiplies the blackbody's radiance, in [0, 1e6]; 1 is
         physically based (default: 1)
+    velocity_grid (--velocity-grid): motion blur: name of the velocity grid in the input file, a vec3s
+        or vec3d grid (Houdini's v or vel) or the float grids NAME.x, NAME.y, NAME.z (Blender's); each
+        kernel moves linearly over the shutter with the velocity at its centre; naming one turns motion
+        blur on (default: none)
+    velocity_scale (--velocity-scale): motion blur: multiplies the velocities, within 1e6 (default: 1)
+    velocity_unit (--velocity-unit): motion blur: second (world units per second, Houdini's and
+        Blender's) or frame (world units per frame) (default: second)
+    fps (--fps): motion blur: frames per second, for --velocity-unit second, in [0.001, 1e6] (default:
+        24)
+    shutter (--shutter): motion blur: shutter OPEN,CLOSE in frames around the frame's time, each within
+        1000, CLOSE >= OPEN (default: -0.25,0.25, a 180-degree shutter centred on the frame)
+    blur_samples (--blur-samples): --method raymarch with motion blur or depth of field: rays per pixel,
+        each at its own shutter time and lens point, averaged; range [1, 4096] (default: 16)
     samples (--samples): level sets: vdb_render's rays per pixel; accepted for compatibility, the EWA
         filter anti-aliases without extra samples (default: 1)
     threads (--threads): worker threads, 0 = the CPUs the farm task or container was granted

@@ -554,6 +554,65 @@ TEST_F(Cli, LightsAPyroShot)
     expectFailure(file + " " + mDir.file("out.exr") + camera + " --environment " + mDir.file("square.hdr"), 2, "twice as wide as high");
 }
 
+TEST_F(Cli, MotionBlursAPyroShotAndFocusesItsLens)
+{
+    // A pyro cache with its velocities as a vector grid (Houdini's v) and as split components
+    // (Blender's vel.x, vel.y, vel.z): the same blur from both, in -v and the header; then a lens.
+    const std::string file = mDir.file("moving.vdb"), still = mDir.file("still.exr"), blurred = mDir.file("v.exr"), split = mDir.file("vel.exr");
+    auto density = makeFogGrid(openvdb::Coord(-6), openvdb::Coord(5), [](const openvdb::Coord& c) { return 0.2f + 0.05f * float(c.x() & 3); }, 0.1);
+    density->setName("density");
+    auto v = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+    v->setName("v");
+    v->setTransform(density->transform().copy());
+    std::array<openvdb::FloatGrid::Ptr, 3> parts;
+    for (int a = 0; a < 3; ++a) {
+        parts[a] = openvdb::FloatGrid::create(0.0f);
+        parts[a]->setName(std::string("vel.") + "xyz"[a]);
+        parts[a]->setTransform(density->transform().copy());
+    }
+    auto acc = v->getAccessor();
+    for (auto it = density->cbeginValueOn(); it; ++it) {
+        const openvdb::Vec3s vel(24.0f, 0.1f * float(it.getCoord().y()), 0.0f); // 24 units a second: 0.5 a 180-degree frame
+        acc.setValueOn(it.getCoord(), vel);
+        for (int a = 0; a < 3; ++a) parts[a]->tree().setValueOn(it.getCoord(), vel[a]);
+    }
+    openvdb::io::File(file).write({density, v, parts[0], parts[1], parts[2]});
+    const std::string camera = " -res 40x32 -translate 0,0,4";
+    ASSERT_EQ(runCli(mDir, file + " " + still + camera).code, 0);
+    const CliRun moving = runCli(mDir, file + " " + blurred + camera + " --velocity-grid v -v");
+    ASSERT_EQ(moving.code, 0) << moving.err;
+    EXPECT_NE(moving.out.find("--velocity-grid v --velocity-scale 1 --velocity-unit second --fps 24 --shutter -0.25,0.25"), std::string::npos) << moving.out;
+    EXPECT_NE(moving.out.find("moving over the shutter"), std::string::npos) << moving.out;
+    EXPECT_EQ(readImageFile(blurred).spec.get_string_attribute("vdb_ewa/velocity-grid"), "v");
+    EXPECT_EQ(readImageFile(blurred).spec.get_string_attribute("vdb_ewa/shutter"), "-0.25,0.25");
+    EXPECT_GT(maxAbsDiff(readExr(still), readExr(blurred)), 0.02) << "the blur shows";
+    ASSERT_EQ(runCli(mDir, file + " " + split + camera + " --velocity-grid vel").code, 0);
+    EXPECT_EQ(maxAbsDiff(readExr(blurred), readExr(split)), 0.0) << "split components are the same vectors";
+    // A closed shutter is the still frame.
+    ASSERT_EQ(runCli(mDir, file + " " + mDir.file("shut.exr") + camera + " --velocity-grid v --shutter 0,0").code, 0);
+    EXPECT_EQ(maxAbsDiff(readExr(still), readExr(mDir.file("shut.exr"))), 0.0);
+    // A job file says the same.
+    const std::string job = mDir.file("blur.json");
+    std::ofstream(job) << R"({"input": ")" << file << R"(", "output": ")" << mDir.file("job.exr")
+                       << R"(", "res": "40x32", "translate": [0, 0, 4], "velocity-grid": "v", "shutter": [-0.25, 0.25], "fps": 24})";
+    ASSERT_EQ(runCli(mDir, "render --job " + job).code, 0);
+    EXPECT_EQ(maxAbsDiff(readExr(blurred), readExr(mDir.file("job.exr"))), 0.0);
+    expectFailure(file + " " + mDir.file("out.exr") + camera + " --velocity-grid nope", 3, "no grid named 'nope'");
+    expectFailure(file + " " + mDir.file("out.exr") + camera + " --velocity-grid density", 3, "needs a vec3s or vec3d grid");
+    expectFailure(file + " " + mDir.file("out.exr") + camera + " --velocity-grid v --shutter 0.5", 2, "--shutter");
+    expectFailure(file + " " + mDir.file("out.exr") + camera + " --velocity-grid v --shutter 0.5,0", 2, "--shutter");
+    const CliRun unused = runCli(mDir, file + " " + mDir.file("unused.exr") + camera + " --shutter 0,1");
+    EXPECT_NE(unused.err.find("--shutter changes nothing without --velocity-grid"), std::string::npos) << unused.err;
+
+    // Depth of field: out of focus, the image spreads; -v says where the lens focuses.
+    const CliRun lens = runCli(mDir, file + " " + mDir.file("lens.exr") + camera + " --fstop 0.02 --focus-distance 2 -v");
+    ASSERT_EQ(lens.code, 0) << lens.err;
+    EXPECT_NE(lens.out.find("--fstop 0.02 --focus-distance 2"), std::string::npos) << lens.out;
+    EXPECT_GT(maxAbsDiff(readExr(still), readExr(mDir.file("lens.exr"))), 0.02);
+    expectFailure(file + " " + mDir.file("out.exr") + camera + " --fstop 2 --camera ortho", 2, "--fstop");
+    expectFailure(file + " " + mDir.file("out.exr") + camera + " --fstop 2 --focus-distance -1", 2, "--focus-distance");
+}
+
 TEST_F(Cli, VerbosePrintsThePresetResolvedWithOverrides)
 {
     const std::string out = mDir.file("out.exr");

@@ -332,7 +332,9 @@ private:
                   << s.kernels << " kernels (" << s.voxelsMerged << " voxels merged into " << s.mergedKernels
                   << " by --lod, " << (s.surfaceLattice > 1 ? "one surface kernel a " + std::to_string(s.surfaceLattice) + "^3 block by --lod, " : "")
                   << s.haloKernels << " halo kernels by --prefilter, " << s.refinedVoxels << " voxels sampled by --refine"
-                  << (s.emitterKernels ? ", " + std::to_string(s.emitterKernels) + " of the emission grids" : "") << "), " << s.kernelsSkipped << " values skipped (below --cutoff or NaN), "
+                  << (s.emitterKernels ? ", " + std::to_string(s.emitterKernels) + " of the emission grids" : "")
+                  << (s.movingKernels ? ", " + std::to_string(s.movingKernels) + " moving over the shutter, " + std::to_string(s.motionSubKernels) +
+                                            " sub-kernels added along their paths by motion blur" : "") << "), " << s.kernelsSkipped << " values skipped (below --cutoff or NaN), "
                   << s.kernelsCulled << " kernels culled, " << s.splats << " splatted into " << s.splatTilePairs
                   << " (splat, tile) pairs; " << s.screenTilesOpaque << " of " << s.screenTiles
                   << " screen tiles turned opaque early, skipping " << s.splatTilePairsSkipped << " pairs; "

@@ -22,6 +22,7 @@ const Choices<ExpEvaluation> kExpEvaluations = {
     {"incremental", ExpEvaluation::Incremental}, {"exact", ExpEvaluation::Exact}, {"table", ExpEvaluation::Table}};
 const Choices<bool> kOnOff = {{"on", true}, {"off", false}};
 const Choices<bool> kPrecisions = {{"double", true}, {"float", false}}; // doublePrecision
+const Choices<VelocityUnit> kVelocityUnits = {{"second", VelocityUnit::Second}, {"frame", VelocityUnit::Frame}};
 const Choices<SurfaceShader> kShaders = {{"diffuse", SurfaceShader::Diffuse}, {"matte", SurfaceShader::Matte},
     {"normal", SurfaceShader::Normal}, {"position", SurfaceShader::Position}};
 
@@ -78,6 +79,12 @@ void RenderOptions::add(CLI::App* app)
     mApp->add_option("--focal", mFocal, "perspective focal length in mm, > 0 (default: " + fmt(cs.focal) + ")");
     mApp->add_option("--aperture", mAperture, "perspective frame width in mm, > 0 (default: " + fmt(cs.aperture) + ")");
     mApp->add_option("--frame", mFrame, "orthographic frame width in world units, > 0 (default: " + fmt(cs.frame) + ")");
+    mApp->add_option("--fstop", mFstop,
+        "depth of field: the thin lens's f-number, in [0, 1e6]; the lens is --focal / fstop wide, world units taken as metres "
+        "(Houdini's and Blender's); 0: a pinhole, no depth of field; perspective cameras (default: 0)");
+    mApp->add_option("--focus-distance", mFocusDistance,
+        "depth of field: the depth in focus, world units along the view axis, > 0 (default: the depth of the point looked at, "
+        "--lookat or the grid's centre)");
     mApp->add_option("--near", mNear, "near plane depth in world units, > 0 (default: " + fmt(cs.near) + ")");
     mApp->add_option("--far", mFar, "far plane depth in world units, > --near; inf: none (default: " + fmt(cs.far) + ")");
     // Optical model (vdb_render's dense-volume model).
@@ -161,6 +168,21 @@ void RenderOptions::add(CLI::App* app)
         "Kelvin at value 0 (Houdini: T0), within 1e6 (default: " + fmt(ge.kelvinOffset) + ")");
     mApp->add_option("--blackbody-intensity", mBlackbodyIntensity,
         "multiplies the blackbody's radiance, in [0, 1e6]; 1 is physically based (default: " + fmt(ge.blackbodyIntensity) + ")");
+    // Motion blur (fog volumes).
+    const MotionBlur mb;
+    mApp->add_option("--velocity-grid", mVelocityGrid,
+        "motion blur: name of the velocity grid in the input file, a vec3s or vec3d grid (Houdini's v or vel) or the float grids "
+        "NAME.x, NAME.y, NAME.z (Blender's); each kernel moves linearly over the shutter with the velocity at its centre; "
+        "naming one turns motion blur on (default: none)");
+    mApp->add_option("--velocity-scale", mVelocityScale, "motion blur: multiplies the velocities, within 1e6 (default: " + fmt(mb.velocityScale) + ")");
+    mApp->add_option("--velocity-unit", mVelocityUnit, "motion blur: second (world units per second, Houdini's and Blender's) or frame (world units per frame) (default: second)");
+    mApp->add_option("--fps", mFps, "motion blur: frames per second, for --velocity-unit second, in [0.001, 1e6] (default: " + fmt(mb.fps) + ")");
+    mApp->add_option("--shutter", mShutter,
+        "motion blur: shutter OPEN,CLOSE in frames around the frame's time, each within 1000, CLOSE >= OPEN (default: " +
+            fmt(mb.shutterOpen) + "," + fmt(mb.shutterClose) + ", a 180-degree shutter centred on the frame)");
+    mApp->add_option("--blur-samples", mBlurSamples,
+        "--method raymarch with motion blur or depth of field: rays per pixel, each at its own shutter time and lens point, "
+        "averaged; range [1, 4096] (default: " + std::to_string(RenderSettings().blurSamples) + ")");
     mApp->add_option("--samples", mSamples,
         "level sets: vdb_render's rays per pixel; accepted for compatibility, the EWA filter anti-aliases "
         "without extra samples (default: 1)");
@@ -207,6 +229,8 @@ CameraSettings RenderOptions::cameraFor(std::optional<int> frame) const
     if (mFrame) cam.frame = *mFrame;
     if (mNear) cam.near = *mNear;
     if (mFar) cam.far = *mFar;
+    if (mFstop) cam.fstop = *mFstop;
+    if (mFocusDistance) cam.focusDistance = *mFocusDistance;
     return cam;
 }
 
@@ -276,6 +300,16 @@ void RenderOptions::resolve(std::optional<int> frame, CameraSettings& cam, Rende
     if (mSamples && *mSamples < 1) throw ValueError("--samples must be >= 1");
     if (!mSimd.empty()) rs.simd = parseChoice("simd", mSimd, kOnOff);
     if (!mCull.empty()) rs.cull = parseChoice("cull", mCull, kOnOff);
+    if (mVelocityScale) rs.motionBlur.velocityScale = *mVelocityScale;
+    if (!mVelocityUnit.empty()) rs.motionBlur.unit = parseChoice("velocity-unit", mVelocityUnit, kVelocityUnits);
+    if (mFps) rs.motionBlur.fps = *mFps;
+    if (!mShutter.empty()) {
+        const std::vector<double> v = parseNumbers("shutter", mShutter);
+        if (v.size() != 2) throw ValueError("--shutter: expected OPEN,CLOSE in frames, got '" + mShutter + "'");
+        rs.motionBlur.shutterOpen = v[0];
+        rs.motionBlur.shutterClose = v[1];
+    }
+    if (mBlurSamples) rs.blurSamples = *mBlurSamples;
     const GrantedSettings granted = grantedExecution();
     rs.threads = granted.threads;
     rs.maxMemory = granted.maxMemory;
@@ -322,6 +356,7 @@ GridSource RenderOptions::withExtraGrids(const GridSource& opened) const
     GridSource grid = mColor.empty() ? opened : opened.withColorGrid(mColor);
     if (!mEmissionGrid.empty()) grid = grid.withEmissionGrid(mEmissionGrid);
     if (!mTemperatureGrid.empty()) grid = grid.withTemperatureGrid(mTemperatureGrid);
+    if (!mVelocityGrid.empty()) grid = grid.withVelocityGrid(mVelocityGrid);
     return grid;
 }
 
@@ -356,6 +391,7 @@ Attributes RenderOptions::statsAttributes(const RenderStats& s)
                                   {"splats-in-flight", n(s.splatsInFlight)}});
     }
     if (s.lightRays > 0) out.insert(out.end(), {{"light-rays", n(s.lightRays)}, {"light-rays-marched", n(s.lightRaysMarched)}});
+    if (s.movingKernels > 0) out.insert(out.end(), {{"kernels-moving", n(s.movingKernels)}, {"motion-sub-kernels", n(s.motionSubKernels)}});
     // Not deterministic (the process's, and the allocator's): left out where files are compared.
     out.emplace_back("peak-memory-mb", fmt(std::round(double(s.peakResidentBytes) / 1e5) / 10.0));
     if (s.activeVoxels > 0) {
@@ -379,6 +415,10 @@ std::vector<Attributes> RenderOptions::resolvedOptions(const GridSource& grid, c
     for (const auto& [k, v] : Attributes{{"focal", fmt(c.focal)}, {"aperture", fmt(c.aperture)}, {"fov", fmt(c.fieldOfView())},
              {"frame", fmt(c.frame)}, {"near", fmt(c.near)}, {"far", fmt(c.far)}})
         cameraGroup.emplace_back(k, v);
+    if (c.fstop > 0.0) {
+        cameraGroup.emplace_back("fstop", fmt(c.fstop));
+        cameraGroup.emplace_back("focus-distance", fmt(camera.focusDepth()));
+    }
     Attributes model{{"absorb", fmt3(rs.medium.absorb)}, {"scatter", fmt3(rs.medium.scatter)}, {"emission", fmt3(rs.medium.emission)},
         {"light", lightsText({rs.lights.begin(), rs.lights.end() - std::ptrdiff_t(mEnvironmentLightCount)})}, {"ambient", fmt3(rs.ambient)}, {"gain", fmt(rs.shadow.gain)}, {"cutoff", fmt(rs.cutoff)},
         {"shadowstep", fmt(rs.shadow.step)}, {"shadow-res", fmt(rs.shadow.resolution)}};
@@ -399,8 +439,16 @@ std::vector<Attributes> RenderOptions::resolvedOptions(const GridSource& grid, c
         model.emplace_back("temperature-offset", fmt(rs.gridEmission.kelvinOffset));
         model.emplace_back("blackbody-intensity", fmt(rs.gridEmission.blackbodyIntensity));
     }
+    if (grid.hasVelocityGrid()) {
+        model.emplace_back("velocity-grid", mVelocityGrid);
+        model.emplace_back("velocity-scale", fmt(rs.motionBlur.velocityScale));
+        model.emplace_back("velocity-unit", choiceName(rs.motionBlur.unit, kVelocityUnits));
+        model.emplace_back("fps", fmt(rs.motionBlur.fps));
+        model.emplace_back("shutter", fmt(rs.motionBlur.shutterOpen) + "," + fmt(rs.motionBlur.shutterClose));
+    }
     Attributes method{{"method", choiceName(rs.method, kMethods)}};
     if (rs.method != Method::Splat) method.emplace_back("step", fmt(rs.step));
+    if (rs.method != Method::Splat && (grid.hasVelocityGrid() || c.fstop > 0.0)) method.emplace_back("blur-samples", std::to_string(rs.blurSamples));
     if (!grid.isLevelSet() && !std::isnan(rs.surface.iso)) {
         method.emplace_back("iso", fmt(rs.surface.iso));
         method.emplace_back("iso-opacity", fmt(rs.surface.isoOpacity));
@@ -427,7 +475,9 @@ void RenderOptions::ignoredOptionWarnings(std::vector<std::string>& warnings) co
     const std::pair<const char*, std::vector<const char*>> groups[] = {
         {"--emission-grid", {"--emission-color", "--emission-intensity"}},
         {"--temperature", {"--temperature-scale", "--temperature-offset", "--blackbody-intensity"}},
-        {"--environment", {"--environment-lights", "--environment-intensity"}}};
+        {"--environment", {"--environment-lights", "--environment-intensity"}},
+        {"--velocity-grid", {"--velocity-scale", "--velocity-unit", "--fps", "--shutter"}},
+        {"--fstop", {"--focus-distance"}}};
     for (const auto& [main, qualifiers] : groups) {
         if (given(main)) continue;
         for (const char* q : qualifiers) {

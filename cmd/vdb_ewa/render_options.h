@@ -103,6 +103,10 @@ private:
     std::string mSimd;
     std::string mCull;
     std::string mMaxMemory;
+    // Motion blur and depth of field.
+    std::string mVelocityGrid, mVelocityUnit, mShutter;
+    std::optional<double> mVelocityScale, mFps, mFstop, mFocusDistance;
+    std::optional<int> mBlurSamples;
     OutputOptions mOutputOptions;
 };
 

@@ -7,6 +7,7 @@
 ///       row 0 at the top.
 #pragma once
 
+#include <cmath>
 #include <limits>
 #include <optional>
 
@@ -28,6 +29,13 @@ struct VDB_EWA_API CameraSettings
     double focal = 50.0;              ///< perspective focal length, mm
     double aperture = 41.2136;        ///< perspective frame width (film back), mm
     double frame = 1.0;               ///< orthographic frame width, world units
+    /// Depth of field (perspective): the thin lens's f-number; 0: a pinhole (no depth of field).
+    /// The lens's aperture is focal / fstop wide, in world units taken as metres (Houdini's and
+    /// Blender's), so focal / (2000 fstop) world units in radius.
+    double fstop = 0.0;
+    /// Depth of field: the depth in focus, world units along the view axis; unset: the depth of
+    /// the point looked at (--lookat, else the grid's centre).
+    std::optional<double> focusDistance;
     double near = 1.0e-3;             ///< near plane depth, world units
     double far = std::numeric_limits<float>::max(); ///< far plane depth, world units
 
@@ -71,6 +79,15 @@ public:
     Vec2d principalPoint() const { return {0.5 * width(), 0.5 * height()}; }
     double near() const { return mSettings.near; }
     double far() const { return mSettings.far; }
+    /// Depth of field: the lens's radius in world units (0: a pinhole) and the depth in focus.
+    double lensRadius() const { return mLensRadius; }
+    double focusDepth() const { return mFocusDepth; }
+    /// The raster radius of the circle of confusion of a point at camera depth @a depth (thin
+    /// lens: f_pixels x lens radius x |1/depth - 1/focus|; 0 for a pinhole).
+    double confusionRadius(double depth) const
+    {
+        return mLensRadius > 0.0 ? mFocalPixels * mLensRadius * std::abs(1.0 / depth - 1.0 / mFocusDepth) : 0.0;
+    }
 
     /// World point -> camera space t.
     Vec3d cameraFromWorldPoint(const Vec3d& pWorld) const
@@ -82,12 +99,18 @@ public:
     /// World-space ray through a raster position: origin on the near plane and unit direction,
     /// as vdb_render's getRay (used by tests and reference integrators).
     void worldRay(double xRaster, double yRaster, Vec3d& origin, Vec3d& direction) const;
+    /// The thin lens's ray through a raster position from the lens point (@a lensX, @a lensY)
+    /// in the unit disc: from that point of the lens, through the point of the pinhole ray at
+    /// the focus depth; origin where it crosses the near plane, unit direction. A pinhole's is
+    /// worldRay.
+    void lensRay(double xRaster, double yRaster, double lensX, double lensY, Vec3d& origin, Vec3d& direction) const;
 
 private:
     CameraSettings mSettings;
     Vec3d mEye;
     Mat3d mCameraFromWorld;
     double mFocalPixels;
+    double mLensRadius = 0.0, mFocusDepth = 1.0;
     bool mLooksDownZ = false;
     bool mUpReplaced = false;
 };

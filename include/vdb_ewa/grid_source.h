@@ -41,6 +41,16 @@ public:
     bool hasEmissionGrid() const;
     bool hasTemperatureGrid() const;
 
+    /// The same grid with motion blur from the velocity grid @a velocityName of its file: a
+    /// vec3s or vec3d grid (Houdini's v or vel), or, where the file has no grid of that name,
+    /// the float grids NAME.x, NAME.y and NAME.z (Blender's split vectors). World units per
+    /// second or per frame (RenderSettings::motionBlur), sampled trilinearly (staggered grids
+    /// as such) at each kernel's centre; non-finite components read as 0.
+    /// @throw IoError, InputError (no such grid, the wrong value type, split grids with
+    /// different transforms, or a host grid without a file: use withVelocityGrid in openvdb_grid.h).
+    GridSource withVelocityGrid(const std::string& velocityName) const;
+    bool hasVelocityGrid() const;
+
     /// The same grid moved by @a objectToWorld (column vectors: world = M (x, y, z, 1); a DCC
     /// object's transform, e.g. Blender's matrix_world): its index-to-world map is followed by
     /// M, for its colour and emission grids too, and for those attached to the result later.

@@ -31,4 +31,8 @@ VDB_EWA_API GridSource withEmissionGrid(const GridSource& source, openvdb::GridB
 /// GridSource::withTemperatureGrid). @throw InputError for a null grid or another value type.
 VDB_EWA_API GridSource withTemperatureGrid(const GridSource& source, openvdb::GridBase::ConstPtr temperatureGrid);
 
+/// @a source with motion blur from a host's vec3s or vec3d velocity grid (see
+/// GridSource::withVelocityGrid). @throw InputError for a null grid or another value type.
+VDB_EWA_API GridSource withVelocityGrid(const GridSource& source, openvdb::GridBase::ConstPtr velocityGrid);
+
 } // namespace vdb_ewa

@@ -166,6 +166,33 @@ struct SurfaceOptions
     double isoOpacity = 1.0;    ///< opacity of that surface, in [0, 1]
 };
 
+/// How velocities are given (MotionBlur::unit).
+enum class VelocityUnit
+{
+    Second, ///< world units per second (Houdini's v, Blender's velocity): a frame is 1/fps seconds
+    Frame   ///< world units per frame
+};
+
+/// Motion blur from a velocity grid (GridSource::withVelocityGrid: attaching one turns it on):
+/// every kernel moves linearly over the shutter, with the velocity at its centre
+/// (docs/equations.md#motion-blur).
+struct MotionBlur
+{
+    double velocityScale = 1.0;      ///< multiplies the velocities
+    VelocityUnit unit = VelocityUnit::Second;
+    double fps = 24.0;               ///< frames per second, for VelocityUnit::Second
+    /// The shutter's open and close times in frames around the frame's time: a 180-degree
+    /// shutter centred on the frame by default. close >= open; equal: no blur.
+    double shutterOpen = -0.25, shutterClose = 0.25;
+
+    /// Seconds (VelocityUnit::Second) or frames a velocity is multiplied by to move a point over
+    /// the time from the frame's to @a frames frames later, scale included.
+    double displacementPerVelocity(double frames) const
+    {
+        return velocityScale * frames / (unit == VelocityUnit::Second ? fps : 1.0);
+    }
+};
+
 /// Everything a render needs besides the grid and the camera, in plain groups.
 struct VDB_EWA_API RenderSettings
 {
@@ -188,10 +215,14 @@ struct VDB_EWA_API RenderSettings
     ShadowOptions shadow;       ///< the lights' transmittance
     SplatOptions splat;         ///< EWA splatting knobs
     SurfaceOptions surface;     ///< level sets and fog iso-surfaces
+    MotionBlur motionBlur;      ///< with the grid's velocity grid, if it has one
 
     // --- Integration ---
     double cutoff = 0.005;            ///< density cutoff; rays stop where |T|^2 < cutoff (RGB T)
     double step = 1.0;                ///< primary-ray step in voxels (--method raymarch only)
+    /// --method raymarch with motion blur or depth of field: rays per pixel, each at its own
+    /// shutter time and lens point (stratified), averaged; more converge further.
+    int blurSamples = 16;
 
     // --- Execution ---
     /// Worker threads: N > 0 runs the render in its own tbb::task_arena of N threads; 0 runs it

@@ -37,6 +37,8 @@ struct RenderStats
     std::uint64_t kernelsSkipped = 0; ///< below the density cutoff, or invalid values
     std::uint64_t voxelsMerged = 0;   ///< active voxels merged into level-of-detail kernels (--lod)
     std::uint64_t mergedKernels = 0;  ///< the level-of-detail kernels they became
+    std::uint64_t movingKernels = 0;  ///< motion blur: kernels that move over the shutter (before splitting)
+    std::uint64_t motionSubKernels = 0; ///< motion blur: kernels added by splitting long paths (included in kernels)
     int surfaceLattice = 1;           ///< level sets: one surface kernel a n^3 block of voxels, per sheet (--lod)
     std::uint64_t kernelsCulled = 0;  ///< outside the view frustum
     std::uint64_t splats = 0;         ///< kernels splatted

@@ -41,6 +41,11 @@ BrickBounder::BrickBounder(const GridSource::Impl& grid, const Camera& camera, c
     const Mat3d ata = glm::transpose(grid.indexToWorldLinear) * grid.indexToWorldLinear;
     const double most = largestEigenvalue(ata), least = 1.0 / largestEigenvalue(glm::inverse(ata));
     mStretch = std::sqrt(most / least);
+    // Motion blur: a sub-kernel's centre lies within the largest travel of its still centre, and
+    // its path (at most twice that) adds |path| / sqrt(12) to its standard deviation along it
+    // (kernel_motion.h); |A^-1| = 1 / sqrt(least) takes world lengths to index lengths.
+    const double travel = largestTravel(grid, settings);
+    mMotionPad = travel * (1.0 + 2.0 * mReachSigmas / std::sqrt(12.0)) / std::sqrt(least);
     // Every anti-aliasing rule but Swan's adds at most the low-pass variance to each axis.
     mFilterPixels = settings.splat.cutoffRadius * std::sqrt(settings.splat.lowpass) + 1.0;
     mMaxTan[0] = 1.3 * 0.5 * camera.width() / camera.focalPixels();
@@ -69,7 +74,7 @@ BrickBounds BrickBounder::bound(const Brick& brick) const
         brick.leaf->evalActiveBoundingBox(box, true);
         if (box.empty()) box = brick.box;
     }
-    const double pad = mStretch * mReachSigmas * std::max(sigma(spacing), sigma(1)) + 1.0;
+    const double pad = mStretch * mReachSigmas * std::max(sigma(spacing), sigma(1)) + 1.0 + mMotionPad;
     const Vec3d lo = Vec3d(box.min().x(), box.min().y(), box.min().z()) - pad;
     const Vec3d hi = Vec3d(box.max().x(), box.max().y(), box.max().z()) + pad;
 
@@ -120,6 +125,12 @@ BrickBounds BrickBounder::bound(const Brick& brick) const
         y1 = std::max(y1, c.y + f * r.y);
     }
     double margin = mFilterPixels;
+    if (perspective && mCamera.lensRadius() > 0.0) {
+        // Depth of field: the circle of confusion's covariance (R/2)^2 I widens the cut-off
+        // ellipse by at most the cut-off times R/2, R largest at the box's nearest or farthest depth.
+        const double r = std::max(mCamera.confusionRadius(zMin), mCamera.confusionRadius(zMax));
+        margin += mSettings.splat.cutoffRadius * 0.5 * r;
+    }
     if (perspective) {
         // A splat is the local affine map of its kernel (Eq. 30): it leaves the box's
         // perspective image by at most the second-order term, f |d|^2 / z^2 (1 + 2 |tan|) / 2,

@@ -43,6 +43,7 @@ private:
     double mStretch;      ///< the index-to-world map's condition number: how far a sphere's image leaves it
     double mFilterPixels; ///< the low-pass filter's reach in pixels
     double mMaxTan[2];    ///< the projection's frustum clamp (1.3 x the edge), tan x and tan y
+    double mMotionPad;    ///< motion blur: how far a kernel's splat can move and stretch, index units
 };
 
 } // namespace detail

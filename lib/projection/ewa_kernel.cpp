@@ -53,6 +53,17 @@ Vec3d jacobianPoint(const Vec3d& tCentre, double size, const ProjectionParams& p
     return tJ;
 }
 
+/// Depth of field: @a cov convolved with the circle of confusion at camera depth @a depth, a
+/// uniform disc of radius R whose covariance is (R/2)^2 I (ProjectionParams::lensRadius).
+Sym2 withConfusion(Sym2 cov, double depth, const ProjectionParams& params)
+{
+    if (!(params.lensRadius > 0.0) || !params.perspective) return cov;
+    const double r = params.focalPixels * params.lensRadius * std::abs(1.0 / depth - 1.0 / params.focusDepth);
+    cov.xx += 0.25 * r * r;
+    cov.yy += 0.25 * r * r;
+    return cov;
+}
+
 /// Low-pass filter (Eq. 33), conic, peak = @a scale / (2 pi sqrt(det Cov)) (renormalised to the
 /// mass inside the cut-off), cut-off box: the steps shared by volume and surface kernels.
 void finishFootprint(Sym2 cov, double scale, const ProjectionParams& params, Footprint& fp)
@@ -153,7 +164,7 @@ Footprint projectKernel(const Vec3d& tCentre, const Mat3d& covCamera, const Proj
         if (d > 0.0) condVar -= (covPlane.yy * v0 * v0 - 2.0 * covPlane.xy * v0 * v1 + covPlane.xx * v1 * v1) / d;
         fp.depthSd = std::sqrt(std::max(condVar, 1e-6 * covRay[2][2]));
     }
-    finishFootprint(cov, detJ * f * f, params, fp);
+    finishFootprint(withConfusion(cov, tCentre.z, params), detJ * f * f, params, fp);
     return fp;
 }
 
@@ -186,7 +197,7 @@ Footprint projectSurfaceKernel(const Vec3d& tCentre, const Vec3d& tangent0, cons
     const Sym2 cov{s2 * (m00 * m00 + m01 * m01), s2 * (m00 * m10 + m01 * m11), s2 * (m10 * m10 + m11 * m11)};
     fp.depthSd = 0.0;
     // rho(x) = |det M| G_{cov}(x - centre): per unit of surface area (Heckbert's EWA filter).
-    finishFootprint(cov, std::abs(m00 * m11 - m01 * m10), params, fp);
+    finishFootprint(withConfusion(cov, tCentre.z, params), std::abs(m00 * m11 - m01 * m10), params, fp);
     return fp;
 }
 

@@ -45,6 +45,8 @@ ProjectionParams projectionParams(const Camera& camera, const SplatOptions& spla
     p.cutoffRadius = splat.cutoffRadius;
     p.renormalize = splat.renormalize;
     p.taper = splat.taper;
+    p.lensRadius = camera.lensRadius();
+    p.focusDepth = camera.focusDepth();
     return p;
 }
 
@@ -137,7 +139,7 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels, c
             ProjectionParams refinedParams = params;
             for (std::size_t i = range.begin(); i < range.end(); ++i) {
                 const Kernel& k = kernels.kernels[i];
-                const Vec3d pWorld = grid.indexToWorld(k.pIndex);
+                Vec3d pWorld = grid.indexToWorld(k.pIndex);
                 Mat3d cov;
                 double volume;
                 if (grid.linear) {
@@ -150,6 +152,14 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels, c
                 }
                 const double s = k.spacing, sigma = kernelSigmaVoxels(k, settings.splat.kernelSigma);
                 cov *= sigma * sigma;
+                if (!kernels.motion.empty()) {
+                    // Motion blur: the kernel at the shutter's mid-time, convolved with a box
+                    // along its path, whose covariance is path path^T / 12 (kernel_motion.h).
+                    const KernelMotion& m = kernels.motion[i];
+                    pWorld += Vec3d(m.shift[0], m.shift[1], m.shift[2]);
+                    const Vec3d path = R * Vec3d(m.path[0], m.path[1], m.path[2]);
+                    cov += glm::outerProduct(path, path) / 12.0;
+                }
                 const Vec3d t = settings.splat.doublePrecision ? camera.cameraFromWorldPoint(pWorld)
                                                                : cameraFromWorldFloat(camera, pWorld);
                 if (!settings.splat.doublePrecision) cov = Mat3d(glm::mat3(cov));

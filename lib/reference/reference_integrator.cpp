@@ -134,6 +134,7 @@ class GaussianSumSampler
 {
 public:
     GaussianSumSampler(const ReferenceVolume& v, double sigma) : mSum(v, sigma) {}
+    void setTime(double) {} // still: rayMarchGaussianSum has no motion blur
     bool sample(const Vec3d& pIndex, double& density, double source[3], Vec3d& emitted)
     {
         emitted = Vec3d(0.0);
@@ -159,12 +160,26 @@ public:
         : mGrid(grid), mAccessor(grid.field->getConstAccessor()), mColor(grid), mInputToWorking(settings.inputToWorking), mModel(settings), mCutoff(settings.cutoff),
           mTinted(bool(grid.color)), mShadow(settings.lights.size(), Rgb{1.0f, 1.0f, 1.0f}), mEmission(grid, emission)
     {
+        if (grid.velocity) mVelocity.emplace(grid);
         for (std::size_t l = 0; l < settings.lights.size(); ++l) {
             if (!mModel.dark(l)) mShadows.emplace_back(l, ShadowMarcher(grid, settings, l));
         }
     }
-    bool sample(const Vec3d& pIndex, double& density, double source[3], Vec3d& emitted)
+    /// Motion blur: the shutter time of the samples to come, as the factor a velocity is
+    /// multiplied by to move a point there from the frame's time (MotionBlur::displacementPerVelocity).
+    void setTime(double displacementPerVelocity) { mTime = displacementPerVelocity; }
+
+    bool sample(Vec3d pIndex, double& density, double source[3], Vec3d& emitted)
     {
+        if (mVelocity && mTime != 0.0) {
+            // Each point of the still field moves linearly with its own velocity v: the point
+            // at p now came from x with x + v(x) t = p, found by fixed-point iteration; the
+            // sample (density, light, colour, emission) is the still field's there.
+            const Vec3d p = mGrid.indexToWorld(pIndex);
+            Vec3d x = p;
+            for (int i = 0; i < 4; ++i) x = p - mVelocity->at(x) * mTime;
+            pIndex = mGrid.worldToIndex(x);
+        }
         float d = 0.0f;
         openvdb::tools::BoxSampler::sample(mAccessor, openvdb::Vec3d(pIndex.x, pIndex.y, pIndex.z), d);
         density = d;
@@ -191,7 +206,49 @@ private:
     bool mTinted;
     std::vector<Rgb> mShadow; ///< per light: its transmittance at the sample (1 if dark)
     EmissionSampler mEmission;
+    std::optional<VelocitySampler> mVelocity;
+    double mTime = 0.0;
 };
+
+/// A ray's place in the shutter (in [0, 1)) and on the lens (the unit disc).
+struct BlurSample
+{
+    double shutter, lensX, lensY;
+};
+
+/// Sample @a i of @a n of pixel (@a x, @a y): the shutter stratified in n equal parts and the
+/// lens by the R2 sequence (Roberts 2018), both rotated by a hash of the pixel (no pattern
+/// shared between pixels; the same for any thread count), the lens square mapped onto the
+/// disc by Shirley and Chiu's concentric map.
+BlurSample blurSample(int x, int y, int i, int n)
+{
+    std::uint64_t h = std::uint64_t(std::uint32_t(x)) * 0x9E3779B97F4A7C15ull ^ std::uint64_t(std::uint32_t(y)) * 0xC2B2AE3D27D4EB4Full;
+    const auto next = [&h] {
+        h ^= h >> 31;
+        h *= 0xBF58476D1CE4E5B9ull;
+        h ^= h >> 29;
+        return double(h >> 11) * 0x1.0p-53;
+    };
+    const double r0 = next(), r1 = next(), r2 = next();
+    BlurSample b;
+    b.shutter = std::fmod((double(i) + 0.5) / double(n) + r0, 1.0);
+    const double u = 2.0 * std::fmod(double(i) * 0.7548776662466927 + r1, 1.0) - 1.0;
+    const double v = 2.0 * std::fmod(double(i) * 0.5698402909980532 + r2, 1.0) - 1.0;
+    constexpr double kQuarterPi = 0.78539816339744830962;
+    double r = 0.0, phi = 0.0;
+    if (u == 0.0 && v == 0.0) {
+        r = 0.0;
+    } else if (std::abs(u) > std::abs(v)) {
+        r = u;
+        phi = kQuarterPi * (v / u);
+    } else {
+        r = v;
+        phi = 2.0 * kQuarterPi - kQuarterPi * (u / v);
+    }
+    b.lensX = r * std::cos(phi);
+    b.lensY = r * std::sin(phi);
+    return b;
+}
 
 void checkMarchable(const GridSource::Impl& grid, const PassRequest& passes, const char* method)
 {
@@ -222,56 +279,82 @@ Frame marchRays(const GridSource::Impl& grid, const Camera& camera, const Render
     const int width = camera.width(), height = camera.height();
     Frame frame = blankFrame(width, height, passes);
     const Vec3d forward = glm::transpose(camera.cameraFromWorld())[2];
+    const bool blurred = (grid.velocity && settings.motionBlur.shutterClose > settings.motionBlur.shutterOpen) || camera.lensRadius() > 0.0;
+    const int samples = blurred ? settings.blurSamples : 1;
 
     setUnits(progress, std::uint64_t(height));
     tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
         auto sampler = makeSampler();
         EmptySpaceSkipper skipper(occupancy, skipMargin);
+        std::uint64_t rays = 0;
         for (int y = rows.begin(); y < rows.end(); ++y) {
             advance(progress);
             for (int x = 0; x < width; ++x) {
-                // A row of long rays takes 0.3-0.6 s under the sanitizers: a cancel is seen
-                // within 16 rays' time, not a row's.
-                if (progress && x % 16 == 15) progress->check();
-                Vec3d origin, dir;
-                camera.worldRay(x + 0.5, y + 0.5, origin, dir);
-                // Parameter s: world distance from the near-plane origin; far plane likewise.
-                const double sFar = camera.projection() == Projection::Perspective
-                    ? (camera.far() - camera.near()) / glm::dot(dir, forward)
-                    : camera.far() - camera.near();
-                const Vec3d oIndex = indexFromWorld * (origin - grid.indexToWorldOffset);
-                const Vec3d dIndex = indexFromWorld * dir; // index units per world unit
-                double s0, s1;
-                float T[3] = {1.0f, 1.0f, 1.0f}, C[3] = {0.0f, 0.0f, 0.0f};
+                // Motion blur and depth of field: blurSamples rays, each at its own shutter time
+                // and lens point (stratified, rotated per pixel: deterministic), averaged.
+                float sumC[3] = {0.0f, 0.0f, 0.0f}, sumT[3] = {0.0f, 0.0f, 0.0f};
                 float z = std::numeric_limits<float>::infinity();
-                if (boxClip(oIndex, dIndex, boxLo, boxHi, s0, s1)) {
-                    s0 = std::max(s0, 0.0);
-                    s1 = std::min(s1, sFar);
-                    const double ds = step * ell;
-                    // Steps are anchored at the near plane, so neighbouring rays sample alike.
-                    for (double s = ds * std::floor(s0 / ds); s < s1; s += ds) {
-                        const Vec3d p = oIndex + (s + 0.5 * ds) * dIndex;
-                        const double jump = skipper.emptyExit(p, dIndex);
-                        if (jump > ds) {
-                            s += ds * std::floor(jump / ds) - ds;
-                            continue;
-                        }
-                        double density, source[3];
-                        Vec3d emitted;
-                        if (!sampler.sample(p, density, source, emitted)) continue;
-                        const float before = (T[0] + T[1] + T[2]) / 3.0f;
-                        for (int c = 0; c < 3; ++c) {
-                            // The emission grids' radiance per voxel length over the step (no
-                            // optical depth of their own: compositeSlab's exact update).
-                            const float tau = float(model.opticalDepth(c, density, step));
-                            compositeSlab(tau, float(tau * source[c] + emitted[c] * step), C[c], T[c]);
-                        }
-                        if (passes.depth && before > 0.5f && !std::isfinite(z)) {
-                            const double u = halfAlphaFraction(before, (T[0] + T[1] + T[2]) / 3.0f);
-                            if (u <= 1.0) z = float(camera.near() + (s + u * ds) * glm::dot(dir, forward));
-                        }
-                        if (T[0] * T[0] + T[1] * T[1] + T[2] * T[2] < cutoff) break;
+                for (int sample = 0; sample < samples; ++sample) {
+                    // A row of long rays takes 0.3-0.6 s under the sanitizers: a cancel is
+                    // seen within 16 rays' time, not a row's (nor a pixel's, with --blur-samples).
+                    if (progress && ++rays % 16 == 0) progress->check();
+                    Vec3d origin, dir;
+                    if (samples == 1) {
+                        camera.worldRay(x + 0.5, y + 0.5, origin, dir);
+                    } else {
+                        const BlurSample b = blurSample(x, y, sample, samples);
+                        sampler.setTime(settings.motionBlur.displacementPerVelocity(
+                            settings.motionBlur.shutterOpen + b.shutter * (settings.motionBlur.shutterClose - settings.motionBlur.shutterOpen)));
+                        camera.lensRay(x + 0.5, y + 0.5, b.lensX, b.lensY, origin, dir);
                     }
+                    float T[3] = {1.0f, 1.0f, 1.0f}, C[3] = {0.0f, 0.0f, 0.0f};
+                    float zRay = std::numeric_limits<float>::infinity();
+                    // Parameter s: world distance from the near-plane origin; far plane likewise.
+                    const double sFar = camera.projection() == Projection::Perspective
+                        ? (camera.far() - camera.near()) / glm::dot(dir, forward)
+                        : camera.far() - camera.near();
+                    const Vec3d oIndex = indexFromWorld * (origin - grid.indexToWorldOffset);
+                    const Vec3d dIndex = indexFromWorld * dir; // index units per world unit
+                    double s0, s1;
+                    if (boxClip(oIndex, dIndex, boxLo, boxHi, s0, s1)) {
+                        s0 = std::max(s0, 0.0);
+                        s1 = std::min(s1, sFar);
+                        const double ds = step * ell;
+                        // Steps are anchored at the near plane, so neighbouring rays sample alike.
+                        for (double s = ds * std::floor(s0 / ds); s < s1; s += ds) {
+                            const Vec3d p = oIndex + (s + 0.5 * ds) * dIndex;
+                            const double jump = skipper.emptyExit(p, dIndex);
+                            if (jump > ds) {
+                                s += ds * std::floor(jump / ds) - ds;
+                                continue;
+                            }
+                            double density, source[3];
+                            Vec3d emitted;
+                            if (!sampler.sample(p, density, source, emitted)) continue;
+                            const float before = (T[0] + T[1] + T[2]) / 3.0f;
+                            for (int c = 0; c < 3; ++c) {
+                                // The emission grids' radiance per voxel length over the step (no
+                                // optical depth of their own: compositeSlab's exact update).
+                                const float tau = float(model.opticalDepth(c, density, step));
+                                compositeSlab(tau, float(tau * source[c] + emitted[c] * step), C[c], T[c]);
+                            }
+                            if (passes.depth && before > 0.5f && !std::isfinite(zRay)) {
+                                const double u = halfAlphaFraction(before, (T[0] + T[1] + T[2]) / 3.0f);
+                                if (u <= 1.0) zRay = float(camera.near() + (s + u * ds) * glm::dot(dir, forward));
+                            }
+                            if (T[0] * T[0] + T[1] * T[1] + T[2] * T[2] < cutoff) break;
+                        }
+                    }
+                    for (int c = 0; c < 3; ++c) {
+                        sumC[c] += C[c];
+                        sumT[c] += T[c];
+                    }
+                    if (!std::isfinite(z)) z = zRay; // the first sample's ray that reached half opacity
+                }
+                float C[3], T[3];
+                for (int c = 0; c < 3; ++c) {
+                    C[c] = sumC[c] / float(samples);
+                    T[c] = sumT[c] / float(samples);
                 }
                 float* px = frame.beauty.pixel(x, y);
                 for (int c = 0; c < 3; ++c) px[c] = C[c];
@@ -308,11 +391,16 @@ Frame rayMarchReference(const GridSource::Impl& grid, const Camera& camera, cons
     }
     const openvdb::CoordBBox box = occupancy->evalActiveVoxelBoundingBox();
     if (box.empty()) return blankFrame(camera.width(), camera.height(), passes);
-    // Trilinear support: one voxel beyond the active ones.
-    const Vec3d boxLo = Vec3d(box.min().x(), box.min().y(), box.min().z()) - 1.0;
-    const Vec3d boxHi = Vec3d(box.max().x(), box.max().y(), box.max().z()) + 1.0;
+    // Trilinear support: one voxel beyond the active ones; with motion blur, as far again as
+    // any point travels (|A^-1| <= its Frobenius norm takes world lengths to index lengths), and
+    // empty space is skipped only that far from the still field.
+    const Mat3d inverse = glm::inverse(grid.indexToWorldLinear);
+    const double travel = largestTravel(grid, settings) *
+                          std::sqrt(glm::dot(inverse[0], inverse[0]) + glm::dot(inverse[1], inverse[1]) + glm::dot(inverse[2], inverse[2]));
+    const Vec3d boxLo = Vec3d(box.min().x(), box.min().y(), box.min().z()) - 1.0 - travel;
+    const Vec3d boxHi = Vec3d(box.max().x(), box.max().y(), box.max().z()) + 1.0 + travel;
     if (progress) progress->stage(0, 100);
-    Frame frame = marchRays(grid, camera, settings, passes, *occupancy, 0, boxLo, boxHi,
+    Frame frame = marchRays(grid, camera, settings, passes, *occupancy, int(std::ceil(travel)), boxLo, boxHi,
         [&] { return TrilinearSampler(grid, settings, emission ? &*emission : nullptr); }, progress);
     stats.rasterSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return frame;
@@ -322,6 +410,9 @@ Frame rayMarchGaussianSum(const GridSource::Impl& grid, const Camera& camera, co
     const PassRequest& passes, RenderStats& stats, Progress* progress)
 {
     checkMarchable(grid, passes, "raymarch-gaussian");
+    if (grid.velocity || camera.lensRadius() > 0.0) {
+        throw ValueError("--method raymarch-gaussian renders still pinhole frames: motion blur (--velocity-grid) and depth of field (--fstop) need --method splat or raymarch");
+    }
     if (progress) progress->stage(0, 15); // kernels and shadows, then the rays
     const ReferenceVolume volume = buildVolume(grid, settings, stats, progress);
     const auto t0 = std::chrono::steady_clock::now();

@@ -251,6 +251,8 @@ std::shared_ptr<GridSource::Impl> movedImpl(const GridSource::Impl& impl, const 
     auto copy = std::make_shared<GridSource::Impl>(impl);
     copy->grid = moved<openvdb::FloatGrid>(impl.grid, m);
     copy->color = moved<openvdb::Vec3SGrid>(impl.color, m);
+    copy->velocity = moved<openvdb::Vec3SGrid>(impl.velocity, m);
+    copy->velocityToWorld = Mat3d(m) * impl.velocityToWorld;
     if (impl.emission) copy->emission = movedImpl(*impl.emission, m);
     if (impl.temperature) copy->temperature = movedImpl(*impl.temperature, m);
     copy->placement = m * impl.placement;
@@ -302,6 +304,76 @@ GridSource attachEmitter(const GridSource::Impl& impl, const openvdb::GridBase::
     return GridSource(copy);
 }
 
+/// @a impl with @a base (vec3s or vec3d, in @a base's own transform) as its velocity grid;
+/// @a toWorld takes its vectors to world space. @throw InputError
+GridSource attachVelocity(const GridSource::Impl& impl, const openvdb::GridBase::ConstPtr& base, const Mat3d& toWorld, const std::string& where)
+{
+    if (!base) throw InputError(where + ": null velocity grid");
+    openvdb::Vec3SGrid::ConstPtr velocity = openvdb::GridBase::constGrid<openvdb::Vec3SGrid>(base);
+    if (!velocity) {
+        if (auto d = openvdb::GridBase::constGrid<openvdb::Vec3DGrid>(base)) {
+            openvdb::Vec3SGrid::Ptr single = openvdb::Vec3SGrid::create(openvdb::Vec3s(d->background()));
+            single->setTransform(d->transform().copy());
+            single->setGridClass(d->getGridClass());
+            single->tree().topologyUnion(d->tree());
+            single->tree().voxelizeActiveTiles();
+            auto acc = d->getConstAccessor();
+            for (auto it = single->beginValueOn(); it; ++it) it.setValue(openvdb::Vec3s(acc.getValue(it.getCoord())));
+            velocity = single;
+        }
+    }
+    if (!velocity) {
+        throw InputError(where + ": velocity grid '" + base->getName() + "' holds " + base->valueType() +
+                         " values; --velocity-grid needs a vec3s or vec3d grid (or NAME.x, NAME.y, NAME.z float grids)");
+    }
+    auto copy = std::make_shared<GridSource::Impl>(impl);
+    copy->velocity = velocity;
+    copy->velocityToWorld = toWorld;
+    return GridSource(copy);
+}
+
+/// The velocity grid @a name of @a path: a vector grid, or NAME.x, NAME.y, NAME.z float grids
+/// joined into one (they must share a transform). @throw IoError, InputError
+openvdb::GridBase::Ptr readVelocity(const std::string& path, const std::string& name)
+{
+    bool split = false;
+    try {
+        initializeOpenVDB();
+        checkReadable(path);
+        detail::checkVdbLayout(path);
+        openvdb::io::File file(path);
+        file.open(false);
+        split = !file.hasGrid(name) && file.hasGrid(name + ".x") && file.hasGrid(name + ".y") && file.hasGrid(name + ".z");
+        file.close();
+    } catch (const Error&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw IoError(path + ": cannot read VDB file (" + std::string(e.what()) + ")");
+    }
+    if (!split) return readGrid(path, name, [](const std::string&) { return false; }, "velocity");
+    openvdb::FloatGrid::ConstPtr parts[3];
+    for (int a = 0; a < 3; ++a) {
+        const std::string part = name + "." + "xyz"[a];
+        std::string stored;
+        parts[a] = asFloatGrid(readGrid(path, part, isScalarFloatType, "scalar floating-point"), stored);
+        if (!parts[a]) throw InputError(path + ": velocity component '" + part + "' is not a float or double grid");
+        if (parts[a]->transform() != parts[0]->transform()) {
+            throw InputError(path + ": velocity components '" + name + ".x', '.y' and '.z' have different transforms; they must share one");
+        }
+    }
+    openvdb::Vec3SGrid::Ptr joined = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+    joined->setName(name);
+    joined->setTransform(parts[0]->transform().copy());
+    for (const auto& part : parts) joined->tree().topologyUnion(part->tree());
+    joined->tree().voxelizeActiveTiles();
+    auto x = parts[0]->getConstAccessor(), y = parts[1]->getConstAccessor(), z = parts[2]->getConstAccessor();
+    for (auto it = joined->beginValueOn(); it; ++it) {
+        const openvdb::Coord& c = it.getCoord();
+        it.setValue(openvdb::Vec3s(x.getValue(c), y.getValue(c), z.getValue(c)));
+    }
+    return joined;
+}
+
 } // namespace
 
 GridSource GridSource::open(const std::string& path, const std::string& gridName)
@@ -331,6 +403,14 @@ GridSource GridSource::withTemperatureGrid(const std::string& temperatureName) c
     return attachEmitter(*mImpl, placed(readGrid(mImpl->path, temperatureName, isScalarFloatType, "scalar floating-point"), mImpl->placement),
         mImpl->path, true);
 }
+
+GridSource GridSource::withVelocityGrid(const std::string& velocityName) const
+{
+    if (mImpl->path.empty()) throw InputError("host grid: withVelocityGrid needs a file; use vdb_ewa::withVelocityGrid with the host's grid");
+    return attachVelocity(*mImpl, placed(readVelocity(mImpl->path, velocityName), mImpl->placement), Mat3d(mImpl->placement), mImpl->path);
+}
+
+bool GridSource::hasVelocityGrid() const { return bool(mImpl->velocity); }
 
 double GridSource::voxelLength() const { return mImpl->voxelLength; }
 
@@ -370,6 +450,11 @@ GridSource withEmissionGrid(const GridSource& source, openvdb::GridBase::ConstPt
 GridSource withTemperatureGrid(const GridSource& source, openvdb::GridBase::ConstPtr temperatureGrid)
 {
     return attachEmitter(source.impl(), inSourceWorld(source, temperatureGrid), "host grid", true);
+}
+
+GridSource withVelocityGrid(const GridSource& source, openvdb::GridBase::ConstPtr velocityGrid)
+{
+    return attachVelocity(source.impl(), inSourceWorld(source, velocityGrid), Mat3d(source.impl().placement), "host grid");
 }
 
 GridSource withColorGrid(const GridSource& source, openvdb::GridBase::ConstPtr colorGrid)

@@ -33,6 +33,10 @@ struct VDB_EWA_LOCAL GridSource::Impl
     /// Emission grids of fog volumes (GridSource::withEmissionGrid, withTemperatureGrid), in this
     /// grid's index space (resampled where their transform differs), or null.
     std::shared_ptr<const Impl> emission, temperature;
+    /// Motion blur's velocities (GridSource::withVelocityGrid), in their own transform, or null;
+    /// velocityToWorld takes a stored vector to world space (the moves of transformed()).
+    openvdb::Vec3SGrid::ConstPtr velocity;
+    Mat3d velocityToWorld{1.0};
     /// The voxel values of the continuous field every integrator reconstructs (its trilinear
     /// interpolation, OpenVDB's BoxSampler; docs/equations.md#the-field): @c grid with NaN,
     /// negative values and inactive values read as 0 and values above kMaxDensity clamped. The

@@ -54,9 +54,19 @@ inline openvdb::Coord voxelOf(const Kernel& k)
     return openvdb::Coord(int(std::lround(k.pIndex.x)), int(std::lround(k.pIndex.y)), int(std::lround(k.pIndex.z)));
 }
 
+/// Motion blur (kernel_motion.h): where a kernel is at the shutter's mid-time, from its still
+/// centre, and its path over the shutter (or its share of it), world units.
+struct KernelMotion
+{
+    float shift[3];
+    float path[3];
+};
+
 struct KernelSet
 {
     LargeArray<Kernel> kernels; ///< in tree order (deterministic)
+    /// Motion blur: one per kernel, or empty (no velocity grid, or nothing moves).
+    LargeArray<KernelMotion> motion;
     std::uint64_t activeVoxels = 0;
     std::uint64_t activeTiles = 0;
     std::uint64_t belowCutoff = 0; ///< values < cutoff (including negative and -Inf): skipped

@@ -8,6 +8,7 @@
 
 #include "source/grid_source_impl.h"
 #include "source/kernel_extraction.h"
+#include "source/kernel_motion.h"
 #include "source/kernel_refinement.h"
 #include "source/level_of_detail.h"
 #include "source/material_color.h"

@@ -1,0 +1,182 @@
+/// @file kernel_motion.cpp
+#include "source/kernel_motion.h"
+
+#include "support/openvdb_tools.h"
+
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace vdb_ewa {
+namespace detail {
+
+namespace {
+
+/// A stored velocity in world units per second or frame, non-finite components as 0.
+Vec3d worldVelocity(const GridSource::Impl& grid, const openvdb::Vec3s& v)
+{
+    Vec3d out(0.0);
+    for (int a = 0; a < 3; ++a) out[a] = std::isfinite(v[a]) ? double(v[a]) : 0.0;
+    return grid.velocityToWorld * out;
+}
+
+} // namespace
+
+VelocitySampler::VelocitySampler(const GridSource::Impl& grid)
+    : mGrid(grid), mAccessor(grid.velocity->getConstAccessor()), mStaggered(grid.velocity->getGridClass() == openvdb::GRID_STAGGERED)
+{
+}
+
+Vec3d VelocitySampler::at(const Vec3d& pWorld)
+{
+    const openvdb::Vec3d p = mGrid.velocity->transform().worldToIndex(openvdb::Vec3d(pWorld.x, pWorld.y, pWorld.z));
+    openvdb::Vec3s v(0.0f);
+    if (mStaggered) openvdb::tools::StaggeredBoxSampler::sample(mAccessor, p, v);
+    else openvdb::tools::BoxSampler::sample(mAccessor, p, v);
+    return worldVelocity(mGrid, v);
+}
+
+namespace {
+
+/// The smallest eigenvalue of the symmetric positive semi-definite @a m (closed form, Smith 1961).
+double leastEigenvalue(const Mat3d& m)
+{
+    const double p1 = m[0][1] * m[0][1] + m[0][2] * m[0][2] + m[1][2] * m[1][2];
+    const double q = (m[0][0] + m[1][1] + m[2][2]) / 3.0;
+    if (p1 == 0.0) return std::min({m[0][0], m[1][1], m[2][2]});
+    const double p2 = (m[0][0] - q) * (m[0][0] - q) + (m[1][1] - q) * (m[1][1] - q) + (m[2][2] - q) * (m[2][2] - q) + 2.0 * p1;
+    const double p = std::sqrt(p2 / 6.0);
+    const Mat3d b = (m - Mat3d(q)) / p;
+    const double r = std::clamp(glm::determinant(b) / 2.0, -1.0, 1.0);
+    const double phi = std::acos(r) / 3.0;
+    return q + 2.0 * p * std::cos(phi + 2.0 * 3.14159265358979323846 / 3.0);
+}
+
+/// A kernel's motion before it is split: its velocity's travel to the mid-time and over the
+/// shutter (world units), and the sub-kernels it needs.
+struct Travel
+{
+    Vec3d shift{0.0}, path{0.0};
+    int pieces = 1;
+    bool clamped = false, longPath = false;
+};
+
+} // namespace
+
+MotionStats moveKernels(const GridSource::Impl& grid, const RenderSettings& settings, const Camera& camera, KernelSet& kernels,
+    std::vector<Rgb>& colors, const MemoryBudget* budget)
+{
+    MotionStats stats;
+    kernels.motion.clear();
+    if (!grid.velocity || kernels.kernels.empty()) return stats;
+    const MotionBlur& blur = settings.motionBlur;
+    const double open = blur.displacementPerVelocity(blur.shutterOpen), close = blur.displacementPerVelocity(blur.shutterClose);
+    const double mid = 0.5 * (open + close), length = close - open;
+    const double reach = std::max({std::abs(open), std::abs(close), 1e-300});
+    const double maxTravel = kMaxTravelVoxels * grid.voxelLength;
+    // The kernel's narrowest world extent per voxel of sigma: the index-to-world map's smallest
+    // singular value (conservative for sheared and anisotropic voxels: more sub-kernels).
+    const Mat3d ata = glm::transpose(grid.indexToWorldLinear) * grid.indexToWorldLinear;
+    const double narrowest = std::sqrt(std::max(0.0, leastEigenvalue(ata)));
+    const bool perspective = camera.projection() == Projection::Perspective;
+    const double f = camera.focalPixels(), lowpass = settings.splat.lowpass;
+    const Mat3d R = camera.cameraFromWorld();
+    const std::size_t n = kernels.kernels.size();
+    std::vector<Travel> travel(n);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& range) {
+        VelocitySampler velocity(grid);
+        for (std::size_t i = range.begin(); i < range.end(); ++i) {
+            const Kernel& k = kernels.kernels[i];
+            const Vec3d pWorld = grid.indexToWorld(k.pIndex);
+            Vec3d v = velocity.at(pWorld);
+            Travel& t = travel[i];
+            const double speed = glm::length(v);
+            if (!(speed > 0.0)) continue;
+            if (speed * reach > maxTravel) { // absurd velocities: clamped
+                v *= maxTravel / (speed * reach);
+                t.clamped = true;
+            }
+            t.shift = v * mid;
+            t.path = v * length;
+            // The path's image in pixels (the projection's Jacobian at the mid-time centre) and
+            // the footprint's width along it, the low-pass filter's at least (Eq. 33).
+            const Vec3d c = camera.cameraFromWorldPoint(pWorld + t.shift), d = R * t.path;
+            double pixels, pixelsPerUnit;
+            if (perspective && c.z > camera.near()) {
+                pixelsPerUnit = f / c.z;
+                pixels = pixelsPerUnit * std::hypot(d.x - c.x / c.z * d.z, d.y - c.y / c.z * d.z);
+            } else if (perspective) {
+                pixelsPerUnit = f / camera.near(); // at the eye: as if at the near plane
+                pixels = pixelsPerUnit * glm::length(d);
+            } else {
+                pixelsPerUnit = f;
+                pixels = f * std::hypot(d.x, d.y);
+            }
+            const double sigmaPixels = kernelSigmaVoxels(k, settings.splat.kernelSigma) * narrowest * pixelsPerUnit;
+            const double footprint = std::sqrt(std::max(sigmaPixels * sigmaPixels, lowpass));
+            const double pieces = std::ceil(pixels / (kMaxSubPathSigmas * footprint));
+            t.longPath = pieces > double(kMaxSubKernels);
+            t.pieces = int(std::clamp(pieces, 1.0, double(kMaxSubKernels)));
+        }
+    });
+    std::vector<std::size_t> first(n + 1, 0);
+    for (std::size_t i = 0; i < n; ++i) {
+        const Travel& t = travel[i];
+        stats.moving += (t.path != Vec3d(0.0) || t.shift != Vec3d(0.0));
+        stats.clamped += t.clamped;
+        stats.longPaths += t.longPath;
+        first[i + 1] = first[i] + std::size_t(t.pieces);
+    }
+    if (stats.moving == 0) return stats; // still: the frame stays bit-identical to one without blur
+    const std::size_t total = first[n];
+    stats.subKernels = total - n;
+    if (budget && total > n) budget->check(double(total), "kernels with motion blur's sub-kernels", kBytesPerKernel);
+
+    LargeArray<Kernel> split(total);
+    LargeArray<KernelMotion> motion(total);
+    std::vector<Rgb> splitColors(colors.empty() ? 0 : total);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& range) {
+        for (std::size_t i = range.begin(); i < range.end(); ++i) {
+            const Travel& t = travel[i];
+            const int m = t.pieces;
+            for (int j = 0; j < m; ++j) {
+                // Sub-path j of m: its centre (j + 1/2)/m along the path, a share 1/m of the weight.
+                Kernel k = kernels.kernels[i];
+                k.density /= float(m);
+                const Vec3d shift = t.shift + t.path * ((double(j) + 0.5) / double(m) - 0.5), path = t.path / double(m);
+                const std::size_t at = first[i] + std::size_t(j);
+                split[at] = k;
+                motion[at] = KernelMotion{{float(shift.x), float(shift.y), float(shift.z)}, {float(path.x), float(path.y), float(path.z)}};
+                if (!colors.empty()) splitColors[at] = colors[i];
+            }
+        }
+    });
+    if (kernels.emitterBegin < n) {
+        std::vector<std::array<float, 3>> emitted;
+        emitted.reserve(total - first[kernels.emitterBegin]);
+        for (std::size_t i = kernels.emitterBegin; i < n; ++i) emitted.insert(emitted.end(), std::size_t(travel[i].pieces), kernels.emitted[i - kernels.emitterBegin]);
+        kernels.emitted = std::move(emitted);
+        kernels.emitterBegin = first[kernels.emitterBegin];
+    }
+    kernels.kernels = std::move(split);
+    kernels.motion = std::move(motion);
+    if (!colors.empty()) colors = std::move(splitColors);
+    return stats;
+}
+
+double largestTravel(const GridSource::Impl& grid, const RenderSettings& settings)
+{
+    if (!grid.velocity) return 0.0;
+    const MotionBlur& blur = settings.motionBlur;
+    const double reach = std::max(std::abs(blur.displacementPerVelocity(blur.shutterOpen)), std::abs(blur.displacementPerVelocity(blur.shutterClose)));
+    // The largest stored vector (tiles, voxels and the background) bounds the trilinear samples.
+    double most = 0.0;
+    for (auto it = grid.velocity->cbeginValueAll(); it; ++it) most = std::max(most, glm::length(worldVelocity(grid, *it)));
+    most = std::max(most, glm::length(worldVelocity(grid, grid.velocity->background())));
+    return std::min(most * reach, kMaxTravelVoxels * grid.voxelLength);
+}
+
+} // namespace detail
+} // namespace vdb_ewa

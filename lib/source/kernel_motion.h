@@ -1,0 +1,73 @@
+/// @file kernel_motion.h
+/// @brief Motion blur in the source stage: each kernel moves linearly over the shutter with
+///        the velocity at its centre, a Gaussian convolved with a box along its path
+///        (docs/equations.md#motion-blur). The kernel's path is handed to the projection
+///        as plain data (KernelSet::motion); long paths are split into sub-kernels.
+#pragma once
+
+#include <vdb_ewa/camera.h>
+#include <vdb_ewa/render_settings.h>
+
+#include "source/grid_source_impl.h"
+#include "source/kernel_extraction.h"
+#include "support/memory_budget.h"
+#include "support/rgb.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace vdb_ewa {
+namespace detail {
+
+/// A sub-path over the shutter is at most this many of the kernel's standard deviations along
+/// it, on the screen (the low-pass filter's included: the image resolves no finer): a Gaussian
+/// convolved with a box of length L is then a Gaussian of variance sigma^2 + L^2 / 12 to within
+/// 1 % of its peak, and the sub-kernels' sum is flat along the path to within 0.3 %
+/// (docs/equations.md#motion-blur).
+inline constexpr double kMaxSubPathSigmas = 2.0;
+/// At most this many sub-kernels a kernel; longer paths make longer sub-paths (counted).
+inline constexpr int kMaxSubKernels = 64;
+/// A kernel travels at most this many voxel lengths over the shutter (absurd velocities are
+/// clamped, and counted).
+inline constexpr double kMaxTravelVoxels = 4096.0;
+
+/// The velocity grid's vectors in world units per second or frame, as stored times
+/// GridSource::Impl::velocityToWorld, trilinear (staggered grids as such); non-finite
+/// components read as 0. One per thread.
+class VelocitySampler
+{
+public:
+    explicit VelocitySampler(const GridSource::Impl& grid);
+    Vec3d at(const Vec3d& pWorld);
+
+private:
+    const GridSource::Impl& mGrid;
+    openvdb::Vec3SGrid::ConstAccessor mAccessor;
+    bool mStaggered;
+};
+
+/// What moveKernels counted.
+struct MotionStats
+{
+    std::uint64_t moving = 0;     ///< kernels that move over the shutter
+    std::uint64_t subKernels = 0; ///< kernels added by splitting long paths
+    std::uint64_t longPaths = 0;  ///< kernels whose path needed more than kMaxSubKernels
+    std::uint64_t clamped = 0;    ///< kernels whose travel was clamped to kMaxTravelVoxels
+};
+
+/// Motion blur: every kernel of @a kernels moved to its centre at the shutter's mid-time and
+/// given its path over the shutter (KernelSet::motion); a path whose image through @a camera
+/// is longer than kMaxSubPathSigmas of the kernel's filtered footprint along it is split into
+/// that many sub-kernels, each a share of the weight over an equal part of the path (@a colors,
+/// KernelSet::emitted and emitterBegin follow). Nothing changes without a velocity grid.
+/// @a budget: the sub-kernels are counted before they are allocated (BudgetError).
+MotionStats moveKernels(const GridSource::Impl& grid, const RenderSettings& settings, const Camera& camera, KernelSet& kernels,
+    std::vector<Rgb>& colors, const MemoryBudget* budget);
+
+/// How far any kernel of @a grid can be from its still centre over the shutter, at most, in
+/// world units (the velocity grid's largest vector): what the streamed frame's brick bounds
+/// grow by. 0 without a velocity grid.
+double largestTravel(const GridSource::Impl& grid, const RenderSettings& settings);
+
+} // namespace detail
+} // namespace vdb_ewa

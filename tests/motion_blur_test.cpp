@@ -1,0 +1,335 @@
+/// @file motion_blur_test.cpp
+/// @brief Motion blur and depth of field against closed forms: a moving Gaussian (a Gaussian
+///        convolved with a box), a uniform slab moving along and across the view, the thin
+///        lens's circle of confusion; still frames bit-identical; the reference's samples.
+#include "fixtures.h"
+
+#include <vdb_ewa/ewa_kernel.h>
+#include <vdb_ewa/error.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <numeric>
+
+using namespace vdb_ewa;
+using namespace vdb_ewa::test;
+
+namespace {
+
+/// A velocity grid that reads @a v everywhere (its background), voxel size @a h.
+openvdb::Vec3SGrid::Ptr uniformVelocity(const Vec3d& v, double h)
+{
+    auto grid = openvdb::Vec3SGrid::create(openvdb::Vec3s(float(v.x), float(v.y), float(v.z)));
+    grid->setTransform(openvdb::math::Transform::createLinearTransform(h));
+    grid->setName("v");
+    return grid;
+}
+
+/// Optical depth per pixel, -ln(1 - alpha).
+std::vector<double> opticalDepth(const Image& img)
+{
+    std::vector<double> tau(std::size_t(img.width) * std::size_t(img.height));
+    for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < img.width; ++x) tau[std::size_t(y) * std::size_t(img.width) + std::size_t(x)] = -std::log1p(-double(img.pixel(x, y)[3]));
+    return tau;
+}
+
+Frame render(const GridSource& source, const CameraSettings& camera, const RenderSettings& settings, RenderStats* stats = nullptr)
+{
+    return Renderer(settings).renderFrame(source, Camera(camera, source.worldCentre()), PassRequest{}, stats);
+}
+
+double phi(double x) { return 0.5 * std::erfc(-x / std::sqrt(2.0)); }
+
+/// A pure absorber with velocities in world units per frame over a shutter of one frame.
+RenderSettings movingAbsorber(double sigma)
+{
+    RenderSettings s = absorberSettings(sigma);
+    s.motionBlur.unit = VelocityUnit::Frame;
+    s.motionBlur.shutterOpen = -0.5;
+    s.motionBlur.shutterClose = 0.5;
+    return s;
+}
+
+} // namespace
+
+TEST(DepthOfField, AKernelInFocusIsUnchangedAndOffFocusWidensByTheThinLens)
+{
+    ProjectionParams pinhole;
+    pinhole.focalPixels = 800.0;
+    pinhole.principalPoint = Vec2d(320.0, 240.0);
+    pinhole.antiAliasing = AntiAliasing::Ewa; // adds --lowpass always: the difference is the lens's alone
+    ProjectionParams lens = pinhole;
+    lens.lensRadius = 0.05;
+    lens.focusDepth = 10.0;
+    const Mat3d cov(0.04);
+    for (const double z : {10.0, 4.0, 25.0}) {
+        const Vec3d t(0.3, -0.2, z);
+        const Footprint a = projectKernel(t, cov, pinhole), b = projectKernel(t, cov, lens);
+        ASSERT_TRUE(a.valid && b.valid);
+        // R = f a |1/z - 1/S|, a uniform disc of radius R: variance R^2 / 4 per axis.
+        const double r = 800.0 * 0.05 * std::abs(1.0 / z - 1.0 / 10.0);
+        EXPECT_NEAR(b.covariance.xx - a.covariance.xx, 0.25 * r * r, 1e-9 * (1.0 + r * r)) << z;
+        EXPECT_NEAR(b.covariance.yy - a.covariance.yy, 0.25 * r * r, 1e-9 * (1.0 + r * r)) << z;
+        EXPECT_DOUBLE_EQ(b.covariance.xy, a.covariance.xy);
+        // The footprint's integral (peak x 2 pi sqrt(det)) is kept: the lens spreads, never dims.
+        EXPECT_NEAR(b.peak * std::sqrt(b.covariance.det()), a.peak * std::sqrt(a.covariance.det()), 1e-12 * a.peak * std::sqrt(a.covariance.det()));
+        EXPECT_DOUBLE_EQ(b.depth, a.depth);
+        if (z == 10.0) {
+            EXPECT_EQ(b.covariance.xx, a.covariance.xx); // in focus: bit-identical
+            EXPECT_EQ(b.peak, a.peak);
+        }
+    }
+}
+
+TEST(DepthOfField, TheCameraFocusesWhereItLooksAndItsLensRaysMeetThere)
+{
+    CameraSettings c = lookAtCamera(Vec3d(0.0, 0.0, 12.0), Vec3d(0.0), 64, 48);
+    c.fstop = 2.0;
+    const Camera camera(c, Vec3d(0.0));
+    EXPECT_DOUBLE_EQ(camera.lensRadius(), 50.0 / 4000.0); // focal / (2 fstop), mm as metres
+    EXPECT_NEAR(camera.focusDepth(), 12.0, 1e-12);
+    EXPECT_EQ(camera.confusionRadius(12.0), 0.0);
+    EXPECT_NEAR(camera.confusionRadius(6.0), camera.focalPixels() * camera.lensRadius() * (1.0 / 6.0 - 1.0 / 12.0), 1e-12);
+    // Every lens ray through a pixel passes through the pinhole ray's point at the focus depth.
+    Vec3d o, d;
+    camera.worldRay(10.5, 30.5, o, d);
+    const Vec3d forward(0.0, 0.0, -1.0);
+    const Vec3d focus = o + d * ((12.0 - c.near) / glm::dot(d, forward));
+    for (const auto& [u, v] : {std::pair{1.0, 0.0}, {0.0, -1.0}, {-0.6, 0.6}}) {
+        Vec3d lo, ld;
+        camera.lensRay(10.5, 30.5, u, v, lo, ld);
+        EXPECT_NEAR(glm::length(ld), 1.0, 1e-12);
+        EXPECT_NEAR(glm::dot(lo - camera.eye(), forward), c.near, 1e-12); // on the near plane
+        const Vec3d at = lo + ld * ((12.0 - c.near) / glm::dot(ld, forward));
+        EXPECT_NEAR(glm::length(at - focus), 0.0, 1e-9);
+        EXPECT_GT(glm::length(lo - o), 0.0);
+    }
+    c.focusDistance = 3.0;
+    EXPECT_DOUBLE_EQ(Camera(c, Vec3d(0.0)).focusDepth(), 3.0);
+    c.projection = Projection::Orthographic;
+    EXPECT_THROW(Camera(c, Vec3d(0.0)), ValueError);
+    c.projection = Projection::Perspective;
+    c.fstop = -1.0;
+    EXPECT_THROW(Camera(c, Vec3d(0.0)), ValueError);
+}
+
+TEST(MotionBlur, ZeroVelocityIsBitIdenticalToTheStillFrame)
+{
+    auto grid = makeFogGrid(openvdb::Coord(-6), openvdb::Coord(6), [](const openvdb::Coord& c) { return 0.3f + 0.02f * float(c.x() + 2 * c.y()); }, 0.1);
+    const GridSource still = gridSourceFromOpenVDB(grid);
+    const GridSource moving = withVelocityGrid(still, uniformVelocity(Vec3d(0.0), 0.1));
+    const CameraSettings cam = lookAtCamera(Vec3d(0.4, 0.3, 3.0), Vec3d(0.0), 48, 40);
+    const RenderSettings s;
+    const Frame a = render(still, cam, s), b = render(moving, cam, s);
+    ASSERT_EQ(a.beauty.rgba.size(), b.beauty.rgba.size());
+    EXPECT_EQ(0, std::memcmp(a.beauty.rgba.data(), b.beauty.rgba.data(), a.beauty.rgba.size() * sizeof(float)));
+}
+
+TEST(MotionBlur, AMovingGaussianIsTheGaussianConvolvedWithItsPath)
+{
+    // One voxel, no prefilter: one kernel of sigma 0.5 world units seen down -z at 20 pixels a
+    // unit (sigma 10 pixels, so the low-pass floor adds nothing). Moving 4 units along x over
+    // the shutter, its optical depth is G_y(y) [Phi((x + L/2)/s) - Phi((x - L/2)/s)] / L.
+    auto grid = makeBoxGrid(openvdb::Coord(0), openvdb::Coord(0), 0.5f, 1.0);
+    const GridSource still = gridSourceFromOpenVDB(grid);
+    const double L = 4.0, sigma = 0.5;
+    const GridSource moving = withVelocityGrid(still, uniformVelocity(Vec3d(L, 0.0, 0.0), 1.0));
+    const int res = 200;
+    const CameraSettings cam = orthoDownZ(0.0, 0.0, 10.0, 10.0, res); // 20 pixels a unit
+    RenderSettings s = movingAbsorber(0.2);
+    s.splat.prefilter = false;
+    RenderStats stats;
+    const std::vector<double> tStill = opticalDepth(render(still, cam, s).beauty), tMoving = opticalDepth(render(moving, cam, s, &stats).beauty);
+    EXPECT_EQ(stats.movingKernels, 1u);
+    EXPECT_EQ(stats.motionSubKernels, 3u); // L / (2 sigma) = 4 sub-paths
+    // The mass is kept.
+    const double massStill = std::accumulate(tStill.begin(), tStill.end(), 0.0), massMoving = std::accumulate(tMoving.begin(), tMoving.end(), 0.0);
+    EXPECT_NEAR(massMoving, massStill, 0.005 * massStill);
+    // The still peak gives the weight: tau(x, y) = w G(x) G(y), G(0) = 1 / (sqrt(2 pi) sigma).
+    const double g0 = 1.0 / (std::sqrt(2.0 * 3.14159265358979323846) * sigma);
+    const double w = tStill[std::size_t(res / 2) * res + res / 2] / (g0 * g0);
+    double worst = 0.0;
+    for (int y = 60; y < 140; ++y)
+        for (int x = 20; x < 180; ++x) {
+            const double wx = (x + 0.5 - 0.5 * res) / 20.0, wy = -((y + 0.5 - 0.5 * res) / 20.0); // world x, y of the pixel centre
+            const double gy = g0 * std::exp(-0.5 * wy * wy / (sigma * sigma));
+            const double expected = w * gy * (phi((wx + 0.5 * L) / sigma) - phi((wx - 0.5 * L) / sigma)) / L;
+            worst = std::max(worst, std::abs(tMoving[std::size_t(y) * res + std::size_t(x)] - expected));
+        }
+    const double peak = w * g0 * (2.0 * phi(0.5 * L / sigma) - 1.0) / L;
+    EXPECT_LT(worst, 0.02 * peak) << "peak " << peak;
+}
+
+TEST(MotionBlur, AUniformSlabMovingAlongTheViewKeepsItsImageAndAcrossItRampsItsEdges)
+{
+    // A slab 40 x 40 x 10 voxels (voxel 0.1) of optical depth 1, seen down -z.
+    auto grid = makeBoxGrid(openvdb::Coord(-20, -20, 0), openvdb::Coord(19, 19, 9), 0.5f, 0.1);
+    const GridSource still = gridSourceFromOpenVDB(grid);
+    const CameraSettings cam = orthoDownZ(0.0, 0.0, 10.0, 6.0, 120); // 20 pixels a unit, 2 a voxel
+    const RenderSettings s = movingAbsorber(0.2);
+    const std::vector<double> tStill = opticalDepth(render(still, cam, s).beauty);
+    // Along the view: the column integral is the same at every shutter time.
+    const std::vector<double> tAlong = opticalDepth(render(withVelocityGrid(still, uniformVelocity(Vec3d(0.0, 0.0, 0.8), 0.1)), cam, s).beauty);
+    for (std::size_t i = 0; i < tStill.size(); ++i) ASSERT_NEAR(tAlong[i], tStill[i], 2e-3) << i;
+    // Across: x moves 1 unit (20 pixels) over the shutter. The slab spans x in [-2.05, 1.95];
+    // its left edge becomes a ramp from -2.55 to -1.55, half the interior at -2.05, and the
+    // interior (|x| < 1) is unchanged.
+    const std::vector<double> tAcross = opticalDepth(render(withVelocityGrid(still, uniformVelocity(Vec3d(1.0, 0.0, 0.0), 0.1)), cam, s).beauty);
+    // The splatter blurs optical depth (kernels widen): its ramp is linear in tau
+    // (docs/equations.md#motion-blur; the reference's, linear in transmittance, is below).
+    const int row = 60;
+    const double interior = 1.0; // 0.2 x 0.5 x 10 voxels
+    EXPECT_NEAR(tStill[std::size_t(row) * 120 + 60], interior, 0.01); // the lattice's ripple
+    const auto at = [&](double worldX) {
+        const double px = worldX * 20.0 + 60.0 - 0.5; // pixel centres are at i + 0.5
+        const int i = int(std::floor(px));
+        const double f = px - i;
+        return (1.0 - f) * tAcross[std::size_t(row) * 120 + std::size_t(i)] + f * tAcross[std::size_t(row) * 120 + std::size_t(i + 1)];
+    };
+    EXPECT_NEAR(at(-2.05), 0.5 * interior, 0.02);
+    for (const double x : {-2.35, -2.2, -1.9, -1.75}) EXPECT_NEAR(at(x), interior * (x + 2.55), 0.03) << x; // the box-filtered edge
+    // Moving, the lattice's ripple along x is averaged away.
+    for (int x = 50; x < 70; ++x) EXPECT_NEAR(tAcross[std::size_t(row) * 120 + std::size_t(x)], interior, 2e-3) << x;
+}
+
+TEST(MotionBlur, TheReferenceSamplesTheShutterToTheSameRamp)
+{
+    auto grid = makeBoxGrid(openvdb::Coord(-20, -20, 0), openvdb::Coord(19, 19, 9), 0.5f, 0.1);
+    const GridSource moving = withVelocityGrid(gridSourceFromOpenVDB(grid), uniformVelocity(Vec3d(1.0, 0.0, 0.0), 0.1));
+    CameraSettings cam = orthoDownZ(0.0, 0.0, 10.0, 6.0, 120);
+    cam.height = 8; // a strip through the slab's middle rows
+    RenderSettings s = movingAbsorber(0.2);
+    s.method = Method::RayMarch;
+    s.step = 0.25;
+    s.blurSamples = 64;
+    const Frame f = render(moving, cam, s);
+    // The image averaged over the shutter: the transmittance is 1 - f (1 - e^-1) where the slab
+    // covers the pixel a share f of the shutter. The trilinear field's edge is a voxel-wide ramp
+    // about x = -2.05; moved over [-0.5, 0.5], f = clamp(x + 2.55, 0, 1), rounded within 0.05 of
+    // the ramp's ends.
+    const int row = 4;
+    const auto transmittance = [&](int i) { return 1.0 - double(f.beauty.pixel(i, row)[3]); };
+    EXPECT_NEAR(transmittance(60), std::exp(-1.0), 0.01);
+    for (int i = 0; i < 120; ++i) {
+        const double x = (i + 0.5 - 60.0) / 20.0;
+        if (x < -2.6 || x > -1.5) continue;
+        const double covered = std::clamp(x + 2.55, 0.0, 1.0);
+        EXPECT_NEAR(transmittance(i), 1.0 - covered * (1.0 - std::exp(-1.0)), 0.04) << x;
+    }
+}
+
+TEST(MotionBlur, TheStreamedFrameEqualsTheWholeFrame)
+{
+    auto grid = makeFogGrid(openvdb::Coord(-12), openvdb::Coord(12), [](const openvdb::Coord& c) { return 0.4f + 0.03f * float(c.x() - c.z()); }, 0.1);
+    auto velocity = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+    velocity->setTransform(openvdb::math::Transform::createLinearTransform(0.1));
+    auto acc = velocity->getAccessor();
+    for (int i = -12; i <= 12; ++i)
+        for (int j = -12; j <= 12; ++j)
+            for (int k = -12; k <= 12; ++k) acc.setValueOn(openvdb::Coord(i, j, k), openvdb::Vec3s(0.2f * float(j), -0.5f, 0.1f * float(i)));
+    const GridSource moving = withVelocityGrid(gridSourceFromOpenVDB(grid), velocity);
+    const CameraSettings cam = lookAtCamera(Vec3d(0.5, 0.4, 3.5), Vec3d(0.0), 64, 48);
+    RenderSettings on;
+    on.motionBlur.fps = 4.0; // long paths: sub-kernels
+    RenderSettings off = on;
+    off.cull = false;
+    RenderStats statsOn, statsOff;
+    for (const bool simd : {true, false}) {
+        on.simd = off.simd = simd;
+        const Frame a = render(moving, cam, on, &statsOn), b = render(moving, cam, off, &statsOff);
+        EXPECT_TRUE(statsOn.streamed);
+        EXPECT_GT(statsOn.motionSubKernels, 0u);
+        EXPECT_EQ(statsOn.motionSubKernels, statsOff.motionSubKernels);
+        double worst = 0.0;
+        for (std::size_t i = 0; i < a.beauty.rgba.size(); ++i) worst = std::max(worst, double(std::abs(a.beauty.rgba[i] - b.beauty.rgba[i])));
+        EXPECT_LT(worst, 1e-5) << "simd " << simd;
+        for (const std::string& w : statsOn.warnings) EXPECT_EQ(w.find("in front of their window"), std::string::npos) << w;
+    }
+}
+
+TEST(MotionBlur, DoubleVelocitiesMoveAsFloatOnesAndOtherGridsAreRefused)
+{
+    auto grid = makeFogGrid(openvdb::Coord(-4), openvdb::Coord(4), [](const openvdb::Coord& c) { return 0.3f + 0.05f * float(c.y() & 1); }, 0.1);
+    const GridSource still = gridSourceFromOpenVDB(grid);
+    auto d = openvdb::Vec3DGrid::create(openvdb::Vec3d(0.0, 0.0, 0.0));
+    d->setTransform(openvdb::math::Transform::createLinearTransform(0.1));
+    auto s = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+    s->setTransform(openvdb::math::Transform::createLinearTransform(0.1));
+    for (int i = -4; i <= 4; ++i) {
+        d->tree().setValueOn(openvdb::Coord(i, 0, 0), openvdb::Vec3d(8.0, 4.0 * i, 0.0));
+        s->tree().setValueOn(openvdb::Coord(i, 0, 0), openvdb::Vec3s(8.0f, 4.0f * float(i), 0.0f));
+    }
+    const CameraSettings cam = lookAtCamera(Vec3d(0.0, 0.0, 3.0), Vec3d(0.0), 32, 32);
+    const Frame a = render(withVelocityGrid(still, d), cam, RenderSettings()), b = render(withVelocityGrid(still, s), cam, RenderSettings());
+    EXPECT_EQ(0, std::memcmp(a.beauty.rgba.data(), b.beauty.rgba.data(), a.beauty.rgba.size() * sizeof(float)));
+    EXPECT_GT(maxAbsDiff(a.beauty, render(still, cam, RenderSettings()).beauty), 1e-3);
+    EXPECT_THROW(withVelocityGrid(still, grid), InputError);
+    EXPECT_THROW(withVelocityGrid(still, nullptr), InputError);
+    EXPECT_THROW(still.withVelocityGrid("v"), InputError); // a host grid has no file
+}
+
+TEST(MotionBlur, AbsurdVelocitiesAreClampedAndSaid)
+{
+    auto grid = makeBoxGrid(openvdb::Coord(-2), openvdb::Coord(2), 0.5f, 0.1);
+    const GridSource moving = withVelocityGrid(gridSourceFromOpenVDB(grid), uniformVelocity(Vec3d(1e30, 0.0, std::nan("")), 0.1));
+    RenderStats stats;
+    const Frame f = render(moving, lookAtCamera(Vec3d(0.0, 0.0, 3.0), Vec3d(0.0), 32, 32), RenderSettings(), &stats);
+    for (const float v : f.beauty.rgba) ASSERT_TRUE(std::isfinite(v));
+    bool said = false;
+    for (const std::string& w : stats.warnings) said = said || w.find("4096 voxel lengths") != std::string::npos;
+    EXPECT_TRUE(said);
+}
+
+TEST(MotionBlur, SettingsOutOfRangeAreRefused)
+{
+    RenderSettings s;
+    s.motionBlur.shutterOpen = 0.5;
+    s.motionBlur.shutterClose = 0.0;
+    EXPECT_THROW(Renderer{s}, ValueError);
+    s = RenderSettings();
+    s.motionBlur.fps = 0.0;
+    EXPECT_THROW(Renderer{s}, ValueError);
+    s = RenderSettings();
+    s.motionBlur.velocityScale = std::nan("");
+    EXPECT_THROW(Renderer{s}, ValueError);
+    s = RenderSettings();
+    s.blurSamples = 0;
+    EXPECT_THROW(Renderer{s}, ValueError);
+}
+
+TEST(DepthOfField, TheSplatterMatchesTheReferenceOffFocus)
+{
+    // A blob 1 unit wide 3 units behind the focus: the lens blurs it by R = f a (1/9 - 1/12).
+    auto grid = makeFogGrid(openvdb::Coord(-5), openvdb::Coord(5), [](const openvdb::Coord& c) {
+        return float(std::exp(-0.5 * double(c.x() * c.x() + c.y() * c.y() + c.z() * c.z()) / 4.0)); }, 0.1);
+    const GridSource blob = gridSourceFromOpenVDB(grid);
+    CameraSettings cam = lookAtCamera(Vec3d(0.0, 0.0, 12.0), Vec3d(0.0), 96, 96);
+    cam.setFieldOfView(8.0);
+    cam.fstop = 0.25;
+    cam.focusDistance = 9.0;
+    // Optically thin: the splatter blurs optical depth, the lens averages images, and the two
+    // agree where exp(-tau) is linear (docs/equations.md#depth-of-field).
+    RenderSettings s = absorberSettings(0.1);
+    RenderSettings r = s;
+    r.method = Method::RayMarch;
+    r.step = 0.1;
+    r.blurSamples = 128;
+    const std::vector<double> a = opticalDepth(render(blob, cam, s).beauty), b = opticalDepth(render(blob, cam, r).beauty);
+    ASSERT_EQ(a.size(), b.size());
+    CameraSettings pin = cam;
+    pin.fstop = 0.0;
+    const std::vector<double> sharp = opticalDepth(render(blob, pin, s).beauty);
+    double err = 0.0, spread = 0.0, peak = 0.0;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+        err += (a[i] - b[i]) * (a[i] - b[i]);
+        spread += (sharp[i] - b[i]) * (sharp[i] - b[i]);
+        peak = std::max(peak, b[i]);
+    }
+    err = std::sqrt(err / double(a.size()));
+    spread = std::sqrt(spread / double(a.size()));
+    EXPECT_LT(err, 0.02 * peak);
+    EXPECT_GT(spread, 5.0 * err); // the lens's blur is large against what is left
+}
