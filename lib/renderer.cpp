@@ -121,6 +121,9 @@ void Renderer::renderLevelSet(const GridSource::Impl& grid, const Camera& camera
     if (grid.velocity) {
         stats.warnings.push_back("--velocity-grid changes nothing here: motion blur moves a fog volume's kernels; the level set renders at the frame's time");
     }
+    if (camera.lensRadius() > 0.0) {
+        stats.warnings.push_back("--fstop changes nothing here: depth of field blurs a fog volume's kernels; the level set renders in focus");
+    }
     StageTimer timer;
     progress.stage(0, 60);
     // At most one surface kernel an active voxel.

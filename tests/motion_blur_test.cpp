@@ -333,3 +333,19 @@ TEST(DepthOfField, TheSplatterMatchesTheReferenceOffFocus)
     EXPECT_LT(err, 0.02 * peak);
     EXPECT_GT(spread, 5.0 * err); // the lens's blur is large against what is left
 }
+
+TEST(DepthOfField, LevelSetsRenderInFocusAndSaySo)
+{
+    // A level set's coverage comes from its discs, which the lens would not blur: in focus.
+    const GridSource sphere = gridSourceFromOpenVDB(sphereLevelSet(1.0, 0.05));
+    CameraSettings cam = lookAtCamera(Vec3d(0.0, 0.0, 5.0), Vec3d(0.0), 48, 48);
+    const Frame sharp = render(sphere, cam, RenderSettings());
+    cam.fstop = 0.02;
+    cam.focusDistance = 2.0;
+    RenderStats stats;
+    const Frame lens = render(sphere, cam, RenderSettings(), &stats);
+    EXPECT_EQ(0, std::memcmp(sharp.beauty.rgba.data(), lens.beauty.rgba.data(), sharp.beauty.rgba.size() * sizeof(float)));
+    bool said = false;
+    for (const std::string& w : stats.warnings) said = said || w.find("--fstop changes nothing here") != std::string::npos;
+    EXPECT_TRUE(said);
+}

@@ -197,7 +197,9 @@ Footprint projectSurfaceKernel(const Vec3d& tCentre, const Vec3d& tangent0, cons
     const Sym2 cov{s2 * (m00 * m00 + m01 * m01), s2 * (m00 * m10 + m01 * m11), s2 * (m10 * m10 + m11 * m11)};
     fp.depthSd = 0.0;
     // rho(x) = |det M| G_{cov}(x - centre): per unit of surface area (Heckbert's EWA filter).
-    finishFootprint(withConfusion(cov, tCentre.z, params), std::abs(m00 * m11 - m01 * m10), params, fp);
+    // No circle of confusion: a surface's coverage comes from its discs (disc_coverage.h), which
+    // the lens does not blur; level sets and --iso surfaces render in focus.
+    finishFootprint(cov, std::abs(m00 * m11 - m01 * m10), params, fp);
     return fp;
 }
 
