@@ -151,6 +151,53 @@ void Renderer::renderLevelSet(const GridSource::Impl& grid, const Camera& camera
     }
 }
 
+void Renderer::renderMotionSamples(const GridSource::Impl& g, const Camera& camera, const PassRequest& passes,
+    Frame& frame, RenderStats& stats, detail::Progress& progress) const
+{
+    if (passes.deep) throw ValueError("--motion-samples averages sub-frames; a deep image has no average: use --motion-samples 1 with --deep");
+    const MotionBlur& blur = mSettings.motionBlur;
+    const int n = blur.samples;
+    for (int s = 0; s < n; ++s) {
+        // Sub-frame s: the shutter's part [open + s d, open + (s + 1) d], d = (close - open) / n.
+        RenderSettings part = mSettings;
+        part.motionBlur.samples = 1;
+        part.motionBlur.shutterOpen = blur.shutterOpen + (blur.shutterClose - blur.shutterOpen) * double(s) / double(n);
+        part.motionBlur.shutterClose = blur.shutterOpen + (blur.shutterClose - blur.shutterOpen) * double(s + 1) / double(n);
+        Frame sub;
+        RenderStats subStats;
+        Renderer(part).renderFogVolume(g, camera, passes, sub, subStats, progress);
+        // The images' average: colour and alpha (premultiplied), transmittance and the passes;
+        // Z, where alpha reaches 0.5, is the nearest sub-frame's.
+        const float w = 1.0f / float(n);
+        if (s == 0) {
+            frame = std::move(sub);
+            for (float& v : frame.beauty.rgba) v *= w;
+            for (std::vector<float>* plane : {&frame.transmittance, &frame.shadow, &frame.emission})
+                for (float& v : *plane) v *= w;
+        } else {
+            for (std::size_t i = 0; i < frame.beauty.rgba.size(); ++i) frame.beauty.rgba[i] += w * sub.beauty.rgba[i];
+            for (const auto& [to, from] : {std::pair{&frame.transmittance, &sub.transmittance}, {&frame.shadow, &sub.shadow}, {&frame.emission, &sub.emission}})
+                for (std::size_t i = 0; i < to->size(); ++i) (*to)[i] += w * (*from)[i];
+            for (std::size_t i = 0; i < frame.depth.size(); ++i) frame.depth[i] = std::min(frame.depth[i], sub.depth[i]);
+        }
+        // Counts and times add up over the sub-frames; the warnings are each sub-frame's alike.
+        const RenderStats total = stats;
+        stats = subStats;
+        if (s > 0) {
+            stats.kernelSeconds += total.kernelSeconds;
+            stats.shadowSeconds += total.shadowSeconds;
+            stats.projectSeconds += total.projectSeconds;
+            stats.rasterSeconds += total.rasterSeconds;
+            for (auto [sum, add] : {std::pair{&stats.kernels, total.kernels}, {&stats.splats, total.splats}, {&stats.splatTilePairs, total.splatTilePairs},
+                     {&stats.splatTilePairsSkipped, total.splatTilePairsSkipped}, {&stats.footprintSamples, total.footprintSamples},
+                     {&stats.slabComposites, total.slabComposites}, {&stats.motionSubKernels, total.motionSubKernels},
+                     {&stats.bricksExpanded, total.bricksExpanded}, {&stats.bricksHidden, total.bricksHidden}, {&stats.windows, total.windows},
+                     {&stats.lightRaysMarched, total.lightRaysMarched}, {&stats.kernelsCulled, total.kernelsCulled}})
+                *sum += add;
+        }
+    }
+}
+
 void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, const PassRequest& passes,
     Frame& frame, RenderStats& stats, detail::Progress& progress) const
 {
@@ -297,6 +344,8 @@ Frame Renderer::renderFrame(const GridSource& grid, const Camera& camera, const 
             frame = detail::rayMarchReference(g, camera, mSettings, passes, stats, &progress);
         } else if (mSettings.method == Method::RayMarchGaussian) {
             frame = detail::rayMarchGaussianSum(g, camera, mSettings, passes, stats, &progress);
+        } else if (g.velocity && mSettings.motionBlur.samples > 1 && mSettings.motionBlur.shutterClose > mSettings.motionBlur.shutterOpen) {
+            renderMotionSamples(g, camera, passes, frame, stats, progress);
         } else {
             renderFogVolume(g, camera, passes, frame, stats, progress);
         }

@@ -139,6 +139,7 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
            velocity_unit: OptionValue = None,
            fps: Optional[Number] = None,
            shutter: OptionValue = None,
+           motion_samples: Optional[int] = None,
            blur_samples: Optional[int] = None,
            samples: Optional[int] = None,
            threads: Optional[int] = None,
@@ -298,6 +299,10 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
         24)
     shutter (--shutter): motion blur: shutter OPEN,CLOSE in frames around the frame's time, each within
         1000, CLOSE >= OPEN (default: -0.25,0.25, a 180-degree shutter centred on the frame)
+    motion_samples (--motion-samples): motion blur: sub-frames over the shutter, each blurred over its
+        part of it, averaged; widened kernels blur optical depth where a camera averages images, so
+        opaque edges need more to converge (docs/equations.md#motion-blur); about N times the time;
+        range [1, 1024] (default: 2; draft 1, high 4, final 8)
     blur_samples (--blur-samples): --method raymarch with motion blur or depth of field: rays per pixel,
         each at its own shutter time and lens point, averaged; range [1, 4096] (default: 16)
     samples (--samples): level sets: vdb_render's rays per pixel; accepted for compatibility, the EWA

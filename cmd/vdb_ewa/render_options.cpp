@@ -180,6 +180,10 @@ void RenderOptions::add(CLI::App* app)
     mApp->add_option("--shutter", mShutter,
         "motion blur: shutter OPEN,CLOSE in frames around the frame's time, each within 1000, CLOSE >= OPEN (default: " +
             fmt(mb.shutterOpen) + "," + fmt(mb.shutterClose) + ", a 180-degree shutter centred on the frame)");
+    mApp->add_option("--motion-samples", mMotionSamples,
+        "motion blur: sub-frames over the shutter, each blurred over its part of it, averaged; widened kernels blur optical "
+        "depth where a camera averages images, so opaque edges need more to converge (docs/equations.md#motion-blur); "
+        "about N times the time; range [1, 1024] (default: 2; draft 1, high 4, final 8)");
     mApp->add_option("--blur-samples", mBlurSamples,
         "--method raymarch with motion blur or depth of field: rays per pixel, each at its own shutter time and lens point, "
         "averaged; range [1, 4096] (default: " + std::to_string(RenderSettings().blurSamples) + ")");
@@ -310,6 +314,7 @@ void RenderOptions::resolve(std::optional<int> frame, CameraSettings& cam, Rende
         rs.motionBlur.shutterClose = v[1];
     }
     if (mBlurSamples) rs.blurSamples = *mBlurSamples;
+    if (mMotionSamples) rs.motionBlur.samples = *mMotionSamples;
     const GrantedSettings granted = grantedExecution();
     rs.threads = granted.threads;
     rs.maxMemory = granted.maxMemory;
@@ -445,6 +450,7 @@ std::vector<Attributes> RenderOptions::resolvedOptions(const GridSource& grid, c
         model.emplace_back("velocity-unit", choiceName(rs.motionBlur.unit, kVelocityUnits));
         model.emplace_back("fps", fmt(rs.motionBlur.fps));
         model.emplace_back("shutter", fmt(rs.motionBlur.shutterOpen) + "," + fmt(rs.motionBlur.shutterClose));
+        model.emplace_back("motion-samples", std::to_string(rs.motionBlur.samples));
     }
     Attributes method{{"method", choiceName(rs.method, kMethods)}};
     if (rs.method != Method::Splat) method.emplace_back("step", fmt(rs.step));
@@ -476,7 +482,7 @@ void RenderOptions::ignoredOptionWarnings(std::vector<std::string>& warnings) co
         {"--emission-grid", {"--emission-color", "--emission-intensity"}},
         {"--temperature", {"--temperature-scale", "--temperature-offset", "--blackbody-intensity"}},
         {"--environment", {"--environment-lights", "--environment-intensity"}},
-        {"--velocity-grid", {"--velocity-scale", "--velocity-unit", "--fps", "--shutter"}},
+        {"--velocity-grid", {"--velocity-scale", "--velocity-unit", "--fps", "--shutter", "--motion-samples"}},
         {"--fstop", {"--focus-distance"}}};
     for (const auto& [main, qualifiers] : groups) {
         if (given(main)) continue;

@@ -106,7 +106,7 @@ private:
     // Motion blur and depth of field.
     std::string mVelocityGrid, mVelocityUnit, mShutter;
     std::optional<double> mVelocityScale, mFps, mFstop, mFocusDistance;
-    std::optional<int> mBlurSamples;
+    std::optional<int> mBlurSamples, mMotionSamples;
     OutputOptions mOutputOptions;
 };
 

@@ -184,6 +184,12 @@ struct MotionBlur
     /// The shutter's open and close times in frames around the frame's time: a 180-degree
     /// shutter centred on the frame by default. close >= open; equal: no blur.
     double shutterOpen = -0.25, shutterClose = 0.25;
+    /// Sub-frames over the shutter, each blurred over its 1/samples of it, averaged. Kernels
+    /// widened by their paths blur optical depth; a camera averages images: an opaque edge
+    /// moving over twice its width stays opaque where the shutter's average is half. More
+    /// sub-frames converge to the shutter's average, at their cost in time
+    /// (docs/equations.md#motion-blur). 1: one frame; presets: draft 1, default 2, high 4, final 8.
+    int samples = 2;
 
     /// Seconds (VelocityUnit::Second) or frames a velocity is multiplied by to move a point over
     /// the time from the frame's to @a frames frames later, scale included.

@@ -106,6 +106,10 @@ private:
         RenderStats& stats, detail::Progress& progress) const;
     VDB_EWA_LOCAL void renderFogVolume(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes, Frame& frame,
         RenderStats& stats, detail::Progress& progress) const;
+    /// Fog volumes with motion blur's sub-frames (MotionBlur::samples): each over its part of
+    /// the shutter, averaged.
+    VDB_EWA_LOCAL void renderMotionSamples(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes, Frame& frame,
+        RenderStats& stats, detail::Progress& progress) const;
 
     RenderSettings mSettings;
 };
