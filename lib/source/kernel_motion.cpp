@@ -102,21 +102,23 @@ MotionStats moveKernels(const GridSource::Impl& grid, const RenderSettings& sett
             t.path = v * length;
             // The path's image in pixels (the projection's Jacobian at the mid-time centre) and
             // the footprint's width along it, the low-pass filter's at least (Eq. 33).
+            // Where the mid-time centre is not in front of the near plane: the path's length
+            // against the kernel's own width (no pixel to measure in).
             const Vec3d c = camera.cameraFromWorldPoint(pWorld + t.shift), d = R * t.path;
-            double pixels, pixelsPerUnit;
+            double pixels = glm::length(d), pixelsPerUnit = 1.0, floor = 0.0;
             if (perspective && c.z > camera.near()) {
                 pixelsPerUnit = f / c.z;
                 pixels = pixelsPerUnit * std::hypot(d.x - c.x / c.z * d.z, d.y - c.y / c.z * d.z);
-            } else if (perspective) {
-                pixelsPerUnit = f / camera.near(); // at the eye: as if at the near plane
-                pixels = pixelsPerUnit * glm::length(d);
-            } else {
+                floor = lowpass;
+            } else if (!perspective) {
                 pixelsPerUnit = f;
                 pixels = f * std::hypot(d.x, d.y);
+                floor = lowpass;
             }
             const double sigmaPixels = kernelSigmaVoxels(k, settings.splat.kernelSigma) * narrowest * pixelsPerUnit;
-            const double footprint = std::sqrt(std::max(sigmaPixels * sigmaPixels, lowpass));
-            const double pieces = std::ceil(pixels / (kMaxSubPathSigmas * footprint));
+            const double footprint = std::sqrt(std::max(sigmaPixels * sigmaPixels, floor));
+            double pieces = std::ceil(pixels / (kMaxSubPathSigmas * footprint));
+            if (!(pieces >= 1.0)) pieces = 1.0; // also NaN (a degenerate transform)
             t.longPath = pieces > double(kMaxSubKernels);
             t.pieces = int(std::clamp(pieces, 1.0, double(kMaxSubKernels)));
         }
