@@ -66,12 +66,51 @@ void splatWarnings(std::uint64_t beforeNear, std::uint64_t clampedNear, std::uin
     if (clippedSpan) warnings.push_back(countLine(clippedSpan, "voxels crossed more than 1024 depth slabs and were cut short (raise --slab)"));
 }
 
-void addLightStats(const std::vector<LightMap>& lights, RenderStats& stats)
+void addLightStats(const std::vector<LightMap>& lights, const PointLights& pointLights, RenderStats& stats)
 {
+    for (const PointLightMap& map : pointLights.maps()) {
+        stats.lightRays += map.rays();
+        stats.lightRaysMarched += map.rays();
+    }
     for (const LightMap& light : lights) {
         stats.lightRays += light.rays();
         stats.lightRaysMarched += light.raysMarched();
     }
+}
+
+namespace {
+
+/// Each light map's share of the lights' quarter of @a budget (4 bytes a lattice point): the
+/// @a directional lights that scatter and the point lights that do share it evenly.
+double lightMapPoints(const RenderSettings& settings, const MemoryBudget& budget, std::size_t directional)
+{
+    const OpticalModel model(settings);
+    std::size_t lit = directional;
+    for (std::size_t l = 0; l < settings.pointLights.size(); ++l) lit += model.pointDark(l) ? 0 : 1;
+    return std::min(kLightMapPointBudget, budget.itemsWithin(0.25, 4.0)) / double(std::max<std::size_t>(lit, 1));
+}
+
+} // namespace
+
+PointLights pointLightMaps(const RenderSettings& settings, const GridSource::Impl& g, const MemoryBudget& budget,
+    Progress& progress, std::vector<std::string>& warnings)
+{
+    if (settings.pointLights.empty()) return {};
+    const OpticalModel model(settings);
+    std::size_t lit = 0;
+    for (std::size_t l = 0; l < settings.lights.size(); ++l) lit += model.dark(l) ? 0 : 1;
+    const double points = lightMapPoints(settings, budget, lit);
+    PointLights lights(g, settings, points, &progress);
+    for (const PointLightMap& map : lights.maps()) {
+        if (map.shadowStep() == settings.shadow.step && map.shadowResolution() == settings.shadow.resolution) continue;
+        std::ostringstream w;
+        w << "--shadowstep raised from " << settings.shadow.step << " to " << map.shadowStep() << " and --shadow-res from "
+          << settings.shadow.resolution << " to " << map.shadowResolution() << " voxels for a point or spot light: finer shadows would need more than their share of memory ("
+          << points << " light-map points a light; raise --max-memory)";
+        warnings.push_back(w.str());
+        break;
+    }
+    return lights;
 }
 
 std::vector<LightMap> lightMaps(const RenderSettings& settings, const GridSource::Impl& g, const MemoryBudget& budget,
@@ -80,8 +119,7 @@ std::vector<LightMap> lightMaps(const RenderSettings& settings, const GridSource
     const OpticalModel model(settings);
     std::size_t lit = 0;
     for (std::size_t l = 0; l < settings.lights.size(); ++l) lit += model.dark(l) ? 0 : 1;
-    const double lightCount = double(std::max<std::size_t>(lit, 1));
-    const double lightPoints = std::min(kLightMapPointBudget, budget.itemsWithin(0.25, 4.0)) / lightCount;
+    const double lightPoints = lightMapPoints(settings, budget, lit);
     std::vector<LightMap> lights;
     lights.reserve(settings.lights.size());
     for (std::size_t l = 0; l < settings.lights.size(); ++l) lights.emplace_back(g, settings, l, &progress, lightPoints, onDemand);
@@ -107,6 +145,9 @@ bool greyFrame(const RenderSettings& settings, const GridSource::Impl& g)
     }
     for (std::size_t l = 0; l < settings.lights.size(); ++l) {
         if (!grey(model.lightScale(l, 0), model.lightScale(l, 1), model.lightScale(l, 2))) return false;
+    }
+    for (std::size_t l = 0; l < settings.pointLights.size(); ++l) {
+        if (!grey(model.pointScale(l, 0), model.pointScale(l, 1), model.pointScale(l, 2))) return false;
     }
     return true;
 }

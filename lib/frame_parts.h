@@ -59,14 +59,19 @@ void addMotionStats(const MotionStats& motion, RenderStats& stats);
 /// What motion blur clamped or stretched, a line each.
 void motionWarnings(const MotionStats& motion, std::vector<std::string>& warnings);
 
-/// The light maps' rays in all and marched, into @a stats.
-void addLightStats(const std::vector<LightMap>& lights, RenderStats& stats);
+/// The light maps' rays in all and marched, into @a stats (the point lights' are marched whole).
+void addLightStats(const std::vector<LightMap>& lights, const PointLights& pointLights, RenderStats& stats);
 
 /// Each light's light map. They take at most a quarter of the budget (4 bytes a lattice point),
 /// shared between the lights; a warning where that coarsened them. Marched whole, or
 /// @a onDemand (the streamed frame marches what its windows need).
 std::vector<LightMap> lightMaps(const RenderSettings& settings, const GridSource::Impl& g, const MemoryBudget& budget,
     Progress& progress, std::vector<std::string>& warnings, bool onDemand = false);
+
+/// The point and spot lights' maps, sharing the lights' quarter of the budget with the
+/// directional lights' (lightMaps); a warning where that coarsened them. Marched whole.
+PointLights pointLightMaps(const RenderSettings& settings, const GridSource::Impl& g, const MemoryBudget& budget,
+    Progress& progress, std::vector<std::string>& warnings);
 
 /// Every splat's optical depth and source terms will be the same in R, G and B (the raster's
 /// one-channel path), known from the settings before any splat exists: a grey medium and

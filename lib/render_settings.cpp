@@ -13,6 +13,8 @@ bool finite3(const Vec3d& v) { return std::isfinite(v.x) && std::isfinite(v.y) &
 /// Coefficients and light colours: 1e6 per voxel length is opaque within a micro-voxel, and
 /// keeps every source term, and the image, inside float's range (1e308 made Inf pixels).
 constexpr double kMaxCoefficient = 1e6;
+/// Point and spot lights: intensities (radiance at one world unit) and world positions.
+constexpr double kMaxPointLightIntensity = 1e12, kMaxPointLightDistance = 1e12;
 constexpr double kMinMemoryBudget = 64.0 * 1024 * 1024;
 bool coefficient3(const Vec3d& v)
 {
@@ -35,6 +37,24 @@ void RenderSettings::validate() const
     }
     if (!coefficient3(medium.emission)) fail("--emission must be in [0, 1e6] per voxel length");
     if (!coefficient3(ambient)) fail("--ambient must be in [0, 1e6]");
+    if (pointLights.size() > kMaxLights) fail("at most " + std::to_string(kMaxLights) + " --point-light and --spot-light options (each takes a light map)");
+    for (const PointLight& light : pointLights) {
+        const char* name = light.spotAngle > 0.0 ? "--spot-light" : "--point-light";
+        const auto within = [](const Vec3d& v, double most) { return finite3(v) && glm::all(glm::lessThanEqual(glm::abs(v), Vec3d(most))); };
+        if (!within(light.position, kMaxPointLightDistance)) fail(std::string(name) + " position must be finite, each coordinate within 1e12");
+        if (!within(light.color, kMaxPointLightIntensity) || !glm::all(glm::greaterThanEqual(light.color, Vec3d(0.0)))) {
+            fail(std::string(name) + " intensity R,G,B must be in [0, 1e12]");
+        }
+        if (!(light.radius >= 0.0 && light.radius <= kMaxPointLightDistance)) fail(std::string(name) + " radius must be in [0, 1e12] world units");
+        if (!(light.spotAngle >= 0.0 && light.spotAngle <= 180.0)) fail("--spot-light cone angle must be in (0, 180] degrees");
+        if (light.spotAngle > 0.0) {
+            const Vec3d axis = light.spotTarget - light.position;
+            if (!within(light.spotTarget, kMaxPointLightDistance) || !(glm::length(axis) > 0.0)) {
+                fail("--spot-light target must be finite and away from the light's position");
+            }
+            if (!(light.spotBlend >= 0.0 && light.spotBlend <= 1.0)) fail("--spot-light blend must be in [0, 1]");
+        }
+    }
     if (!coefficient3(gridEmission.color)) fail("--emission-color must be in [0, 1e6]");
     if (!(gridEmission.intensity >= 0.0 && gridEmission.intensity <= kMaxCoefficient)) fail("--emission-intensity must be in [0, 1e6]");
     if (!(gridEmission.blackbodyIntensity >= 0.0 && gridEmission.blackbodyIntensity <= kMaxCoefficient)) {

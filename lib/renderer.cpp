@@ -39,7 +39,8 @@ namespace {
 /// A fog volume's --iso surface rasterised on its own with disc coverage (the level sets'
 /// method: docs/equations.md#surface-coverage), for the slab compositor to composite at its
 /// depth; lit as the volume is: per light, its colour x the material colour x the cosine x its
-/// transmittance from its light map at the kernel, summed. shadow: the lights' transmittances
+/// transmittance from its light map at the kernel, summed (point and spot lights: the cosine
+/// towards the light, its falloff and its map's transmittance). shadow: the lights' transmittances
 /// summed (the shadow pass). Both times --iso-opacity.
 struct IsoSurface
 {
@@ -47,7 +48,8 @@ struct IsoSurface
 };
 
 IsoSurface isoSurface(const RenderSettings& settings, const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes,
-    const std::vector<detail::LightMap>& lights, detail::Progress& progress, const detail::MemoryBudget& budget)
+    const std::vector<detail::LightMap>& lights, const detail::PointLights& pointLights, detail::Progress& progress,
+    const detail::MemoryBudget& budget)
 {
     budget.check(double(grid.activeVoxels), "active voxels (surface kernels)", detail::kBytesPerKernel);
     // Two layers of 5 floats a pixel (colour, coverage, depth) and the depth along each ray.
@@ -71,6 +73,17 @@ IsoSurface isoSurface(const RenderSettings& settings, const GridSource::Impl& gr
             for (std::size_t c = 0; c < 3; ++c) {
                 shadow[i][c] += t[c];
                 lit[i][c] += float(settings.lights[l].color[int(c)] * albedo[int(c)] * lambert * double(t[c]));
+            }
+        }
+        for (const PointLight& light : pointLights.lights()) {
+            const Vec3d toLight = light.position - k.pWorld;
+            const double r = glm::length(toLight);
+            const double lambert = r > 0.0 ? std::max(0.0, glm::dot(k.normal, toLight / r)) : 1.0;
+            const double falloff = detail::pointLightFalloff(light, k.pWorld, grid.voxelLength);
+            const std::array<double, 3> t = pointLights.transmittance(&light - pointLights.lights().data(), k.pWorld);
+            for (std::size_t c = 0; c < 3; ++c) {
+                shadow[i][c] += float(t[c]);
+                lit[i][c] += float(light.color[int(c)] * albedo[int(c)] * lambert * falloff * t[c]);
             }
         }
     }
@@ -123,6 +136,9 @@ void Renderer::renderLevelSet(const GridSource::Impl& grid, const Camera& camera
     }
     if (camera.lensRadius() > 0.0) {
         stats.warnings.push_back("--fstop changes nothing here: depth of field blurs a fog volume's kernels; the level set renders in focus");
+    }
+    if (!mSettings.pointLights.empty()) {
+        stats.warnings.push_back("--point-light and --spot-light change nothing here: they light fog volumes and --iso surfaces; a level set is lit by its --shader");
     }
     StageTimer timer;
     progress.stage(0, 60);
@@ -233,7 +249,8 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     stats.kernelSeconds = timer.lap();
     progress.stage(10, 35);
     const std::vector<detail::LightMap> lights = lightMaps(mSettings, g, budget, progress, stats.warnings);
-    addLightStats(lights, stats);
+    const detail::PointLights pointLights = detail::pointLightMaps(mSettings, g, budget, progress, stats.warnings);
+    addLightStats(lights, pointLights, stats);
     stats.shadowSeconds = timer.lap();
     if (emittersLowered) {
         std::ostringstream w;
@@ -252,12 +269,12 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     const detail::MotionStats motion = detail::moveKernels(g, mSettings, camera, kernels, colors, &budget);
     detail::SplatSet splats = detail::projectSplats(g, kernels, colors, camera, mSettings, passes, &progress);
     std::optional<IsoSurface> iso;
-    if (!std::isnan(mSettings.surface.iso)) iso = isoSurface(mSettings, g, camera, passes, lights, progress, budget);
+    if (!std::isnan(mSettings.surface.iso)) iso = isoSurface(mSettings, g, camera, passes, lights, pointLights, progress, budget);
     stats.projectSeconds = timer.lap();
     progress.stage(45, 100);
     detail::RasterStats raster;
     frame = detail::rasterizeSplats(splats, camera, mSettings, passes, raster, lights, !colors.empty(), &progress, &budget,
-        iso ? &iso->layer : nullptr, iso && passes.shadow ? &iso->shadow : nullptr);
+        iso ? &iso->layer : nullptr, iso && passes.shadow ? &iso->shadow : nullptr, &pointLights);
     stats.rasterSeconds = timer.lap();
 
     stats.activeVoxels = kernels.activeVoxels;

@@ -68,12 +68,14 @@ void Renderer::renderStreamedFogVolume(const GridSource::Impl& g, const Camera& 
 
     // Light on demand: no ray is marched yet; the compositor marches those its lookups read.
     std::vector<detail::LightMap> lights = detail::lightMaps(mSettings, g, budget, progress, stats.warnings, true);
+    // Point and spot lights: their maps marched whole, then looked up as the light on demand's.
+    const detail::PointLights pointLights = detail::pointLightMaps(mSettings, g, budget, progress, stats.warnings);
     stats.shadowSeconds = timer.lap();
 
     progress.stage(5, 100);
     progress.setUnits(order.size());
     progress.advance(0); // the windows' start is reported (the first window may take a while)
-    detail::StreamedRaster raster(camera, mSettings, passes, lights, g.color != nullptr, detail::greyFrame(mSettings, g), slabs, &budget);
+    detail::StreamedRaster raster(camera, mSettings, passes, lights, g.color != nullptr, detail::greyFrame(mSettings, g), slabs, &budget, &pointLights);
     stats.rasterSeconds += timer.lap();
     const double alpha = mSettings.splat.prefilter ? detail::quasiInterpolationAlpha(mSettings.splat.kernelSigma) : 0.0;
     const detail::UnitKernelRule units{mSettings, &lod};
@@ -191,7 +193,7 @@ void Renderer::renderStreamedFogVolume(const GridSource::Impl& g, const Camera& 
     stats.shadowSeconds += marching;
     stats.rasterSeconds -= marching;
     detail::addRasterStats(rasterStats, stats);
-    detail::addLightStats(lights, stats);
+    detail::addLightStats(lights, pointLights, stats);
     if (outOfOrder) stats.warnings.push_back(detail::countLine(outOfOrder, "splats started in front of their window (a bound of the streamed frame is wrong; --cull off renders without it)"));
     if (g.activeVoxels == 0 && g.activeTiles == 0) stats.warnings.push_back("the grid has no active values: the image is empty");
     // Counted in the bricks expanded: a hidden brick's values are never read.

@@ -94,6 +94,9 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
            absorb: OptionValue = None,
            scatter: OptionValue = None,
            light: OptionValue = None,
+           point_light: OptionValue = None,
+           spot_light: OptionValue = None,
+           point_light_radius: Optional[Number] = None,
            emission: OptionValue = None,
            ambient: OptionValue = None,
            environment: OptionValue = None,
@@ -197,6 +200,15 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
     light (--light): directional light: direction towards it X,Y,Z (any non-zero length)[,R,G,B] with
         optional colour, each in [0, 1e6]; repeat for more lights (at most 64), each with its own
         shadows; their light adds (default: one, 0.3,0.3,0,0.7,0.7,0.7)
+    point_light (--point-light): point light at world X,Y,Z (each within 1e12)[,R,G,B]: intensity R,G,B
+        (the radiance it gives at one world unit; falls off as 1/(distance^2 + radius^2)), each in [0,
+        1e12]; inside the volume too; shadowed through a light map of rays from it; repeat for more (at
+        most 64); fog volumes and --iso surfaces (default: none; intensity 1,1,1)
+    spot_light (--spot-light): spot light at world X,Y,Z aimed at TX,TY,TZ, full cone ANGLE in degrees
+        in (0, 180][,BLEND,R,G,B]: BLEND the fraction of the cone's edge that fades, in [0, 1] (default
+        0.15, Blender's), intensity as --point-light; repeat for more (default: none)
+    point_light_radius (--point-light-radius): world units: nearer than this (and than half a voxel) a
+        point or spot light grows no brighter, in [0, 1e12] (default: 0)
     emission (--emission): self-emission R,G,B per unit density per voxel length, each in [0, 1e6],
         added to the scattered light (default: 0,0,0)
     ambient (--ambient): constant ambient (sky) light R,G,B, never shadowed, scattered like --light: a

@@ -613,6 +613,36 @@ TEST_F(Cli, MotionBlursAPyroShotAndFocusesItsLens)
     expectFailure(file + " " + mDir.file("out.exr") + camera + " --fstop 2 --focus-distance -1", 2, "--focus-distance");
 }
 
+TEST_F(Cli, LightsAFireFromInsideWithPointAndSpotLights)
+{
+    // A light at the core of a ball and a spot from outside: -v, the header and a job file say
+    // the same lights; bad ones fail on one line.
+    const std::string file = mDir.file("ball.vdb"), lit = mDir.file("lit.exr");
+    auto ball = makeFogGrid(openvdb::Coord(-6), openvdb::Coord(6), [](const openvdb::Coord& c) { return c.asVec3d().length() < 6.0 ? 0.3f : 0.0f; }, 0.1);
+    openvdb::io::File(file).write({ball});
+    const std::string camera = " -res 32x32 -translate 0,0,3 --light 1,0,0,0,0,0";
+    const std::string lights = " --point-light 0,0,0,2,1,0.5 --spot-light 2,0,0,0,0,0,30,0.2,4,4,4 --point-light-radius 0.05";
+    const CliRun run = runCli(mDir, file + " " + lit + camera + lights + " -v");
+    ASSERT_EQ(run.code, 0) << run.err;
+    EXPECT_NE(run.out.find("--point-light 0,0,0,2,1,0.5 --spot-light 2,0,0,0,0,0,30,0.2,4,4,4 --point-light-radius 0.05"), std::string::npos) << run.out;
+    EXPECT_EQ(readImageFile(lit).spec.get_string_attribute("vdb_ewa/point-light"), "0,0,0,2,1,0.5");
+    const Image image = readExr(lit);
+    EXPECT_GT(image.pixel(16, 16)[0], image.pixel(16, 16)[2]) << "the core's orange light";
+    const std::string job = mDir.file("lights.json");
+    std::ofstream(job) << R"({"input": ")" << file << R"(", "output": ")" << mDir.file("job.exr")
+                       << R"(", "res": "32x32", "translate": [0, 0, 3], "light": [1, 0, 0, 0, 0, 0], "point-light": [0, 0, 0, 2, 1, 0.5],)"
+                       << R"( "spot-light": [2, 0, 0, 0, 0, 0, 30, 0.2, 4, 4, 4], "point-light-radius": 0.05})";
+    ASSERT_EQ(runCli(mDir, "render --job " + job).code, 0);
+    EXPECT_EQ(maxAbsDiff(image, readExr(mDir.file("job.exr"))), 0.0);
+    expectFailure(file + " " + mDir.file("out.exr") + camera + " --point-light 1,2", 2, "--point-light");
+    expectFailure(file + " " + mDir.file("out.exr") + camera + " --spot-light 0,0,0,1,0,0,0", 2, "--spot-light");
+    expectFailure(file + " " + mDir.file("out.exr") + camera + " --spot-light 0,0,0,0,0,0,30", 2, "--spot-light target");
+    expectFailure(file + " " + mDir.file("out.exr") + camera + " --point-light 0,0,0,-1,1,1", 2, "--point-light intensity");
+    expectFailure(file + " " + mDir.file("out.exr") + camera + " --point-light 0,0,0 --method raymarch-gaussian", 2, "--point-light");
+    const CliRun unused = runCli(mDir, file + " " + mDir.file("unused.exr") + camera + " --point-light-radius 1");
+    EXPECT_NE(unused.err.find("--point-light-radius changes nothing without --point-light"), std::string::npos) << unused.err;
+}
+
 TEST_F(Cli, VerbosePrintsThePresetResolvedWithOverrides)
 {
     const std::string out = mDir.file("out.exr");

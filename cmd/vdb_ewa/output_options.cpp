@@ -181,6 +181,7 @@ void OutputOptions::toWorkingSpace(RenderSettings& rs, std::vector<std::string>&
         }
     };
     for (Light& light : rs.lights) convert("--light colour", light.color);
+    for (PointLight& light : rs.pointLights) convert(light.spotAngle > 0.0 ? "--spot-light intensity" : "--point-light intensity", light.color);
     convert("--absorb", rs.medium.absorb);
     convert("--scatter", rs.medium.scatter);
     convert("--emission", rs.medium.emission);

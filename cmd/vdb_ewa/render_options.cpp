@@ -95,6 +95,18 @@ void RenderOptions::add(CLI::App* app)
             "repeat for more lights (at most " + std::to_string(kMaxLights) + "), each with its own shadows; their light adds (default: one, " +
                 fmt3(rs.lights.front().direction) + "," + fmt3(rs.lights.front().color) + ")")
         ->allow_extra_args(false);
+    mApp->add_option("--point-light", mPointLights,
+            "point light at world X,Y,Z (each within 1e12)[,R,G,B]: intensity R,G,B (the radiance it gives at one world unit; falls off as 1/(distance^2 + radius^2)), "
+            "each in [0, 1e12]; inside the volume too; shadowed through a light map of rays from it; repeat for more (at most " +
+                std::to_string(kMaxLights) + "); fog volumes and --iso surfaces (default: none; intensity 1,1,1)")
+        ->allow_extra_args(false);
+    mApp->add_option("--spot-light", mSpotLights,
+            "spot light at world X,Y,Z aimed at TX,TY,TZ, full cone ANGLE in degrees in (0, 180][,BLEND,R,G,B]: BLEND the fraction "
+            "of the cone's edge that fades, in [0, 1] (default 0.15, Blender's), intensity as --point-light; repeat for more "
+            "(default: none)")
+        ->allow_extra_args(false);
+    mApp->add_option("--point-light-radius", mPointLightRadius,
+        "world units: nearer than this (and than half a voxel) a point or spot light grows no brighter, in [0, 1e12] (default: 0)");
     mApp->add_option("--emission", mEmission,
         "self-emission R,G,B per unit density per voxel length, each in [0, 1e6], added to the scattered light (default: " +
             fmt3(rs.medium.emission) + ")");
@@ -257,6 +269,34 @@ void RenderOptions::resolve(std::optional<int> frame, CameraSettings& cam, Rende
             if (v.size() == 6) light.color = Vec3d(v[3], v[4], v[5]);
             rs.lights.push_back(light);
         }
+    }
+    if (!mPointLights.empty() || !mSpotLights.empty()) {
+        rs.pointLights.clear();
+        for (const std::string& text : mPointLights) {
+            const std::vector<double> v = parseNumbers("point-light", text);
+            if (v.size() != 3 && v.size() != 6) throw ValueError("--point-light: expected X,Y,Z or X,Y,Z,R,G,B, got '" + text + "'");
+            PointLight light;
+            light.position = Vec3d(v[0], v[1], v[2]);
+            if (v.size() == 6) light.color = Vec3d(v[3], v[4], v[5]);
+            rs.pointLights.push_back(light);
+        }
+        for (const std::string& text : mSpotLights) {
+            const std::vector<double> v = parseNumbers("spot-light", text);
+            if (v.size() != 7 && v.size() != 8 && v.size() != 11) {
+                throw ValueError("--spot-light: expected X,Y,Z,TX,TY,TZ,ANGLE[,BLEND[,R,G,B]], got '" + text + "'");
+            }
+            PointLight light;
+            light.position = Vec3d(v[0], v[1], v[2]);
+            light.spotTarget = Vec3d(v[3], v[4], v[5]);
+            light.spotAngle = v[6];
+            if (!(v[6] > 0.0 && v[6] <= 180.0)) throw ValueError("--spot-light: the cone ANGLE must be in (0, 180] degrees, got '" + text + "'");
+            if (v.size() >= 8) light.spotBlend = v[7];
+            if (v.size() == 11) light.color = Vec3d(v[8], v[9], v[10]);
+            rs.pointLights.push_back(light);
+        }
+    }
+    if (mPointLightRadius) {
+        for (PointLight& light : rs.pointLights) light.radius = *mPointLightRadius;
     }
     if (!mEmissionColor.empty()) rs.gridEmission.color = parseVec3("emission-color", mEmissionColor, true);
     if (mEmissionIntensity) rs.gridEmission.intensity = *mEmissionIntensity;
@@ -427,6 +467,12 @@ std::vector<Attributes> RenderOptions::resolvedOptions(const GridSource& grid, c
     Attributes model{{"absorb", fmt3(rs.medium.absorb)}, {"scatter", fmt3(rs.medium.scatter)}, {"emission", fmt3(rs.medium.emission)},
         {"light", lightsText({rs.lights.begin(), rs.lights.end() - std::ptrdiff_t(mEnvironmentLightCount)})}, {"ambient", fmt3(rs.ambient)}, {"gain", fmt(rs.shadow.gain)}, {"cutoff", fmt(rs.cutoff)},
         {"shadowstep", fmt(rs.shadow.step)}, {"shadow-res", fmt(rs.shadow.resolution)}};
+    if (!rs.pointLights.empty()) {
+        const auto [points, spots] = pointLightsText(rs.pointLights);
+        if (!points.empty()) model.emplace_back("point-light", points);
+        if (!spots.empty()) model.emplace_back("spot-light", spots);
+        model.emplace_back("point-light-radius", fmt(rs.pointLights.front().radius));
+    }
     if (grid.hasColorGrid()) model.emplace_back("color", mColor);
     if (!mEnvironment.empty()) {
         model.emplace_back("environment", mEnvironment);
@@ -484,6 +530,9 @@ void RenderOptions::ignoredOptionWarnings(std::vector<std::string>& warnings) co
         {"--environment", {"--environment-lights", "--environment-intensity"}},
         {"--velocity-grid", {"--velocity-scale", "--velocity-unit", "--fps", "--shutter", "--motion-samples"}},
         {"--fstop", {"--focus-distance"}}};
+    if (given("--point-light-radius") && !given("--point-light") && !given("--spot-light")) {
+        warnings.push_back("--point-light-radius changes nothing without --point-light or --spot-light");
+    }
     for (const auto& [main, qualifiers] : groups) {
         if (given(main)) continue;
         for (const char* q : qualifiers) {
@@ -497,6 +546,19 @@ std::string RenderOptions::lightsText(const std::vector<Light>& lights, const st
     std::string out;
     for (const Light& l : lights) out += (out.empty() ? "" : separator) + fmt3(l.direction) + "," + fmt3(l.color);
     return out.empty() ? "none" : out;
+}
+
+std::pair<std::string, std::string> RenderOptions::pointLightsText(const std::vector<PointLight>& lights)
+{
+    std::string points, spots;
+    for (const PointLight& l : lights) {
+        if (l.spotAngle > 0.0) {
+            spots += (spots.empty() ? "" : "; ") + fmt3(l.position) + "," + fmt3(l.spotTarget) + "," + fmt(l.spotAngle) + "," + fmt(l.spotBlend) + "," + fmt3(l.color);
+        } else {
+            points += (points.empty() ? "" : "; ") + fmt3(l.position) + "," + fmt3(l.color);
+        }
+    }
+    return {points, spots};
 }
 
 } // namespace vdb_ewa::cli

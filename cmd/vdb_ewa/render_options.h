@@ -77,6 +77,9 @@ public:
     /// The lights as --light takes them, X,Y,Z,R,G,B each, separated by @a separator ("none"
     /// without).
     static std::string lightsText(const std::vector<Light>& lights, const std::string& separator = "; ");
+    /// The point lights as --point-light takes them (X,Y,Z,R,G,B) and the spot lights as
+    /// --spot-light does (all eleven values), each list separated by "; " (empty without).
+    static std::pair<std::string, std::string> pointLightsText(const std::vector<PointLight>& lights);
 
 private:
     /// --threads and --max-memory under the farm's or container's grant (granted_resources.h).
@@ -86,7 +89,8 @@ private:
 
     CLI::App* mApp = nullptr;
     std::string mCameraFile, mName, mRes, mTranslate, mRotate, mLookAt, mUp, mCamera;
-    std::vector<std::string> mLights;
+    std::vector<std::string> mLights, mPointLights, mSpotLights;
+    std::optional<double> mPointLightRadius;
     std::string mAbsorb, mScatter, mEmission, mAmbient, mAa, mMethod, mQuality, mExp, mRenormalize, mTaper, mPrefilter, mPrecision;
     std::optional<int> mTileSpacing, mRefine, mRefineEmission, mSamples;
     std::optional<double> mShadowRes;

@@ -77,6 +77,24 @@ struct Light
     }
 };
 
+/// A point or spot light (--point-light, --spot-light): light from one world point, falling off
+/// as 1 / distance^2 and shadowed by the volume; inside it too (an explosion's core). Fog volumes
+/// and their --iso surfaces take it; level sets do not (docs/lighting.md#point-and-spot-lights).
+struct PointLight
+{
+    Vec3d position{0.0, 0.0, 0.0};   ///< world position
+    Vec3d color{1.0, 1.0, 1.0};      ///< intensity R,G,B: the radiance it gives at one world unit (I / r^2 at r)
+    /// World units: nearer than this (and than half a voxel length) the light grows no brighter,
+    /// I / max(r, radius)^2 (a bulb's size; keeps the light finite at its own position).
+    double radius = 0.0;
+    /// A spot light's full cone angle in degrees, in (0, 180]; 0: a point light, every direction.
+    double spotAngle = 0.0;
+    Vec3d spotTarget{0.0, 0.0, -1.0}; ///< the world point a spot light aims at (not its position)
+    /// The fraction of the cone's edge over which a spot light fades out (smoothstep in the
+    /// cosine), in [0, 1]; Blender's Spot Blend, same default.
+    double spotBlend = 0.15;
+};
+
 /// Emission from grids of the file besides the density (GridSource::withEmissionGrid,
 /// withTemperatureGrid; a pyro cache's flame and temperature): radiance per voxel length
 /// wherever they are, whatever the density (docs/equations.md#emission-grids).
@@ -95,7 +113,8 @@ struct GridEmission
     Mat3d rec709ToWorking{1.0};
 };
 
-/// Most directional lights a render takes (RenderSettings::lights): each has a light map.
+/// Most directional lights a render takes (RenderSettings::lights), and most point and spot
+/// lights (RenderSettings::pointLights): each has a light map.
 constexpr std::size_t kMaxLights = 64;
 
 /// Most worker threads a render takes (RenderSettings::threads): past the largest machines, and
@@ -211,6 +230,9 @@ struct VDB_EWA_API RenderSettings
     /// unit of scattering scatters it as it would the light (a fill for fog volumes; level sets
     /// and --iso surfaces ignore it). 0: none.
     Vec3d ambient{0.0, 0.0, 0.0};
+    /// Point and spot lights, each shadowed through a light map of rays from its position
+    /// (the splatter shades each kernel at its centre with them); empty: none.
+    std::vector<PointLight> pointLights;
     GridEmission gridEmission;  ///< emission and temperature grids
     /// Colours that come from the grid and the shaders, not from these settings, are taken in
     /// the input space, as vdb_render writes them: the --color grid's values and the level-set

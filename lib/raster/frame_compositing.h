@@ -18,8 +18,9 @@ namespace detail {
 struct FrameCompositing
 {
     /// @a emissive: some splat may carry a pre-shaded source term (Splat::emission).
+    /// @a pointLights: the point and spot lights (null or empty: none), which must outlive it.
     FrameCompositing(const Camera& camera, const RenderSettings& settings, const PassRequest& passes, const std::vector<LightMap>& lights,
-        bool tinted, bool emissive, const SlabGrid& slabs);
+        bool tinted, bool emissive, const SlabGrid& slabs, const PointLights* pointLights = nullptr);
     FrameCompositing(const FrameCompositing&) = delete;
     FrameCompositing& operator=(const FrameCompositing&) = delete;
 

@@ -270,7 +270,7 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
                     for (int c = 0; c < C; ++c) tBefore[c][i] = mT[c * kTilePixels + q];
                     meanBefore[i] = meanT(q);
                 }
-                if (!mOptions.lights.empty() && mass[i] > 0.0f) {
+                if (mOptions.lit() && mass[i] > 0.0f) {
                     lighted[i] = 1.0f;
                     anyLighted = true;
                 }
@@ -327,6 +327,34 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
                 litSum[c] = hn::Add(litSum[c], l);
                 colouredSum[c] = hn::MulAdd(scale, l, colouredSum[c]);
                 source[c] = hn::MulAdd(scale, l, source[c]);
+            }
+        }
+        if (anyLighted && mOptions.pointLights) {
+            // Point lights: each lit lane's layer looked up lane by lane (pointLightAt: a cube
+            // of rays, not a lattice the vector lookup reads), then lit as the lights above.
+            alignas(64) float lane0[kLanes], lane1[kLanes], front[3][kLanes], logRatio[3][kLanes], falloff[kLanes];
+            hn::Store(u0, d, lane0);
+            hn::Store(u1, d, lane1);
+            const PointLights& points = *mOptions.pointLights;
+            for (std::size_t light = 0; light < points.maps().size(); ++light) {
+                for (int i = 0; i < kLanes; ++i) {
+                    std::array<float, 3> f{1.0f, 1.0f, 1.0f}, r{0.0f, 0.0f, 0.0f};
+                    float g = 0.0f;
+                    if (lighted[i] != 0.0f) pointLightAt(light, p + i, slab, lane0[i], lane1[i], f, r, g);
+                    for (int c = 0; c < 3; ++c) {
+                        front[c][i] = f[std::size_t(c)];
+                        logRatio[c][i] = r[std::size_t(c)];
+                    }
+                    falloff[i] = g;
+                }
+                const Floats g = hn::Load(d, falloff);
+                for (int c = 0; c < C; ++c) {
+                    const Floats l = hn::IfThenElseZero(lightedLanes, hn::Mul(weight[c], lightIntegral(tau[c], hn::Load(d, front[c]), hn::Load(d, logRatio[c]))));
+                    const Floats scale = hn::Mul(hn::Set(d, float(points.scale(light)[std::size_t(c)])), g);
+                    litSum[c] = hn::Add(litSum[c], l);
+                    colouredSum[c] = hn::MulAdd(scale, l, colouredSum[c]);
+                    source[c] = hn::MulAdd(scale, l, source[c]);
+                }
             }
         }
         const auto chosen = hn::Ne(hn::Load(d, composite), zero);

@@ -67,6 +67,11 @@ struct CompositeOptions
     /// transmittance at each (pixel, slab) from its light map lights the splats' scattering
     /// weights; empty when nothing scatters.
     std::vector<CompositeLight> lights;
+    /// The point and spot lights that scatter (null: none), lit per slab sample from their own
+    /// maps as the directional lights are, each times its falloff at the layer's middle.
+    const PointLights* pointLights = nullptr;
+    /// Some light lights the splats' scattering weights per slab sample.
+    bool lit() const { return !lights.empty() || pointLights; }
     const OpticalModel* model = nullptr;
     const Camera* camera = nullptr;
     bool tinted = false; ///< scattering weights differ from optical depths (material colours)

@@ -8,11 +8,11 @@ namespace vdb_ewa {
 namespace detail {
 
 StreamedRaster::StreamedRaster(const Camera& camera, const RenderSettings& settings, const PassRequest& passes,
-    const std::vector<LightMap>& lights, bool tinted, bool grey, const SlabGrid& slabs, const MemoryBudget* budget)
+    const std::vector<LightMap>& lights, bool tinted, bool grey, const SlabGrid& slabs, const MemoryBudget* budget, const PointLights* pointLights)
     : mCamera(camera), mPasses(passes), mBudget(budget), mTilesX((camera.width() + kTileSize - 1) / kTileSize),
       mTilesY((camera.height() + kTileSize - 1) / kTileSize),
       // Emissive unless nothing in the model emits: the splats are not known yet.
-      mCompositing(std::make_unique<FrameCompositing>(camera, settings, passes, lights, tinted, true, slabs)),
+      mCompositing(std::make_unique<FrameCompositing>(camera, settings, passes, lights, tinted, true, slabs, pointLights)),
       mOpaqueSums(std::size_t(mTilesX + 1) * std::size_t(mTilesY + 1), 0)
 {
     const OpticalModel& model = mCompositing->model;

@@ -24,8 +24,9 @@ public:
     /// splats' scattering weights carry material colours; @a grey: every splat's optical depth
     /// and source terms will be the same in R, G and B (one channel carried, see
     /// scalarSlabCompositor). @a budget: each window's splat-tile pairs are counted against it.
+    /// @a pointLights: the point and spot lights (null: none), which must outlive it.
     StreamedRaster(const Camera& camera, const RenderSettings& settings, const PassRequest& passes, const std::vector<LightMap>& lights,
-        bool tinted, bool grey, const SlabGrid& slabs, const MemoryBudget* budget);
+        bool tinted, bool grey, const SlabGrid& slabs, const MemoryBudget* budget, const PointLights* pointLights = nullptr);
     ~StreamedRaster();
     StreamedRaster(const StreamedRaster&) = delete;
     StreamedRaster& operator=(const StreamedRaster&) = delete;

@@ -317,8 +317,8 @@ private:
           mEmission(mOptions.emissive ? std::size_t(ringSize) * C * kTilePixels : 0, 0.0f),
           mPassEmission(std::size_t(ringSize) * std::size_t(mPassCount) * C * kTilePixels, 0.0f),
           mScatter(mOptions.tinted ? std::size_t(ringSize) * C * kTilePixels : 0, 0.0f),
-          mMoment(mOptions.lights.empty() ? 0 : std::size_t(ringSize) * kTilePixels, 0.0f),
-          mMoment2(mOptions.lights.empty() ? 0 : std::size_t(ringSize) * kTilePixels, 0.0f),
+          mMoment(mOptions.lit() ? std::size_t(ringSize) * kTilePixels : 0, 0.0f),
+          mMoment2(mOptions.lit() ? std::size_t(ringSize) * kTilePixels : 0, 0.0f),
           mDirty(std::size_t(ringSize))
     {
     }
@@ -604,7 +604,7 @@ private:
         const float mass = slabMass(base, p);
         float absorbed[C]; // 1 - exp(-tau), once per channel for light, termination, composite
         for (int c = 0; c < C; ++c) absorbed[c] = slabAbsorbed(mTau[base + c * kTilePixels + std::size_t(p)]);
-        if (!mOptions.lights.empty() && mass > 0.0f) lightSlab(slab, p, mass, lit, lighted);
+        if (mOptions.lit() && mass > 0.0f) lightSlab(slab, p, mass, lit, lighted);
         // vdb_render's ray termination: |T|^2 < cutoff (early termination, Sec. 5).
         // A ray stops where it crosses the threshold, so only the slab's part in
         // front of the crossing is composited: every stopped pixel keeps vdb_render's
@@ -681,23 +681,57 @@ private:
                 lighted[c] += mOptions.lights[l].scale[c] * term;
             }
         }
+        if (!mOptions.pointLights) return;
+        const PointLights& points = *mOptions.pointLights;
+        for (std::size_t l = 0; l < points.maps().size(); ++l) {
+            std::array<float, 3> front, logRatio;
+            float falloff;
+            pointLightAt(l, p, slab, u0, u1, front, logRatio, falloff);
+            for (int c = 0; c < C; ++c) {
+                const std::size_t i = base + c * kTilePixels + std::size_t(p);
+                const float term = std::max(mScatter.empty() ? mTau[i] : mScatter[i], 0.0f) *
+                                   slabLightIntegral(mTau[i], front[std::size_t(c)], logRatio[std::size_t(c)]);
+                lit[c] += term;
+                lighted[c] += float(points.scale(l)[std::size_t(c)]) * falloff * term;
+            }
+        }
     }
 
-    /// Each pixel's ray in light-map coordinates, q(z) = base + z dir, z the slab coordinate
+    /// Point light @a l on pixel p's ray across the layer from fraction @a u0 to @a u1 of
+    /// @a slab's thickness (PointLights::acrossLayer at its world points).
+    void pointLightAt(std::size_t l, int p, std::int64_t slab, float u0, float u1, std::array<float, 3>& front,
+        std::array<float, 3>& logRatio, float& falloff) const
+    {
+        const double z = mOptions.slabs.start(slab);
+        const double z0 = z + double(u0) * mOptions.slabs.thickness, z1 = z + double(u1) * mOptions.slabs.thickness;
+        const LightRays& r = mRays.back(); // world coordinates (traceRays)
+        const Vec3d base(r.base[0][p], r.base[1][p], r.base[2][p]), dir(r.dir[0][p], r.dir[1][p], r.dir[2][p]);
+        mOptions.pointLights->acrossLayer(l, base + z0 * dir, base + z1 * dir, front, logRatio, falloff);
+    }
+
+    /// Each pixel's ray in each light-map's coordinates, and in world ones for the point lights,
+    /// q(z) = base + z dir, z the slab coordinate
     /// (distance from the eye, or depth for orthographic cameras): at the tile's first splat,
     /// so tiles without any (the background) skip it.
     void traceRays()
     {
         mRaysTraced = true;
-        if (mOptions.lights.empty()) return;
-        mRays.resize(mOptions.lights.size());
+        if (!mOptions.lit()) return;
+        // One ray per light in its map's coordinates, then (point lights) one in world ones.
+        mRays.resize(mOptions.lights.size() + (mOptions.pointLights ? 1 : 0));
         const Camera& camera = *mOptions.camera;
         for (int ly = 0; ly < mH; ++ly)
             for (int lx = 0; lx < mW; ++lx) {
                 Vec3d origin, dir;
                 camera.worldRay(mX0 + lx + 0.5, mY0 + ly + 0.5, origin, dir);
                 const Vec3d base = camera.projection() == Projection::Perspective ? camera.eye() : origin - camera.near() * dir;
-                for (std::size_t l = 0; l < mRays.size(); ++l) {
+                if (mOptions.pointLights) {
+                    for (int k = 0; k < 3; ++k) {
+                        mRays.back().base[k][ly * kTileSize + lx] = base[k];
+                        mRays.back().dir[k][ly * kTileSize + lx] = dir[k];
+                    }
+                }
+                for (std::size_t l = 0; l < mOptions.lights.size(); ++l) {
                     const LightMap& map = *mOptions.lights[l].map;
                     const Vec3d q = map.coordinates(base), v = map.direction(dir);
                     for (int k = 0; k < 3; ++k) {
@@ -755,7 +789,7 @@ private:
     /// [slot][pixel] optical depth x position in the slab (0 front, 1 back), and x its square
     /// (lit frames only): where the slab's mass lies, for shading.
     std::vector<float> mMoment, mMoment2;
-    std::vector<LightRays> mRays; ///< per light of CompositeOptions::lights
+    std::vector<LightRays> mRays; ///< per light of CompositeOptions::lights, then (point lights) in world coordinates
     bool mRaysTraced = false; ///< traceRays ran
     float mZ[kTilePixels];              ///< Z pass along the ray, +inf until alpha reaches 0.5
     float mTBefore[C];

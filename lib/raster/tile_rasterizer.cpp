@@ -96,7 +96,7 @@ TileBins binInSweepOrder(const SplatSet& set, int width, int height, const Memor
 }
 
 FrameCompositing::FrameCompositing(const Camera& camera, const RenderSettings& settings, const PassRequest& passes,
-    const std::vector<LightMap>& lights, bool tinted, bool emissive, const SlabGrid& slabs)
+    const std::vector<LightMap>& lights, bool tinted, bool emissive, const SlabGrid& slabs, const PointLights* pointLights)
     : model(settings), table(float(settings.splat.cutoffRadius * settings.splat.cutoffRadius))
 {
     options.cutoff = float(settings.cutoff);
@@ -116,7 +116,8 @@ FrameCompositing::FrameCompositing(const Camera& camera, const RenderSettings& s
     }
     options.model = &model;
     options.camera = &camera;
-    options.tinted = tinted && !options.lights.empty();
+    if (pointLights && !pointLights->empty()) options.pointLights = pointLights;
+    options.tinted = tinted && options.lit();
     options.emissive = emissive;
 }
 
@@ -198,7 +199,7 @@ DeepImage assembleDeep(std::vector<TileDeep>& tiles, int tilesX, int width, int 
 
 Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSettings& settings,
     const PassRequest& passes, RasterStats& stats, const std::vector<LightMap>& lights, bool tinted, Progress* progress,
-    const MemoryBudget* budget, const SurfaceLayer* surface, const SurfaceLayer* surfaceShadow)
+    const MemoryBudget* budget, const SurfaceLayer* surface, const SurfaceLayer* surfaceShadow, const PointLights* pointLights)
 {
     const int width = camera.width(), height = camera.height();
     Frame frame = blankFrame(width, height, passes);
@@ -209,7 +210,7 @@ Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSet
     std::vector<TileCounters> counters(static_cast<std::size_t>(tiles));
     const bool emissive = std::any_of(set.splats.begin(), set.splats.end(),
         [](const Splat& s) { return s.emission[0] != 0.0f || s.emission[1] != 0.0f || s.emission[2] != 0.0f; });
-    FrameCompositing compositing(camera, settings, passes, lights, tinted, emissive, set.slabs);
+    FrameCompositing compositing(camera, settings, passes, lights, tinted, emissive, set.slabs, pointLights);
     CompositeOptions& options = compositing.options;
     const std::vector<float> depthScale = (passes.depth || passes.deep || surface) ? depthScales(camera) : std::vector<float>{};
     // The surface's slab coordinate per pixel: its camera depth along the pixel's ray.

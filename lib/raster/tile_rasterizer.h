@@ -35,10 +35,11 @@ struct RasterStats
 /// @a surface: a surface composited at its depth in each pixel's slab sweep (fog --iso
 /// surfaces: before the first slab whose middle lies behind it), with its coverage as
 /// opacity; @a surfaceShadow: the light's transmittance at it, for the shadow pass.
+/// @a pointLights: the point and spot lights, lit per slab sample too (null: none).
 Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSettings& settings,
     const PassRequest& passes, RasterStats& stats, const std::vector<LightMap>& lights = {}, bool tinted = false,
     Progress* progress = nullptr, const MemoryBudget* budget = nullptr, const SurfaceLayer* surface = nullptr,
-    const SurfaceLayer* surfaceShadow = nullptr);
+    const SurfaceLayer* surfaceShadow = nullptr, const PointLights* pointLights = nullptr);
 
 } // namespace detail
 } // namespace vdb_ewa

@@ -157,13 +157,19 @@ class TrilinearSampler
 {
 public:
     TrilinearSampler(const GridSource::Impl& grid, const RenderSettings& settings, const EmissionModel* emission)
-        : mGrid(grid), mAccessor(grid.field->getConstAccessor()), mColor(grid), mInputToWorking(settings.inputToWorking), mModel(settings), mCutoff(settings.cutoff),
+        : mGrid(grid), mSettings(settings), mAccessor(grid.field->getConstAccessor()), mColor(grid), mInputToWorking(settings.inputToWorking), mModel(settings), mCutoff(settings.cutoff),
           mTinted(bool(grid.color)), mShadow(settings.lights.size(), Rgb{1.0f, 1.0f, 1.0f}), mEmission(grid, emission)
     {
         if (grid.velocity) mVelocity.emplace(grid);
         for (std::size_t l = 0; l < settings.lights.size(); ++l) {
             if (!mModel.dark(l)) mShadows.emplace_back(l, ShadowMarcher(grid, settings, l));
         }
+        for (std::size_t l = 0; l < settings.pointLights.size(); ++l) {
+            if (!mModel.pointDark(l)) mPointLights.push_back(l);
+        }
+        const openvdb::CoordBBox box = grid.field->evalActiveVoxelBoundingBox();
+        mBoxMin = Vec3d(box.min().x(), box.min().y(), box.min().z()) - 1.0;
+        mBoxMax = Vec3d(box.max().x(), box.max().y(), box.max().z()) + 1.0;
     }
     /// Motion blur: the shutter time of the samples to come, as the factor a velocity is
     /// multiplied by to move a point there from the frame's time (MotionBlur::displacementPerVelocity).
@@ -192,11 +198,22 @@ public:
         for (auto& [l, marcher] : mShadows) mShadow[l] = marcher.march(pIndex);
         const Vec3d color = mTinted ? workingColor(mInputToWorking, mColor.at(mGrid.indexToWorld(pIndex))) : Vec3d(1.0);
         for (int c = 0; c < 3; ++c) source[c] = mModel.source(c, mShadow.data(), color[c]);
+        // Point and spot lights: a shadow ray from the sample to the light.
+        for (const std::size_t l : mPointLights) {
+            const PointLight& light = mSettings.pointLights[l];
+            const double falloff = pointLightFalloff(light, mGrid.indexToWorld(pIndex), mGrid.voxelLength);
+            if (!(falloff > 0.0)) continue;
+            const double depth = pointShadowDepth(mGrid, mAccessor, pIndex, light.position, mSettings.shadow.step, mCutoff, mBoxMin, mBoxMax);
+            for (int c = 0; c < 3; ++c) source[c] += mModel.pointScale(l, c) * color[c] * falloff * std::exp(-mModel.extinction(c) * depth);
+        }
         return true;
     }
 
 private:
     const GridSource::Impl& mGrid;
+    const RenderSettings& mSettings;
+    std::vector<std::size_t> mPointLights; ///< the point lights that are not dark
+    Vec3d mBoxMin{0.0}, mBoxMax{0.0};      ///< the padded active box (index space): where shadow rays see density
     openvdb::FloatGrid::ConstAccessor mAccessor;
     std::vector<std::pair<std::size_t, ShadowMarcher>> mShadows; ///< the lights that are not dark
     MaterialColor mColor;
@@ -412,6 +429,9 @@ Frame rayMarchGaussianSum(const GridSource::Impl& grid, const Camera& camera, co
     checkMarchable(grid, passes, "raymarch-gaussian");
     if (grid.velocity || camera.lensRadius() > 0.0) {
         throw ValueError("--method raymarch-gaussian renders still pinhole frames: motion blur (--velocity-grid) and depth of field (--fstop) need --method splat or raymarch");
+    }
+    if (!settings.pointLights.empty()) {
+        throw ValueError("--method raymarch-gaussian lights with --light only: --point-light and --spot-light need --method splat or raymarch");
     }
     if (progress) progress->stage(0, 15); // kernels and shadows, then the rays
     const ReferenceVolume volume = buildVolume(grid, settings, stats, progress);

@@ -20,13 +20,16 @@ namespace detail {
 class OpticalModel
 {
 public:
-    explicit OpticalModel(const RenderSettings& settings) : mLightScale(settings.lights.size())
+    explicit OpticalModel(const RenderSettings& settings) : mLightScale(settings.lights.size()), mPointScale(settings.pointLights.size())
     {
         for (int c = 0; c < 3; ++c) {
             mExtinction[c] = settings.medium.extinction()[c];
             const bool scatters = mExtinction[c] > 0.0;
             for (std::size_t l = 0; l < mLightScale.size(); ++l) {
                 mLightScale[l][std::size_t(c)] = scatters ? settings.lights[l].color[c] * settings.medium.scatter[c] / mExtinction[c] : 0.0;
+            }
+            for (std::size_t l = 0; l < mPointScale.size(); ++l) {
+                mPointScale[l][std::size_t(c)] = scatters ? settings.pointLights[l].color[c] * settings.medium.scatter[c] / mExtinction[c] : 0.0;
             }
             mEmitted[c] = scatters ? settings.medium.emission[c] / mExtinction[c] : 0.0;
             mAmbient[c] = scatters ? settings.ambient[c] * settings.medium.scatter[c] / mExtinction[c] : 0.0;
@@ -48,6 +51,14 @@ public:
     /// Light @a l's colour x scattering albedo of channel @a c: the source radiance per unit
     /// optical depth it gives white material in full light.
     double lightScale(std::size_t l, int c) const { return mLightScale[l][std::size_t(c)]; }
+
+    /// The point and spot lights (RenderSettings::pointLights), in order.
+    std::size_t pointLightCount() const { return mPointScale.size(); }
+    /// Point light @a l's intensity x scattering albedo of channel @a c: its source radiance
+    /// per unit optical depth in white material at unit falloff (pointLightFalloff), unshadowed.
+    double pointScale(std::size_t l, int c) const { return mPointScale[l][std::size_t(c)]; }
+    /// True if point light @a l scatters nothing: it needs no light map.
+    bool pointDark(std::size_t l) const { return mPointScale[l][0] == 0.0 && mPointScale[l][1] == 0.0 && mPointScale[l][2] == 0.0; }
 
     /// Source radiance per unit optical depth (the c of Eq. 7 and 10): each light's colour x
     /// scattering albedo x material colour x its transmittance @a lightTransmittances[l]
@@ -90,6 +101,7 @@ public:
 private:
     double mExtinction[3], mEmitted[3], mAmbient[3];
     std::vector<std::array<double, 3>> mLightScale; ///< per light: colour x scatter / extinction
+    std::vector<std::array<double, 3>> mPointScale; ///< per point light: intensity x scatter / extinction
 };
 
 } // namespace detail

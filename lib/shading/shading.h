@@ -9,4 +9,5 @@
 #include "shading/grid_emission.h"
 #include "shading/light_map.h"
 #include "shading/optical_model.h"
+#include "shading/point_light_map.h"
 #include "shading/shadow_transmittance.h"
