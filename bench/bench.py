@@ -49,6 +49,11 @@
                                                          depth of field on pyro and the cloud, default and
                                                          high against the reference integrator's shutter
                                                          and lens samples, time against the still frame
+  bench/bench.py lights [--res 480x270] [--repeat 3] [--keep DIR]
+                                                         point and spot lights (inside the volume and
+                                                         from outside) on pyro and the cloud, default and
+                                                         high against the reference's shadow rays, time
+                                                         against the frame with its directional light only
   bench/bench.py output [--scene smoke] [--res 1920x1080] [--repeat 3]
                                                          issue 4's output stage: EXR pixel types,
                                                          compressions, passes and deep files, with
@@ -585,6 +590,53 @@ def cmd_blur(args):
                       f"{diff(out_with, ref)[1]:.1f} | {diff(out_without, ref)[1]:.1f} |", flush=True)
 
 
+LIGHT_SCENES = [
+    # (label, file, camera, optical model and the directional light, [(light, options)])
+    ("pyro, thin (--scatter 0.05)", f"{ASSETS}/pyro.vdb", "-translate 0.225,2.175,15.75 -lookat 0.225,2.175,-0.225",
+     "--scatter 0.05 --absorb 0.01 --light 0.3,0.3,0,0.2,0.2,0.2",
+     [("point light inside", "--point-light 0.225,2.5,-0.225,6,3,1.2"),
+      ("spot light", "--spot-light -6,6,8,0.225,2.5,-0.225,25,0.3,120,120,140")]),
+    ("pyro, vdb_render's model", f"{ASSETS}/pyro.vdb", "-translate 0.225,2.175,15.75 -lookat 0.225,2.175,-0.225",
+     "--light 0.3,0.3,0,0.2,0.2,0.2",
+     [("spot light", "--spot-light -6,6,8,0.225,2.5,-0.225,25,0.3,60,60,70")]),
+    ("cloud (grids/)", f"{ROOT}/grids/cloud.vdb", "-translate 1.5,0.8,4.5 -lookat 0,0,0", "--light 0.3,0.3,0,0.3,0.3,0.3",
+     [("point light inside", "--point-light 0,0,0,0.4,0.2,0.08"),
+      ("spot light", "--spot-light 3,2,1,0,0,0,20,0.3,10,10,12")]),
+]
+
+
+def cmd_lights(args):
+    """Point and spot lights: `default` and `high` against our reference integrator (shadow rays
+    from every sample to the light; vdb_render has no point lights), and each frame's time against
+    the same frame with its directional light only, interleaved round by round."""
+    tmp = args.keep or tempfile.mkdtemp(prefix="vdb_ewa_lights_")
+    os.makedirs(tmp, exist_ok=True)
+    print(f"# {args.res}, median of {args.repeat} interleaved rounds, {os.cpu_count()} cores; reference: --method raymarch "
+          f"--step {args.ref_step} --shadowstep {args.ref_step}")
+    print("| scene | light | quality | time with (s) | time without (s) | with / without | PSNR vs reference (dB) |")
+    print("|---|---|---|---|---|---|---|")
+    for n, (label, src, cam, model, lights) in enumerate(LIGHT_SCENES):
+        if not os.path.exists(src):
+            continue
+        common = ["-res", args.res, *cam.split(), *model.split()]
+        for k, (light, opts) in enumerate(lights):
+            ref = os.path.join(tmp, f"lights_{n}_{k}_{args.res}_ref.exr")
+            if not os.path.exists(ref):
+                run([*EWA_RENDER, src, ref, *common, *opts.split(), "--method", "raymarch", "--step", str(args.ref_step),
+                     "--shadowstep", str(args.ref_step)])
+            for q in ("default", "high"):
+                out_with, out_without = os.path.join(tmp, "with.exr"), os.path.join(tmp, "without.exr")
+                cmds = {"with": [*EWA_RENDER, src, out_with, *common, "--quality", q, *opts.split()],
+                        "without": [*EWA_RENDER, src, out_without, *common, "--quality", q]}
+                times = {key: [] for key in cmds}
+                for _ in range(args.repeat):
+                    for key, c in cmds.items():
+                        times[key].append(run(c)[0])
+                t = {key: statistics.median(v) for key, v in times.items()}
+                print(f"| {label} | {light} | {q} | {t['with']:.2f} | {t['without']:.2f} | {t['with'] / t['without']:.2f}x | "
+                      f"{diff(out_with, ref)[1]:.1f} |", flush=True)
+
+
 def cmd_python(args):
     label, path, camera = next(s for s in SCENES if s[0] == args.scene)
     pythonpath = os.environ.get("VDB_EWA_PYTHONPATH", os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(EWA))), "python"))
@@ -1017,6 +1069,11 @@ def main():
     sbl.add_argument("--ref-step", type=float, default=0.25)
     sbl.add_argument("--fstop", type=float, default=0.05)
     sbl.add_argument("--keep", default="", help="folder that keeps the grids and references between runs")
+    sl = sub.add_parser("lights")
+    sl.add_argument("--res", default="480x270")
+    sl.add_argument("--repeat", type=int, default=3)
+    sl.add_argument("--ref-step", type=float, default=0.25)
+    sl.add_argument("--keep", default="", help="folder that keeps the references between runs")
     so = sub.add_parser("output")
     so.add_argument("--scene", default="smoke")
     so.add_argument("--res", default="1920x1080")
@@ -1063,7 +1120,7 @@ def main():
     {"speed": cmd_speed, "sigma": cmd_sigma, "tradeoff": cmd_tradeoff, "targets": cmd_targets,
      "output": cmd_output, "surfaces": cmd_surfaces, "holes": cmd_holes, "plot": cmd_plot, "ladder": cmd_ladder,
      "analytic": cmd_analytic, "roofline": cmd_roofline, "scaling": cmd_scaling,
-     "stability": cmd_stability, "python": cmd_python, "cull": cmd_cull, "blur": cmd_blur}[a.cmd](a)
+     "stability": cmd_stability, "python": cmd_python, "cull": cmd_cull, "blur": cmd_blur, "lights": cmd_lights}[a.cmd](a)
 
 
 if __name__ == "__main__":

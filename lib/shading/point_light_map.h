@@ -60,7 +60,8 @@ public:
     double latticePoints() const { return double(mDepth.size()); }
 
 private:
-    /// One face of the cube: rays through (axis + u e1 + v e2), u = u0 + i du, v = v0 + j du.
+    /// One face of the cube: rays through (axis + tan(a) e1 + tan(b) e2), a = u0 + i du,
+    /// b = v0 + j du (angles: the rays spread about evenly).
     struct Face
     {
         Vec3d axis{0.0}, e1{0.0}, e2{0.0};
@@ -73,7 +74,7 @@ private:
 
     Vec3d mLight{0.0};          ///< world position
     double mStep = 0.0;         ///< world units between samples along a ray
-    double mDu = 0.0;           ///< u and v between rays of a face
+    double mDu = 0.0;           ///< the angle between rays of a face (radians)
     double mStepVoxels = 0.0, mResolutionVoxels = 0.0;
     std::array<Face, 6> mFaces;
     /// Per ray: the sample index (k: at distance k x mStep) of its first stored sample, the
