@@ -206,3 +206,4 @@ TEST(PointLight, BadLightsAreRefusedOnOneLine)
     EXPECT_NO_THROW(s.validate());
 }
 
+

@@ -67,6 +67,9 @@ scene.collection.objects.link(camera)
 eye, target = mathutils.Vector(params["eye"]), mathutils.Vector(params["target"])
 camera.matrix_world = mathutils.Matrix.LocRotScale(eye, (target - eye).to_track_quat("-Z", "Y"), None)
 scene.camera = camera
+camera_data.dof.use_dof = True
+camera_data.dof.aperture_fstop = params["fstop"]
+camera_data.dof.focus_distance = params["focus_distance"]
 
 sun_data = bpy.data.lights.new("sun", "SUN")
 sun_data.energy = params["sun_strength"]
@@ -74,6 +77,17 @@ sun_data.color = params["sun_color"]
 sun = bpy.data.objects.new("sun", sun_data)
 scene.collection.objects.link(sun)
 sun.matrix_world = mathutils.Matrix.LocRotScale(None, mathutils.Vector(params["sun_direction"]).to_track_quat("Z", "Y"), None)
+
+spot_data = bpy.data.lights.new("spot", "SPOT")
+spot_data.energy = params["spot_power"]
+spot_data.color = params["spot_color"]
+spot_data.spot_size = math.radians(params["spot_angle"])
+spot_data.spot_blend = params["spot_blend"]
+spot_data.shadow_soft_size = params["spot_radius"]
+spot = bpy.data.objects.new("spot", spot_data)
+scene.collection.objects.link(spot)
+spot_at, spot_to = mathutils.Vector(params["spot_position"]), mathutils.Vector(params["target"])
+spot.matrix_world = mathutils.Matrix.LocRotScale(spot_at, (spot_to - spot_at).to_track_quat("-Z", "Y"), None)
 
 t0 = time.monotonic()
 bpy.ops.render.render()

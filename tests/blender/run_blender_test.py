@@ -1,9 +1,9 @@
 """The Blender add-on in the real client: blender -b builds a scene (a volume object loading a
 .vdb file, moved by a rotation, a non-uniform scale and a translation, with a Principled Volume; a
-camera aimed at a point; a sun), renders it through the vdb_ewa engine in-process, and saves
+camera aimed at a point, with depth of field; a sun and a spot light), renders it through the vdb_ewa engine in-process, and saves
 Blender's render result. The CLI renders the same scene from options this script derives on its
 own (the grid rewritten with the moved transform by pyopenvdb, --lookat for the camera, the
-material and sun by docs/blender.md's formulas); the two must agree to 40 dB PSNR.
+material and lights by docs/blender.md's formulas); the two must agree to 40 dB PSNR.
 
 Exit 77 (ctest's skip) with a message where Blender, pyopenvdb or OpenImageIO is missing.
 
@@ -110,6 +110,9 @@ def main():
                   absorption_color=[0.3, 0.2, 0.6], focal=35.0, sensor=36.0, clip=[0.01, 1000.0], eye=eye.tolist(),
                   target=target.tolist(), sun_strength=4.0, sun_color=[1.0, 0.9, 0.8],
                   sun_direction=(np.array([0.4, -0.3, 0.8]) / np.linalg.norm([0.4, -0.3, 0.8])).tolist(),
+                  fstop=0.1, focus_distance=0.8 * float(np.linalg.norm(target - eye)),
+                  spot_position=(target + extent * np.array([-0.6, -0.5, 0.5])).tolist(), spot_power=40.0 * extent * extent,
+                  spot_color=[0.6, 0.8, 1.0], spot_angle=40.0, spot_blend=0.3, spot_radius=0.01 * extent,
                   cycles_samples=args.samples, cycles_seed=args.seed, quality=args.quality, exr=out("blender.exr"), png=out("blender.png"))
     with open(out("params.json"), "w") as f:
         json.dump(params, f, indent=1)
@@ -145,9 +148,13 @@ def main():
     absorb = np.maximum(1 - color, 0) * np.maximum(1 - np.sqrt(absorption), 0) * density * voxel
     light = list(params["sun_direction"]) + list(np.array(params["sun_color"]) * params["sun_strength"] / (4 * math.pi))
     join = lambda v: ",".join("%.17g" % x for x in v)
+    # The spot: Cycles' intensity power / 4 pi, scattered isotropically (1 / 4 pi), aimed at the target.
+    spot = (list(params["spot_position"]) + list(target) + [params["spot_angle"], params["spot_blend"]]
+            + list(np.array(params["spot_color"]) * params["spot_power"] / (16 * math.pi * math.pi)))
     cli = [args.cli, out("moved.vdb"), out("cli.exr"), "--name", grid.name, "--res", args.res, "--translate", join(eye),
            "--lookat", join(target), "--up", "0,0,1", "--focal", "35", "--aperture", "36", "--near", "0.01", "--far", "1000",
-           "--light", join(light), "--gain", "0", "--scatter", join(scatter), "--absorb", join(absorb), "--quality", args.quality,
+           "--fstop", "%.17g" % params["fstop"], "--focus-distance", "%.17g" % params["focus_distance"],
+           "--light", join(light), "--spot-light", join(spot), "--point-light-radius", "%.17g" % params["spot_radius"], "--gain", "0", "--scatter", join(scatter), "--absorb", join(absorb), "--quality", args.quality,
            "--working-space", "lin_rec709", "--output-space", "lin_rec709", "--exr-type", "float", "-q"]
     done = subprocess.run(cli, capture_output=True, text=True)
     if done.returncode != 0:

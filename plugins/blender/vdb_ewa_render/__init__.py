@@ -103,6 +103,7 @@ def render_options(depsgraph, warnings):
     scene = depsgraph.scene
     options = scene_mapping.camera_options(scene, warnings)
     options["light"] = scene_mapping.light_options(depsgraph, warnings) or [(0.0, 0.0, 1.0, 0.0, 0.0, 0.0)]
+    options.update(scene_mapping.point_light_options(depsgraph, warnings))
     # Blender's scene-linear space is linear Rec.709; render and return it there.
     # Cycles' attenuation: shadows fall as exp(-optical depth), without vdb_render's --gain.
     options["gain"] = 0.0

@@ -1,4 +1,4 @@
-"""A Blender scene as vdb_ewa.render() options: the camera, the sun lights, each volume object's
+"""A Blender scene as vdb_ewa.render() options: the camera, the sun, point and spot lights, each volume object's
 grid, transform and Principled Volume (docs/blender.md has the table). Pure functions of bpy
 data; __init__.py renders with them."""
 import math
@@ -58,7 +58,21 @@ def camera_options(scene, warnings):
     if scene.render.pixel_aspect_x != scene.render.pixel_aspect_y:
         warnings.append("non-square pixels are ignored")
     if data.dof.use_dof:
-        warnings.append("camera %s: depth of field is ignored" % cam.name)
+        # A thin lens: Blender's f-stop over its focal length in mm and scene units as metres
+        # (vdb_ewa's --fstop takes them alike); the focus depth along the view axis, of the focus
+        # object where there is one (Cycles focuses on a plane, as vdb_ewa does).
+        if data.type != 'PERSP':
+            warnings.append("camera %s: depth of field needs a perspective camera; ignored" % cam.name)
+        else:
+            options["fstop"] = data.dof.aperture_fstop
+            focus = data.dof.focus_distance
+            if data.dof.focus_object is not None:
+                forward = cam.matrix_world.to_3x3() @ mathutils.Vector((0.0, 0.0, -1.0))
+                focus = (data.dof.focus_object.matrix_world.translation - location).dot(forward.normalized())
+            if focus > 0.0:
+                options["focus_distance"] = focus
+            else:
+                warnings.append("camera %s: the focus lies behind the camera; focused on the point looked at" % cam.name)
     return options
 
 
@@ -74,8 +88,10 @@ def light_options(depsgraph, warnings):
     for instance in _instances(depsgraph, 'LIGHT'):
         obj = instance.object
         light = obj.data
+        if light.type in ('POINT', 'SPOT'):
+            continue  # point_light_options
         if light.type != 'SUN':
-            warnings.append("light %s: %s lights are not supported (sun lights are)" % (obj.name, light.type.lower()))
+            warnings.append("light %s: %s lights are not supported (sun, point and spot lights are)" % (obj.name, light.type.lower()))
             continue
         m = instance.matrix_world.to_3x3()
         d = (m[0][2], m[1][2], m[2][2])
@@ -85,6 +101,41 @@ def light_options(depsgraph, warnings):
         scale = light.energy / FOUR_PI
         lights.append(tuple(c / norm for c in d) + tuple(c * scale for c in light.color))
     return lights
+
+
+def point_light_options(depsgraph, warnings):
+    """Point and spot lights as --point-light X,Y,Z,R,G,B and --spot-light X,Y,Z,TX,TY,TZ,ANGLE,
+    BLEND,R,G,B: colour x power / (16 pi^2) (Cycles' radiant intensity is power / 4 pi, and an
+    isotropic medium scatters 1 / 4 pi of it towards the eye, where vdb_ewa's model scatters all);
+    a spot aims along its local -z, Spot Size its full cone angle, Spot Blend its blend (the same
+    smoothstep as Cycles'). Their radius (Cycles' soft size) becomes point_light_radius, the
+    largest one (vdb_ewa has one for all). Returns the keyword options, empty without such lights."""
+    points, spots, radii = [], [], []
+    for instance in _instances(depsgraph, 'LIGHT'):
+        obj = instance.object
+        light = obj.data
+        if light.type not in ('POINT', 'SPOT'):
+            continue
+        m = instance.matrix_world
+        position = tuple(m.translation)
+        intensity = tuple(c * light.energy / (FOUR_PI * FOUR_PI) for c in light.color)
+        radii.append(light.shadow_soft_size)
+        if light.type == 'POINT':
+            points.append(position + intensity)
+        else:
+            axis = m.to_3x3() @ mathutils.Vector((0.0, 0.0, -1.0))
+            target = tuple(p + a for p, a in zip(position, axis))
+            spots.append(position + target + (math.degrees(light.spot_size), light.spot_blend) + intensity)
+    options = {}
+    if points:
+        options["point_light"] = points
+    if spots:
+        options["spot_light"] = spots
+    if radii:
+        options["point_light_radius"] = max(radii)
+        if min(radii) != max(radii):
+            warnings.append("point and spot lights of radii %g to %g: vdb_ewa gives them all the largest" % (min(radii), max(radii)))
+    return options
 
 
 def _principled(material):
