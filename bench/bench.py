@@ -548,6 +548,18 @@ vdb.write({path!r}, grids=[density, v])
     return path
 
 
+def with_and_without(path, common, opts, tmp, repeat):
+    """Render @a path with and without @a opts in @a repeat interleaved rounds: the median times
+    {"with": s, "without": s} and the two images' paths."""
+    out_with, out_without = os.path.join(tmp, "with.exr"), os.path.join(tmp, "without.exr")
+    cmds = {"with": [*EWA_RENDER, path, out_with, *common, *opts], "without": [*EWA_RENDER, path, out_without, *common]}
+    times = {k: [] for k in cmds}
+    for _ in range(repeat):
+        for k, c in cmds.items():
+            times[k].append(run(c)[0])
+    return {k: statistics.median(v) for k, v in times.items()}, out_with, out_without
+
+
 BLUR_SCENES = [("pyro", f"{ASSETS}/pyro.vdb", "-translate 0.225,2.175,15.75 -lookat 0.225,2.175,-0.225", 3.0, 10.0),
                ("cloud (grids/)", f"{ROOT}/grids/cloud.vdb", "-translate 1.5,0.8,4.5 -lookat 0,0,0", 1.5, 3.0)]
 
@@ -578,14 +590,7 @@ def cmd_blur(args):
                 run([*EWA_RENDER, path, ref, *common, *opts, "--method", "raymarch", "--step", str(args.ref_step),
                      "--shadowstep", str(args.ref_step), "--blur-samples", str(args.ref_samples)])
             for q in ("default", "high"):
-                out_with, out_without = os.path.join(tmp, "with.exr"), os.path.join(tmp, "without.exr")
-                cmds = {"with": [*EWA_RENDER, path, out_with, *common, "--quality", q, *opts],
-                        "without": [*EWA_RENDER, path, out_without, *common, "--quality", q]}
-                times = {k: [] for k in cmds}
-                for _ in range(args.repeat):
-                    for k, c in cmds.items():
-                        times[k].append(run(c)[0])
-                t = {k: statistics.median(v) for k, v in times.items()}
+                t, out_with, out_without = with_and_without(path, common + ["--quality", q], opts, tmp, args.repeat)
                 print(f"| {label} | {effect} | {q} | {t['with']:.2f} | {t['without']:.2f} | {t['with'] / t['without']:.2f}x | "
                       f"{diff(out_with, ref)[1]:.1f} | {diff(out_without, ref)[1]:.1f} |", flush=True)
 
@@ -625,14 +630,7 @@ def cmd_lights(args):
                 run([*EWA_RENDER, src, ref, *common, *opts.split(), "--method", "raymarch", "--step", str(args.ref_step),
                      "--shadowstep", str(args.ref_step)])
             for q in ("default", "high"):
-                out_with, out_without = os.path.join(tmp, "with.exr"), os.path.join(tmp, "without.exr")
-                cmds = {"with": [*EWA_RENDER, src, out_with, *common, "--quality", q, *opts.split()],
-                        "without": [*EWA_RENDER, src, out_without, *common, "--quality", q]}
-                times = {key: [] for key in cmds}
-                for _ in range(args.repeat):
-                    for key, c in cmds.items():
-                        times[key].append(run(c)[0])
-                t = {key: statistics.median(v) for key, v in times.items()}
+                t, out_with, _ = with_and_without(src, common + ["--quality", q], opts.split(), tmp, args.repeat)
                 print(f"| {label} | {light} | {q} | {t['with']:.2f} | {t['without']:.2f} | {t['with'] / t['without']:.2f}x | "
                       f"{diff(out_with, ref)[1]:.1f} |", flush=True)
 

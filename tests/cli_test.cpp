@@ -634,11 +634,10 @@ TEST_F(Cli, LightsAFireFromInsideWithPointAndSpotLights)
                        << R"( "spot-light": [2, 0, 0, 0, 0, 0, 30, 0.2, 4, 4, 4], "point-light-radius": 0.05})";
     ASSERT_EQ(runCli(mDir, "render --job " + job).code, 0);
     EXPECT_EQ(maxAbsDiff(image, readExr(mDir.file("job.exr"))), 0.0);
-    expectFailure(file + " " + mDir.file("out.exr") + camera + " --point-light 1,2", 2, "--point-light");
-    expectFailure(file + " " + mDir.file("out.exr") + camera + " --spot-light 0,0,0,1,0,0,0", 2, "--spot-light");
-    expectFailure(file + " " + mDir.file("out.exr") + camera + " --spot-light 0,0,0,0,0,0,30", 2, "--spot-light target");
-    expectFailure(file + " " + mDir.file("out.exr") + camera + " --point-light 0,0,0,-1,1,1", 2, "--point-light intensity");
-    expectFailure(file + " " + mDir.file("out.exr") + camera + " --point-light 0,0,0 --method raymarch-gaussian", 2, "--point-light");
+    const std::pair<const char*, const char*> bad[] = {{" --point-light 1,2", "--point-light"}, {" --spot-light 0,0,0,1,0,0,0", "--spot-light"},
+        {" --spot-light 0,0,0,0,0,0,30", "--spot-light target"}, {" --point-light 0,0,0,-1,1,1", "--point-light intensity"},
+        {" --point-light 0,0,0 --method raymarch-gaussian", "--point-light"}};
+    for (const auto& [options, message] : bad) expectFailure(file + " " + mDir.file("out.exr") + camera + options, 2, message);
     const CliRun unused = runCli(mDir, file + " " + mDir.file("unused.exr") + camera + " --point-light-radius 1");
     EXPECT_NE(unused.err.find("--point-light-radius changes nothing without --point-light"), std::string::npos) << unused.err;
 }
