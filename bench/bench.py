@@ -54,6 +54,10 @@
                                                          from outside) on pyro and the cloud, default and
                                                          high against the reference's shadow rays, time
                                                          against the frame with its directional light only
+  bench/bench.py volumes [--res 480x270] [--repeat 3] [--keep DIR]
+                                                         --add-volume: pyro with the cloud inside it, one
+                                                         sweep against the reference of the summed field
+                                                         and against compositing them over each other
   bench/bench.py output [--scene smoke] [--res 1920x1080] [--repeat 3]
                                                          issue 4's output stage: EXR pixel types,
                                                          compressions, passes and deep files, with
@@ -635,6 +639,49 @@ def cmd_lights(args):
                       f"{diff(out_with, ref)[1]:.1f} |", flush=True)
 
 
+def cmd_volumes(args):
+    """Several volumes in one sweep: the shared pyro with the sample cloud (moved into its lower
+    half: they interpenetrate) added by --add-volume, `default` and `high` against our reference
+    integrator of the summed field, and the time against pyro alone, interleaved round by round."""
+    tmp = args.keep or tempfile.mkdtemp(prefix="vdb_ewa_volumes_")
+    os.makedirs(tmp, exist_ok=True)
+    pyro, cloud = f"{ASSETS}/pyro.vdb", os.path.join(tmp, "cloud_moved.vdb")
+    if not os.path.exists(pyro):
+        sys.exit(f"{pyro} is missing")
+    if not os.path.exists(cloud):  # the cloud, twice its size, its centre 1.5 world units up in pyro's plume
+        script = f"""
+import pyopenvdb as vdb
+g = vdb.read({ROOT + '/grids/cloud.vdb'!r}, 'density')
+m = g.transform.indexToWorld
+o = m((0, 0, 0))
+g.transform = vdb.createLinearTransform([[2 * (a - b) for a, b in zip(m(e), o)] + [0] for e in ((1, 0, 0), (0, 1, 0), (0, 0, 1))]
+                                        + [[0.2, 1.5, 0.0, 1]])
+vdb.write({cloud!r}, grids=[g])
+"""
+        subprocess.run([sys.executable, "-c", script], check=True)
+    common = ["-res", args.res, *"-translate 0.225,2.175,15.75 -lookat 0.225,2.175,-0.225".split()]
+    ref = os.path.join(tmp, f"volumes_{args.res}_ref.exr")
+    opts = ["--add-volume", cloud]
+    if not os.path.exists(ref):
+        run([*EWA_RENDER, pyro, ref, *common, *opts, "--method", "raymarch", "--step", str(args.ref_step), "--shadowstep", str(args.ref_step)])
+    print(f"# {args.res}, median of {args.repeat} interleaved rounds, {os.cpu_count()} cores; reference: --method raymarch "
+          f"--step {args.ref_step} --shadowstep {args.ref_step} of the summed field")
+    print("| scene | quality | time with (s) | time without (s) | with / without | PSNR vs reference (dB) | PSNR of over (dB) |")
+    print("|---|---|---|---|---|---|---|")
+    for q in ("default", "high"):
+        t, out_with, out_without = with_and_without(pyro, common + ["--quality", q], opts, tmp, args.repeat)
+        # The cloud alone, composited over pyro and under it: separate renders cannot interpenetrate.
+        alone = os.path.join(tmp, "cloud_alone.exr")
+        run([*EWA_RENDER, cloud, alone, *common, "--quality", q])
+        overs = []
+        for front, back in ((alone, out_without), (out_without, alone)):
+            comp = os.path.join(tmp, "over.exr")
+            subprocess.run(["oiiotool", front, back, "--over", "-o", comp], check=True, capture_output=True)
+            overs.append(diff(comp, ref)[1])
+        print(f"| pyro + cloud, interpenetrating | {q} | {t['with']:.2f} | {t['without']:.2f} | {t['with'] / t['without']:.2f}x | "
+              f"{diff(out_with, ref)[1]:.1f} | {max(overs):.1f} (the better order) |", flush=True)
+
+
 def cmd_python(args):
     label, path, camera = next(s for s in SCENES if s[0] == args.scene)
     pythonpath = os.environ.get("VDB_EWA_PYTHONPATH", os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(EWA))), "python"))
@@ -1072,6 +1119,11 @@ def main():
     sl.add_argument("--repeat", type=int, default=3)
     sl.add_argument("--ref-step", type=float, default=0.25)
     sl.add_argument("--keep", default="", help="folder that keeps the references between runs")
+    svo = sub.add_parser("volumes")
+    svo.add_argument("--res", default="480x270")
+    svo.add_argument("--repeat", type=int, default=3)
+    svo.add_argument("--ref-step", type=float, default=0.25)
+    svo.add_argument("--keep", default="", help="folder that keeps the moved cloud and the reference between runs")
     so = sub.add_parser("output")
     so.add_argument("--scene", default="smoke")
     so.add_argument("--res", default="1920x1080")
@@ -1118,7 +1170,7 @@ def main():
     {"speed": cmd_speed, "sigma": cmd_sigma, "tradeoff": cmd_tradeoff, "targets": cmd_targets,
      "output": cmd_output, "surfaces": cmd_surfaces, "holes": cmd_holes, "plot": cmd_plot, "ladder": cmd_ladder,
      "analytic": cmd_analytic, "roofline": cmd_roofline, "scaling": cmd_scaling,
-     "stability": cmd_stability, "python": cmd_python, "cull": cmd_cull, "blur": cmd_blur, "lights": cmd_lights}[a.cmd](a)
+     "stability": cmd_stability, "python": cmd_python, "cull": cmd_cull, "blur": cmd_blur, "lights": cmd_lights, "volumes": cmd_volumes}[a.cmd](a)
 
 
 if __name__ == "__main__":

@@ -207,6 +207,16 @@ PYBIND11_MODULE(vdb_ewa, m)
             "The same grid moved by a 4x4 object-to-world matrix, column vectors: world = M @ (x, y, z, 1) (Blender's\n"
             "matrix_world); its colour and emission grids move with it, also those the render attaches by name.\n"
             "Raises vdb_ewa.ValueError for a matrix that is not 4x4, finite, affine and invertible.")
+        .def("with_added_volume", [](const GridSource& g, const GridSource& other) {
+            py::gil_scoped_release release; // resamples and sums the fields
+            return g.withAddedVolume(other);
+        },
+            py::arg("other"),
+            "This fog volume and another in one field, their densities summed (render's add_volume): both go through\n"
+            "one front-to-back sweep, so where they interpenetrate each hides and shadows the other. other is resampled\n"
+            "onto this grid's voxels where its transform differs (put the finest volume first), its densities scaled by\n"
+            "the voxel lengths' ratio (densities are per voxel length). Colours, emission and velocities are this grid's.\n"
+            "Raises vdb_ewa.InputError where either is a level set.")
         .def("__repr__", [](const GridSource& g) {
             return "<vdb_ewa.Grid '" + g.name() + "'" + (g.path().empty() ? std::string(" (array)") : " from " + g.path()) + ", " +
                    std::to_string(g.activeVoxelCount()) + " active voxels" + (g.isLevelSet() ? ", level set>" : ">");

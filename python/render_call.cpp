@@ -238,7 +238,9 @@ void RenderedFrame::write(const std::string& path) const
     const std::unique_ptr<ParsedOptions> parsed = prepared(path);
     const cli::RenderOptions& options = parsed->options;
     const std::string& preview = options.output().previewOption();
-    options.output().refuseInputs(path, preview, {input, options.environment(), options.cameraFile()});
+    std::vector<std::string> inputs{input, options.environment(), options.cameraFile()};
+    for (const std::string& file : options.addedVolumeFiles()) inputs.push_back(file);
+    options.output().refuseInputs(path, preview, inputs);
     Frame copy = working; // write() converts in place
     options.output().write(copy, camera, path, preview, options.headerAttributes(grid, camera, given, input, seconds, std::nullopt, stats));
 }

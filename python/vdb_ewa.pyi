@@ -137,6 +137,7 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
            temperature_scale: Optional[Number] = None,
            temperature_offset: Optional[Number] = None,
            blackbody_intensity: Optional[Number] = None,
+           add_volume: OptionValue = None,
            velocity_grid: OptionValue = None,
            velocity_scale: Optional[Number] = None,
            velocity_unit: OptionValue = None,
@@ -300,6 +301,11 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
     temperature_offset (--temperature-offset): Kelvin at value 0 (Houdini: T0), within 1e6 (default: 0)
     blackbody_intensity (--blackbody-intensity): multiplies the blackbody's radiance, in [0, 1e6]; 1 is
         physically based (default: 1)
+    add_volume (--add-volume): another fog volume in the same frame, FILE[:GRID] (GRID: the first float
+        grid by default): its density is added to the input's on the input's voxels (resampled
+        trilinearly where its transform differs: name the finest volume first), so volumes that
+        interpenetrate hide and shadow each other in one sweep; same optical model; repeat for more
+        (default: none)
     velocity_grid (--velocity-grid): motion blur: name of the velocity grid in the input file, a vec3s
         or vec3d grid (Houdini's v or vel) or the float grids NAME.x, NAME.y, NAME.z (Blender's); each
         kernel moves linearly over the shutter with the velocity at its centre; naming one turns motion

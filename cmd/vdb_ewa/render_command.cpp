@@ -246,7 +246,9 @@ private:
     {
         const std::string input = pathOf(mInput, frameNumber);
         const std::string preview = pathOf(mOptions.output().previewOption(), frameNumber);
-        mOptions.output().refuseInputs(output, preview, {input, mJob, mOptions.environment()});
+        std::vector<std::string> inputs{input, mJob, mOptions.environment()};
+        for (const std::string& file : mOptions.addedVolumeFiles()) inputs.push_back(file);
+        mOptions.output().refuseInputs(output, preview, inputs);
         const auto t0 = std::chrono::steady_clock::now();
         resetPeakMemory(); // each frame reports its own peak
         stallForTests("read");
@@ -310,7 +312,7 @@ private:
         for (std::size_t g = 0; g < groups.size(); ++g) {
             out << "\nvdb_ewa: " << titles[g];
             for (const auto& [key, value] : groups[g]) {
-                if (key == "light" || key == "point-light" || key == "spot-light") { // one option per light (lightsText)
+                if (key == "light" || key == "point-light" || key == "spot-light" || key == "add-volume") { // one option each (lightsText)
                     for (std::size_t at = 0, end; at != std::string::npos; at = end == std::string::npos ? end : end + 2) {
                         end = value.find("; ", at);
                         out << " --" << key << " " << value.substr(at, end == std::string::npos ? end : end - at);

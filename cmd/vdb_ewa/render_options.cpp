@@ -7,6 +7,7 @@
 #include "option_values.h"
 
 #include <cmath>
+#include <filesystem>
 #include <iomanip>
 #include <sstream>
 
@@ -180,6 +181,13 @@ void RenderOptions::add(CLI::App* app)
         "Kelvin at value 0 (Houdini: T0), within 1e6 (default: " + fmt(ge.kelvinOffset) + ")");
     mApp->add_option("--blackbody-intensity", mBlackbodyIntensity,
         "multiplies the blackbody's radiance, in [0, 1e6]; 1 is physically based (default: " + fmt(ge.blackbodyIntensity) + ")");
+    // Several volumes in one sweep.
+    mApp->add_option("--add-volume", mAddVolumes,
+            "another fog volume in the same frame, FILE[:GRID] (GRID: the first float grid by default): its density is "
+            "added to the input's on the input's voxels (resampled trilinearly where its transform differs: name the finest "
+            "volume first), so volumes that interpenetrate hide and shadow each other in one sweep; same optical model; "
+            "repeat for more (default: none)")
+        ->allow_extra_args(false);
     // Motion blur (fog volumes).
     const MotionBlur mb;
     mApp->add_option("--velocity-grid", mVelocityGrid,
@@ -398,7 +406,12 @@ GridSource RenderOptions::open(const std::string& path) const { return withExtra
 
 GridSource RenderOptions::withExtraGrids(const GridSource& opened) const
 {
-    GridSource grid = mColor.empty() ? opened : opened.withColorGrid(mColor);
+    GridSource summed = opened;
+    for (const std::string& volume : mAddVolumes) {
+        const auto [file, grid] = splitVolume(volume);
+        summed = summed.withAddedVolume(GridSource::open(file, grid));
+    }
+    GridSource grid = mColor.empty() ? summed : summed.withColorGrid(mColor);
     if (!mEmissionGrid.empty()) grid = grid.withEmissionGrid(mEmissionGrid);
     if (!mTemperatureGrid.empty()) grid = grid.withTemperatureGrid(mTemperatureGrid);
     if (!mVelocityGrid.empty()) grid = grid.withVelocityGrid(mVelocityGrid);
@@ -490,6 +503,11 @@ std::vector<Attributes> RenderOptions::resolvedOptions(const GridSource& grid, c
         model.emplace_back("temperature-offset", fmt(rs.gridEmission.kelvinOffset));
         model.emplace_back("blackbody-intensity", fmt(rs.gridEmission.blackbodyIntensity));
     }
+    if (!mAddVolumes.empty()) {
+        std::string volumes;
+        for (const std::string& v : mAddVolumes) volumes += (volumes.empty() ? "" : "; ") + v;
+        model.emplace_back("add-volume", volumes);
+    }
     if (grid.hasVelocityGrid()) {
         model.emplace_back("velocity-grid", mVelocityGrid);
         model.emplace_back("velocity-scale", fmt(rs.motionBlur.velocityScale));
@@ -559,6 +577,21 @@ std::pair<std::string, std::string> RenderOptions::pointLightsText(const std::ve
         }
     }
     return {points, spots};
+}
+
+std::pair<std::string, std::string> RenderOptions::splitVolume(const std::string& volume)
+{
+    // The whole text where it names a file: a path may hold a colon.
+    const std::size_t colon = volume.rfind(':');
+    if (colon == std::string::npos || std::filesystem::exists(volume)) return {volume, ""};
+    return {volume.substr(0, colon), volume.substr(colon + 1)};
+}
+
+std::vector<std::string> RenderOptions::addedVolumeFiles() const
+{
+    std::vector<std::string> files;
+    for (const std::string& volume : mAddVolumes) files.push_back(splitVolume(volume).first);
+    return files;
 }
 
 } // namespace vdb_ewa::cli

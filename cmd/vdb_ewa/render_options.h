@@ -71,6 +71,10 @@ public:
     /// --camera-file and --environment as given (empty: none): inputs an output must not overwrite.
     const std::string& cameraFile() const { return mCameraFile; }
     const std::string& environment() const { return mEnvironment; }
+    /// The files of --add-volume: inputs an output must not overwrite either.
+    std::vector<std::string> addedVolumeFiles() const;
+    /// --add-volume's FILE[:GRID] as (file, grid): the whole text where it names a file.
+    static std::pair<std::string, std::string> splitVolume(const std::string& volume);
     OutputOptions& output() { return mOutputOptions; }
     const OutputOptions& output() const { return mOutputOptions; }
 
@@ -89,7 +93,7 @@ private:
 
     CLI::App* mApp = nullptr;
     std::string mCameraFile, mName, mRes, mTranslate, mRotate, mLookAt, mUp, mCamera;
-    std::vector<std::string> mLights, mPointLights, mSpotLights;
+    std::vector<std::string> mLights, mPointLights, mSpotLights, mAddVolumes;
     std::optional<double> mPointLightRadius;
     std::string mAbsorb, mScatter, mEmission, mAmbient, mAa, mMethod, mQuality, mExp, mRenormalize, mTaper, mPrefilter, mPrecision;
     std::optional<int> mTileSpacing, mRefine, mRefineEmission, mSamples;

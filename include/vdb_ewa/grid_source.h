@@ -51,6 +51,16 @@ public:
     GridSource withVelocityGrid(const std::string& velocityName) const;
     bool hasVelocityGrid() const;
 
+    /// This fog volume and the fog volume @a other in one field, their densities summed: both
+    /// go through one front-to-back sweep, so where they interpenetrate each hides and shadows
+    /// the other (--add-volume). @a other is resampled trilinearly onto this grid's voxels where
+    /// its transform differs (name the finest volume first), its densities scaled by the ratio
+    /// of the voxel lengths so that its optical depth per world unit is kept (densities are per
+    /// voxel length). It brings its density only: colours, emission and velocities are this
+    /// grid's. The sum is clamped as one density is (1e6).
+    /// @throw InputError where either is a level set.
+    GridSource withAddedVolume(const GridSource& other) const;
+
     /// The same grid moved by @a objectToWorld (column vectors: world = M (x, y, z, 1); a DCC
     /// object's transform, e.g. Blender's matrix_world): its index-to-world map is followed by
     /// M, for its colour and emission grids too, and for those attached to the result later.

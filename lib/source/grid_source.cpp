@@ -427,6 +427,39 @@ GridSource GridSource::transformed(const Mat4d& m) const
     return GridSource(movedImpl(*mImpl, m));
 }
 
+GridSource GridSource::withAddedVolume(const GridSource& other) const
+{
+    const auto where = [](const Impl& impl) { return (impl.path.empty() ? std::string("host grid") : impl.path) + ": grid '" + impl.name + "'"; };
+    for (const Impl* impl : {mImpl.get(), other.mImpl.get()}) {
+        if (impl->grid->getGridClass() == openvdb::GRID_LEVEL_SET) {
+            throw InputError(where(*impl) + " is a level set; --add-volume sums fog volumes");
+        }
+    }
+    // The other's field on this grid's voxels, its densities per this grid's voxel length.
+    openvdb::FloatGrid::Ptr added;
+    if (other.mImpl->field->transform() == mImpl->grid->transform()) {
+        added = other.mImpl->field->deepCopy();
+    } else {
+        added = openvdb::FloatGrid::create(0.0f);
+        added->setTransform(mImpl->grid->transform().copy());
+        openvdb::tools::resampleToMatch<openvdb::tools::BoxSampler>(*other.mImpl->field, *added);
+    }
+    added->tree().voxelizeActiveTiles();
+    const float scale = float(mImpl->voxelLength / other.mImpl->voxelLength);
+    openvdb::FloatGrid::Ptr sum = mImpl->field->deepCopy();
+    auto acc = sum->getAccessor();
+    for (auto it = added->cbeginValueOn(); it; ++it) {
+        const openvdb::Coord c = it.getCoord();
+        acc.setValueOn(c, fieldValue(acc.getValue(c) + *it * scale));
+    }
+    sum->setGridClass(openvdb::GRID_FOG_VOLUME);
+    sum->setName(mImpl->name);
+    auto impl = std::make_shared<Impl>(*mImpl);
+    impl->grid = sum;
+    impl->derive();
+    return GridSource(impl);
+}
+
 bool GridSource::hasEmissionGrid() const { return bool(mImpl->emission); }
 bool GridSource::hasTemperatureGrid() const { return bool(mImpl->temperature); }
 

@@ -1,6 +1,7 @@
 """Run inside Blender (blender -b --factory-startup --python blender_scene.py -- PARAMS.json): build
-the test scene from PARAMS (a volume object loading a .vdb file with a transform and a Principled
-Volume, a camera aimed at a point, a sun), render it with PARAMS["engine"] and save Blender's own
+the test scene from PARAMS (two interpenetrating volume objects loading a .vdb file, each with a
+transform, sharing a Principled Volume; a camera with depth of field aimed at a point; a sun and a
+spot light), render it with PARAMS["engine"] and save Blender's own
 render result as a float EXR and as a PNG (Standard view)."""
 import json
 import math
@@ -56,6 +57,10 @@ principled.inputs["Absorption Color"].default_value = (*params["absorption_color
 principled.inputs["Density Attribute"].default_value = params["grid"]
 output = next(n for n in nodes if n.type == "OUTPUT_MATERIAL")
 material.node_tree.links.new(principled.outputs["Volume"], output.inputs["Volume"])
+# A second volume object of the same asset and material, interpenetrating the first.
+second = bpy.data.objects.new("asset.second", volume)
+scene.collection.objects.link(second)
+second.matrix_world = mathutils.Matrix(params["second_object_to_world"])
 volume.materials.append(material)
 
 camera_data = bpy.data.cameras.new("camera")

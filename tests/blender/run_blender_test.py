@@ -1,6 +1,7 @@
 """The Blender add-on in the real client: blender -b builds a scene (a volume object loading a
 .vdb file, moved by a rotation, a non-uniform scale and a translation, with a Principled Volume; a
-camera aimed at a point, with depth of field; a sun and a spot light), renders it through the vdb_ewa engine in-process, and saves
+camera aimed at a point, with depth of field; a sun and a spot light; a second volume object of
+the same material interpenetrating the first), renders it through the vdb_ewa engine in-process, and saves
 Blender's render result. The CLI renders the same scene from options this script derives on its
 own (the grid rewritten with the moved transform by pyopenvdb, --lookat for the camera, the
 material and lights by docs/blender.md's formulas); the two must agree to 40 dB PSNR.
@@ -101,12 +102,17 @@ def main():
     # The object's transform: scaled unevenly in its own axes, rotated, moved (loc/rot/scale hold no shear).
     object_to_world = rotation_z(20) @ np.diag([1.5, 1.0, 0.8, 1.0])
     object_to_world[:3, 3] = (1.0, -0.5, 0.3)
+    # A second object of the same asset, unscaled (finer voxels: the base of the engine's sum),
+    # shifted to interpenetrate the first.
+    second_to_world = rotation_z(-35) @ np.eye(4)
+    second_to_world[:3, 3] = (1.0, -0.5, 0.3)
+    second_to_world[:3, 3] += (object_to_world @ centre)[:3] - (second_to_world @ centre)[:3] + file_map[:3, :3] @ np.array([15.0, 0.0, 5.0])
     target = (object_to_world @ centre)[:3]
     extent = np.linalg.norm(file_map[:3, :3] @ (np.array(grid.evalActiveVoxelBoundingBox()[1]) - grid.evalActiveVoxelBoundingBox()[0]))
     eye = target + extent * np.array([0.25, -0.9, 0.35])
     width, height = map(int, args.res.split("x"))
     params = dict(engine=args.engine, addon_dir=os.path.abspath(args.addon_dir), asset=os.path.abspath(asset), grid=grid.name,
-                  res=[width, height], object_to_world=object_to_world.tolist(), density=2.0, color=[0.9, 0.7, 0.5],
+                  res=[width, height], object_to_world=object_to_world.tolist(), second_object_to_world=second_to_world.tolist(), density=2.0, color=[0.9, 0.7, 0.5],
                   absorption_color=[0.3, 0.2, 0.6], focal=35.0, sensor=36.0, clip=[0.01, 1000.0], eye=eye.tolist(),
                   target=target.tolist(), sun_strength=4.0, sun_color=[1.0, 0.9, 0.8],
                   sun_direction=(np.array([0.4, -0.3, 0.8]) / np.linalg.norm([0.4, -0.3, 0.8])).tolist(),
@@ -142,7 +148,12 @@ def main():
     composite = object_to_world @ file_map @ half_voxel
     moved.transform = pyopenvdb.createLinearTransform(composite.T.tolist())  # OpenVDB: row vectors
     pyopenvdb.write(out("moved.vdb"), grids=[moved])
-    voxel = abs(np.linalg.det(composite[:3, :3])) ** (1.0 / 3.0)
+    # The second object: finer voxels (unscaled), so the sum's base, rendered first.
+    second = pyopenvdb.readAll(asset)[0][0]
+    second_composite = second_to_world @ file_map @ half_voxel
+    second.transform = pyopenvdb.createLinearTransform(second_composite.T.tolist())
+    pyopenvdb.write(out("second.vdb"), grids=[second])
+    voxel = abs(np.linalg.det(second_composite[:3, :3])) ** (1.0 / 3.0)
     color, absorption, density = np.array(params["color"]), np.array(params["absorption_color"]), params["density"]
     scatter = color * density * voxel
     absorb = np.maximum(1 - color, 0) * np.maximum(1 - np.sqrt(absorption), 0) * density * voxel
@@ -151,7 +162,7 @@ def main():
     # The spot: Cycles' intensity power / 4 pi, scattered isotropically (1 / 4 pi), aimed at the target.
     spot = (list(params["spot_position"]) + list(target) + [params["spot_angle"], params["spot_blend"]]
             + list(np.array(params["spot_color"]) * params["spot_power"] / (16 * math.pi * math.pi)))
-    cli = [args.cli, out("moved.vdb"), out("cli.exr"), "--name", grid.name, "--res", args.res, "--translate", join(eye),
+    cli = [args.cli, out("second.vdb"), out("cli.exr"), "--name", grid.name, "--add-volume", out("moved.vdb") + ":" + grid.name, "--res", args.res, "--translate", join(eye),
            "--lookat", join(target), "--up", "0,0,1", "--focal", "35", "--aperture", "36", "--near", "0.01", "--far", "1000",
            "--fstop", "%.17g" % params["fstop"], "--focus-distance", "%.17g" % params["focus_distance"],
            "--light", join(light), "--spot-light", join(spot), "--point-light-radius", "%.17g" % params["spot_radius"], "--gain", "0", "--scatter", join(scatter), "--absorb", join(absorb), "--quality", args.quality,

@@ -127,6 +127,32 @@ def volume_options(vdb_ewa, volume):
     return grid, options
 
 
+def mergeable(volumes):
+    """Volume objects that one field can hold: the same material per world unit, no colour or
+    temperature grid (the sum keeps only the first volume's)."""
+    first = volumes[0].options
+    return all(v.options == first and "color_grid" not in v.options and "temperature" not in v.options for v in volumes)
+
+
+class MergedVolumes:
+    """Volume objects of one material as one field (Grid.with_added_volume): one front-to-back
+    sweep, so they hide and shadow each other where they interpenetrate."""
+
+    def __init__(self, volumes):
+        self.volumes = volumes
+        self.name = "+".join(v.name for v in volumes)
+        self.path = volumes[0].path
+        self.object_to_world = "each its own"
+
+    def render_input(self, vdb_ewa):
+        """The summed grid on the finest volume's voxels, and the material per its voxel length."""
+        inputs = sorted((volume_options(vdb_ewa, v) for v in self.volumes), key=lambda gm: gm[0].voxel_length)
+        grid, material = inputs[0]
+        for other, _ in inputs[1:]:
+            grid = grid.with_added_volume(other)
+        return grid, material
+
+
 def over(front, back):
     """Premultiplied front over back."""
     return front + back * (1.0 - front[..., 3:4])
@@ -171,6 +197,11 @@ class VdbEwaRenderEngine(bpy.types.RenderEngine):
             self.report({'ERROR'}, "vdb_ewa: %s" % e)
             return
         image = np.zeros((height, width, 4), np.float32)
+        if len(volumes) > 1 and mergeable(volumes):
+            volumes = [MergedVolumes(volumes)]
+        elif len(volumes) > 1:
+            warnings.append("volumes of different materials (or with colour or temperature grids) are composited one over the "
+                            "other: wrong where they interpenetrate")
         for index, volume in enumerate(volumes):
             self.update_stats("vdb_ewa", "volume %s (%d of %d)" % (volume.name, index + 1, len(volumes)))
 
@@ -179,7 +210,7 @@ class VdbEwaRenderEngine(bpy.types.RenderEngine):
                 return self.cancel_requested()
 
             try:
-                grid, material = volume_options(vdb_ewa, volume)
+                grid, material = volume.render_input(vdb_ewa) if isinstance(volume, MergedVolumes) else volume_options(vdb_ewa, volume)
                 call = {**options, **material, **extra}  # the panel's Options override the scene's
                 if os.environ.get("VDB_EWA_VERBOSE"):
                     print("vdb_ewa: volume %s: %s moved by %s: %s" % (volume.name, volume.path, volume.object_to_world, call))
