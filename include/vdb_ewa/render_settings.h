@@ -78,14 +78,15 @@ struct Light
 };
 
 /// A point or spot light (--point-light, --spot-light): light from one world point, falling off
-/// as 1 / distance^2 and shadowed by the volume; inside it too (an explosion's core). Fog volumes
-/// and their --iso surfaces take it; level sets do not (docs/lighting.md#point-and-spot-lights).
+/// as I / (r^2 + R^2) at distance r and shadowed by the volume; inside it too (an explosion's
+/// core). Fog volumes and their --iso surfaces take it; level sets do not
+/// (docs/lighting.md#point-and-spot-lights).
 struct PointLight
 {
     Vec3d position{0.0, 0.0, 0.0};   ///< world position
-    Vec3d color{1.0, 1.0, 1.0};      ///< intensity R,G,B: the radiance it gives at one world unit (I / r^2 at r)
-    /// World units: nearer than this (and than half a voxel length) the light grows no brighter,
-    /// I / max(r, radius)^2 (a bulb's size; keeps the light finite at its own position).
+    Vec3d color{1.0, 1.0, 1.0};      ///< intensity I, R,G,B: about the radiance it gives at one world unit
+    /// R, world units: the bulb's size, at least half a voxel length; within it the light stops
+    /// growing, so that it stays finite at its own position.
     double radius = 0.0;
     /// A spot light's full cone angle in degrees, in (0, 180]; 0: a point light, every direction.
     double spotAngle = 0.0;
@@ -230,8 +231,8 @@ struct VDB_EWA_API RenderSettings
     /// unit of scattering scatters it as it would the light (a fill for fog volumes; level sets
     /// and --iso surfaces ignore it). 0: none.
     Vec3d ambient{0.0, 0.0, 0.0};
-    /// Point and spot lights, each shadowed through a light map of rays from its position
-    /// (the splatter shades each kernel at its centre with them); empty: none.
+    /// Point and spot lights, each shadowed through a light map of rays from its position and
+    /// lit per slab sample as the directional lights are; empty: none.
     std::vector<PointLight> pointLights;
     GridEmission gridEmission;  ///< emission and temperature grids
     /// Colours that come from the grid and the shaders, not from these settings, are taken in

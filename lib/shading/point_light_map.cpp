@@ -156,6 +156,7 @@ PointLightMap::PointLightMap(const GridSource::Impl& grid, const RenderSettings&
     // The lattice: rays mResolutionVoxels apart where the box is farthest, samples every
     // mStepVoxels; both raised by one factor past the budget (points, and a sixteenth of it in
     // rays), as the directional light's map (docs/numerics.md#the-light-maps-budget).
+    const double mostRays = pointBudget / 16.0;
     std::vector<std::int64_t> kLo;
     std::vector<std::int32_t> count;
     std::uint64_t total = 0;
@@ -173,13 +174,13 @@ PointLightMap::PointLightMap(const GridSource::Impl& grid, const RenderSettings&
             face.v0 = w[2] - mDu;
             const double nu = std::ceil((w[1] - w[0]) / mDu) + 3.0, nv = std::ceil((w[3] - w[2]) / mDu) + 3.0;
             rays += nu * nv;
-            if (rays > pointBudget) break;
+            if (rays > mostRays) break; // raised below before anything is allocated for them
             face.nu = int(nu);
             face.nv = int(nv);
         }
         // Samples along the rays: where each crosses the box's world bounds.
         double points = 0.0;
-        if (rays <= pointBudget) {
+        if (rays <= mostRays) {
             kLo.clear();
             count.clear();
             for (std::size_t f = 0; f < 6; ++f) {
