@@ -81,11 +81,12 @@ void addLightStats(const std::vector<LightMap>& lights, const PointLights& point
 namespace {
 
 /// Each light map's share of the lights' quarter of @a budget (4 bytes a lattice point): the
-/// @a directional lights that scatter and the point lights that do share it evenly.
-double lightMapPoints(const RenderSettings& settings, const MemoryBudget& budget, std::size_t directional)
+/// directional and point lights that scatter share it evenly.
+double lightMapPoints(const RenderSettings& settings, const MemoryBudget& budget)
 {
     const OpticalModel model(settings);
-    std::size_t lit = directional;
+    std::size_t lit = 0;
+    for (std::size_t l = 0; l < settings.lights.size(); ++l) lit += model.dark(l) ? 0 : 1;
     for (std::size_t l = 0; l < settings.pointLights.size(); ++l) lit += model.pointDark(l) ? 0 : 1;
     return std::min(kLightMapPointBudget, budget.itemsWithin(0.25, 4.0)) / double(std::max<std::size_t>(lit, 1));
 }
@@ -96,10 +97,7 @@ PointLights pointLightMaps(const RenderSettings& settings, const GridSource::Imp
     Progress& progress, std::vector<std::string>& warnings)
 {
     if (settings.pointLights.empty()) return {};
-    const OpticalModel model(settings);
-    std::size_t lit = 0;
-    for (std::size_t l = 0; l < settings.lights.size(); ++l) lit += model.dark(l) ? 0 : 1;
-    const double points = lightMapPoints(settings, budget, lit);
+    const double points = lightMapPoints(settings, budget);
     PointLights lights(g, settings, points, &progress);
     for (const PointLightMap& map : lights.maps()) {
         if (map.shadowStep() == settings.shadow.step && map.shadowResolution() == settings.shadow.resolution) continue;
@@ -116,10 +114,7 @@ PointLights pointLightMaps(const RenderSettings& settings, const GridSource::Imp
 std::vector<LightMap> lightMaps(const RenderSettings& settings, const GridSource::Impl& g, const MemoryBudget& budget,
     Progress& progress, std::vector<std::string>& warnings, bool onDemand)
 {
-    const OpticalModel model(settings);
-    std::size_t lit = 0;
-    for (std::size_t l = 0; l < settings.lights.size(); ++l) lit += model.dark(l) ? 0 : 1;
-    const double lightPoints = lightMapPoints(settings, budget, lit);
+    const double lightPoints = lightMapPoints(settings, budget);
     std::vector<LightMap> lights;
     lights.reserve(settings.lights.size());
     for (std::size_t l = 0; l < settings.lights.size(); ++l) lights.emplace_back(g, settings, l, &progress, lightPoints, onDemand);

@@ -75,12 +75,13 @@ IsoSurface isoSurface(const RenderSettings& settings, const GridSource::Impl& gr
                 lit[i][c] += float(settings.lights[l].color[int(c)] * albedo[int(c)] * lambert * double(t[c]));
             }
         }
-        for (const PointLight& light : pointLights.lights()) {
+        for (std::size_t l = 0; l < pointLights.lights().size(); ++l) {
+            const PointLight& light = pointLights.lights()[l];
             const Vec3d toLight = light.position - k.pWorld;
             const double r = glm::length(toLight);
             const double lambert = r > 0.0 ? std::max(0.0, glm::dot(k.normal, toLight / r)) : 1.0;
             const double falloff = detail::pointLightFalloff(light, k.pWorld, grid.voxelLength);
-            const std::array<double, 3> t = pointLights.transmittance(&light - pointLights.lights().data(), k.pWorld);
+            const std::array<double, 3> t = pointLights.transmittance(l, k.pWorld);
             for (std::size_t c = 0; c < 3; ++c) {
                 shadow[i][c] += float(t[c]);
                 lit[i][c] += float(light.color[int(c)] * albedo[int(c)] * lambert * falloff * t[c]);

@@ -51,6 +51,17 @@ double ExponentialSum::operator()(double k) const
     return f;
 }
 
+std::array<Vec3d, 8> paddedBoxCorners(const GridSource::Impl& grid, const openvdb::CoordBBox& box)
+{
+    std::array<Vec3d, 8> corners;
+    for (int c = 0; c < 8; ++c) {
+        const Vec3d p((c & 1 ? box.max().x() + 1 : box.min().x() - 1), (c & 2 ? box.max().y() + 1 : box.min().y() - 1),
+            (c & 4 ? box.max().z() + 1 : box.min().z() - 1));
+        corners[std::size_t(c)] = grid.indexToWorld(p);
+    }
+    return corners;
+}
+
 double shadowStopDepth(const float* extinction, double cutoff)
 {
     // f(D) = sum_c exp(-2 sigma_c D) falls from 3 to the number of channels without
@@ -107,15 +118,14 @@ LightMap::LightMap(const GridSource::Impl& grid, const RenderSettings& settings,
     const Vec3d e1 = glm::normalize(glm::cross(l, std::abs(l.x) < 0.6 ? Vec3d(1, 0, 0) : Vec3d(0, 1, 0)));
     const Vec3d e2 = glm::cross(l, e1);
     Vec3d lo, hi;
+    const std::array<Vec3d, 8> corners = paddedBoxCorners(grid, box);
     for (int attempt = 0;; ++attempt) {
         mFromWorld = glm::transpose(Mat3d(e1 / (h * ell), e2 / (h * ell), l / (step * ell)));
         // The padded active box (trilinear support) in map coordinates; lattice from its corner.
         lo = Vec3d(1e300);
         hi = Vec3d(-1e300);
-        for (int c = 0; c < 8; ++c) {
-            const Vec3d p((c & 1 ? box.max().x() + 1 : box.min().x() - 1), (c & 2 ? box.max().y() + 1 : box.min().y() - 1),
-                (c & 4 ? box.max().z() + 1 : box.min().z() - 1));
-            const Vec3d q = mFromWorld * grid.indexToWorld(p);
+        for (const Vec3d& corner : corners) {
+            const Vec3d q = mFromWorld * corner;
             lo = glm::min(lo, q);
             hi = glm::max(hi, q);
         }

@@ -56,6 +56,10 @@ constexpr double kLightMapPointBudget = 2e8;
 /// where it starts below). The light it keeps there lights every deeper point.
 double shadowStopDepth(const float* extinction, double cutoff);
 
+/// The eight corners of the active box @a box padded by a voxel (the trilinear field's
+/// support), in world space: what the light maps' lattices must cover.
+std::array<Vec3d, 8> paddedBoxCorners(const GridSource::Impl& grid, const openvdb::CoordBBox& box);
+
 class LightMap
 {
 public:

@@ -1,6 +1,8 @@
 /// @file point_light_map.cpp
 #include "shading/point_light_map.h"
 
+#include "shading/light_map.h"
+
 #include "support/empty_space.h"
 #include "support/openvdb_tools.h"
 
@@ -53,9 +55,9 @@ double pointShadowDepth(const GridSource::Impl& grid, openvdb::FloatGrid::ConstA
     const double length = glm::length(toLight);
     if (!(length > 0.0)) return 0.0;
     const Vec3d dir = toLight / length;
+    const Vec3d dIndex = grid.linear ? glm::inverse(grid.indexToWorldLinear) * dir : Vec3d(0.0); // per world unit
     double t0 = 0.0, t1 = length;
     if (grid.linear) {
-        const Vec3d dIndex = glm::inverse(grid.indexToWorldLinear) * dir;
         double b0, b1;
         if (!boxClip(pIndex, dIndex, boxMin, boxMax, b0, b1)) return 0.0;
         t0 = std::max(t0, b0);
@@ -67,29 +69,14 @@ double pointShadowDepth(const GridSource::Impl& grid, openvdb::FloatGrid::ConstA
     const double dt = (t1 - t0) / n; // equal parts, midpoints: the segment's integral
     double depth = 0.0;
     for (double k = 0.0; k < n; k += 1.0) {
-        const Vec3d q = grid.worldToIndex(pWorld + (t0 + (k + 0.5) * dt) * dir);
+        const double t = t0 + (k + 0.5) * dt;
+        const Vec3d q = grid.linear ? pIndex + t * dIndex : grid.worldToIndex(pWorld + t * dir);
         float d = 0.0f;
         openvdb::tools::BoxSampler::sample(accessor, openvdb::Vec3d(q.x, q.y, q.z), d);
         if (d >= cutoff) depth += double(d);
     }
     return depth * dt / grid.voxelLength;
 }
-
-namespace {
-
-/// The padded active box's eight corners (trilinear support), in world space.
-std::array<Vec3d, 8> worldCorners(const GridSource::Impl& grid, const openvdb::CoordBBox& box)
-{
-    std::array<Vec3d, 8> corners;
-    for (int c = 0; c < 8; ++c) {
-        const Vec3d p((c & 1 ? box.max().x() + 1 : box.min().x() - 1), (c & 2 ? box.max().y() + 1 : box.min().y() - 1),
-            (c & 4 ? box.max().z() + 1 : box.min().z() - 1));
-        corners[std::size_t(c)] = grid.indexToWorld(p);
-    }
-    return corners;
-}
-
-} // namespace
 
 Vec3d PointLightMap::rayDirection(const Face& f, int i, int j) const
 {
@@ -105,7 +92,7 @@ PointLightMap::PointLightMap(const GridSource::Impl& grid, const RenderSettings&
     setUnits(progress, 6);
     const openvdb::CoordBBox box = grid.field->evalActiveVoxelBoundingBox();
     if (box.empty()) return;
-    const std::array<Vec3d, 8> corners = worldCorners(grid, box);
+    const std::array<Vec3d, 8> corners = paddedBoxCorners(grid, box);
     Vec3d worldMin(std::numeric_limits<double>::max()), worldMax(-std::numeric_limits<double>::max());
     double farthest = 0.0;
     for (const Vec3d& c : corners) {

@@ -55,9 +55,8 @@ public:
     /// raised them.
     double shadowStep() const { return mStepVoxels; }
     double shadowResolution() const { return mResolutionVoxels; }
-    /// Rays and lattice points held.
+    /// Rays held.
     std::uint64_t rays() const;
-    double latticePoints() const { return double(mDepth.size()); }
 
 private:
     /// One face of the cube: rays through (axis + tan(a) e1 + tan(b) e2), a = u0 + i du,
