@@ -215,8 +215,18 @@ PYBIND11_MODULE(vdb_ewa, m)
             "This fog volume and another in one field, their densities summed (render's add_volume): both go through\n"
             "one front-to-back sweep, so where they interpenetrate each hides and shadows the other. other is resampled\n"
             "onto this grid's voxels where its transform differs (put the finest volume first), its densities scaled by\n"
-            "the voxel lengths' ratio (densities are per voxel length). Colours, emission and velocities are this grid's.\n"
-            "Raises vdb_ewa.InputError where either is a level set.")
+            "the voxel lengths' ratio (densities are per voxel length). Velocities attached before (with_velocity_grid) are\n"
+            "summed too: the sum moves with both volumes' velocities weighted by their densities (a volume without one\n"
+            "stands still). Colours and emission are this grid's. Raises vdb_ewa.InputError where either is a level set.")
+        .def("with_velocity_grid", [](const GridSource& g, const std::string& name) {
+            py::gil_scoped_release release; // reads the file
+            return g.withVelocityGrid(name);
+        },
+            py::arg("name"),
+            "The same grid with motion blur from the velocity grid name of its file (render's velocity_grid, which\n"
+            "attaches it to the input instead): a vec3s or vec3d grid, or the float grids name.x, .y, .z. Attach it\n"
+            "before with_added_volume so that each volume keeps its own motion; velocity_unit, velocity_scale, fps\n"
+            "and shutter still apply. Raises vdb_ewa.IoError or vdb_ewa.InputError (no such grid, wrong type).")
         .def("__repr__", [](const GridSource& g) {
             return "<vdb_ewa.Grid '" + g.name() + "'" + (g.path().empty() ? std::string(" (array)") : " from " + g.path()) + ", " +
                    std::to_string(g.activeVoxelCount()) + " active voxels" + (g.isLevelSet() ? ", level set>" : ">");

@@ -263,7 +263,8 @@ std::shared_ptr<RenderedFrame> render(const py::object& gridOrPath, const py::ob
     parsed.options.resolve(std::nullopt, cam, given);
     const Renderer validated(given); // the settings are checked before any file is read
     std::vector<std::string> warnings;
-    const RenderSettings working = parsed.options.prepare("", "", given, warnings);
+    const bool attachedVelocity = !isPath && gridOrPath.cast<const GridSource&>().hasVelocityGrid(); // Grid.with_velocity_grid
+    const RenderSettings working = parsed.options.prepare("", "", given, warnings, attachedVelocity);
 
     std::string input;
     std::optional<GridSource> grid;

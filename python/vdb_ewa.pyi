@@ -38,6 +38,8 @@ class Grid:
     @property
     def voxel_length(self) -> float: ...
     def transformed(self, object_to_world: npt.ArrayLike) -> "Grid": ...
+    def with_added_volume(self, other: "Grid") -> "Grid": ...
+    def with_velocity_grid(self, name: str) -> "Grid": ...
 
 class CancelToken:
     """Cancels a render from any thread: pass it as render(..., cancel=token), call token.cancel()."""
@@ -304,12 +306,13 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
     add_volume (--add-volume): another fog volume in the same frame, FILE[:GRID] (GRID: the first float
         grid by default): its density is added to the input's on the input's voxels (resampled
         trilinearly where its transform differs: name the finest volume first), so volumes that
-        interpenetrate hide and shadow each other in one sweep; same optical model; repeat for more
-        (default: none)
+        interpenetrate hide and shadow each other in one sweep; same optical model; with --velocity-
+        grid, each moves with its own velocity grid of that name (none: it stands still); repeat for
+        more (default: none)
     velocity_grid (--velocity-grid): motion blur: name of the velocity grid in the input file, a vec3s
         or vec3d grid (Houdini's v or vel) or the float grids NAME.x, NAME.y, NAME.z (Blender's); each
         kernel moves linearly over the shutter with the velocity at its centre; naming one turns motion
-        blur on (default: none)
+        blur on; each --add-volume file's grid of that name moves that volume (default: none)
     velocity_scale (--velocity-scale): motion blur: multiplies the velocities, within 1e6 (default: 1)
     velocity_unit (--velocity-unit): motion blur: second (world units per second, Houdini's and
         Blender's) or frame (world units per frame) (default: second)

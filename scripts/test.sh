@@ -10,6 +10,6 @@ cmake -S . -B build-tests -DCMAKE_BUILD_TYPE=Release -DVDB_EWA_BUILD_TESTS=ON -D
 cmake --build build-tests -j"$(nproc)"
 (cd build-tests && ctest --output-on-failure -j"$(nproc)")
 cmake -S . -B build-san -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ -DVDB_EWA_BUILD_TESTS=ON \
-  -DVDB_EWA_SANITIZE=ON -DVDB_EWA_BUILD_FUZZERS=ON
+  -DVDB_EWA_SANITIZE=ON -DVDB_EWA_BUILD_FUZZERS=ON -DVDB_EWA_FUZZ_COVERAGE=OFF
 cmake --build build-san -j"$(nproc)"
 (cd build-san && ctest --output-on-failure -j"$(nproc)")

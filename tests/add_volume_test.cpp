@@ -5,7 +5,10 @@
 ///        keeps its optical depth per world unit; level sets are refused.
 #include "fixtures.h"
 
+#include "source/source.h"
+
 #include <vdb_ewa/error.h>
+#include <vdb_ewa/openvdb_grid.h>
 
 #include <gtest/gtest.h>
 
@@ -100,4 +103,39 @@ TEST(AddVolume, LevelSetsAreRefused)
     const GridSource surface = gridSourceFromOpenVDB(sphereLevelSet(0.3, 0.05));
     EXPECT_THROW(fog.withAddedVolume(surface), InputError);
     EXPECT_THROW(surface.withAddedVolume(fog), InputError);
+}
+
+TEST(AddVolume, EachVolumeMovesWithItsOwnVelocityAndOverlapsWithTheDensityWeightedMean)
+{
+    // Two balls overlapping at x = 0, one moving along +x at 2 world units per second, one still
+    // (no velocity grid), on different voxels. The sum's velocity is the mover's where it is
+    // alone, 0 where the still ball is alone, and rho_a v / (rho_a + rho_b) where they overlap,
+    // whichever volume is the base (the mover's velocity grid is rotated into world space).
+    // The mover's ball at (0, -0.3, 0) with stored velocities (0, 2, 0), turned by x -> -y, y -> x:
+    // at (-0.3, 0, 0) in the world, moving along +x.
+    auto a = ball(Vec3d(0.0, -0.3, 0.0), 0.4, 1.0f, 0.05), b = ball(Vec3d(0.3, 0.0, 0.0), 0.4, 0.5f, 0.04);
+    auto v = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+    v->setTransform(a->transform().copy());
+    v->tree().topologyUnion(a->tree());
+    v->tree().voxelizeActiveTiles();
+    for (auto it = v->beginValueOn(); it; ++it) it.setValue(openvdb::Vec3s(0.0f, 2.0f, 0.0f));
+    const Mat4d turn(glm::dvec4(0.0, -1.0, 0.0, 0.0), glm::dvec4(1.0, 0.0, 0.0, 0.0), glm::dvec4(0.0, 0.0, 1.0, 0.0), glm::dvec4(0.0, 0.0, 0.0, 1.0));
+    const GridSource mover = withVelocityGrid(gridSourceFromOpenVDB(a), v).transformed(turn);
+    const GridSource still = gridSourceFromOpenVDB(b);
+    ASSERT_TRUE(mover.hasVelocityGrid());
+    for (const GridSource& sum : {mover.withAddedVolume(still), still.withAddedVolume(mover)}) {
+        ASSERT_TRUE(sum.hasVelocityGrid());
+        detail::VelocitySampler sampler(sum.impl());
+        const Vec3d alone = sampler.at(Vec3d(-0.55, 0.0, 0.0)), stillAlone = sampler.at(Vec3d(0.55, 0.0, 0.0));
+        EXPECT_NEAR(alone.x, 2.0, 1e-4);
+        EXPECT_NEAR(alone.y, 0.0, 1e-4);
+        EXPECT_NEAR(glm::length(stillAlone), 0.0, 1e-6);
+        // At x = 0: rho_a = 1 - 0.3 / 0.4 = 0.25 per 0.05 voxel, rho_b = 0.125 per 0.04 voxel, or 0.15625 per 0.05.
+        // The sum's voxels lie at x = 0 in both grids; the base's voxel length sets the weights' unit.
+        const double ra = 0.25 / 0.05, rb = 0.125 / 0.04; // per world unit
+        EXPECT_NEAR(sampler.at(Vec3d(0.0, 0.0, 0.0)).x, 2.0 * ra / (ra + rb), 0.02);
+    }
+    // Without velocities the sum has none: a still frame.
+    EXPECT_FALSE(gridSourceFromOpenVDB(a).withAddedVolume(still).hasVelocityGrid());
+    EXPECT_FALSE(still.withAddedVolume(gridSourceFromOpenVDB(a)).hasVelocityGrid());
 }

@@ -7,6 +7,7 @@
 #include "option_values.h"
 
 #include <cmath>
+#include <exception>
 #include <filesystem>
 #include <iomanip>
 #include <sstream>
@@ -185,15 +186,15 @@ void RenderOptions::add(CLI::App* app)
     mApp->add_option("--add-volume", mAddVolumes,
             "another fog volume in the same frame, FILE[:GRID] (GRID: the first float grid by default): its density is "
             "added to the input's on the input's voxels (resampled trilinearly where its transform differs: name the finest "
-            "volume first), so volumes that interpenetrate hide and shadow each other in one sweep; same optical model; "
-            "repeat for more (default: none)")
+            "volume first), so volumes that interpenetrate hide and shadow each other in one sweep; same optical model; with "
+            "--velocity-grid, each moves with its own velocity grid of that name (none: it stands still); repeat for more (default: none)")
         ->allow_extra_args(false);
     // Motion blur (fog volumes).
     const MotionBlur mb;
     mApp->add_option("--velocity-grid", mVelocityGrid,
         "motion blur: name of the velocity grid in the input file, a vec3s or vec3d grid (Houdini's v or vel) or the float grids "
         "NAME.x, NAME.y, NAME.z (Blender's); each kernel moves linearly over the shutter with the velocity at its centre; "
-        "naming one turns motion blur on (default: none)");
+        "naming one turns motion blur on; each --add-volume file's grid of that name moves that volume (default: none)");
     mApp->add_option("--velocity-scale", mVelocityScale, "motion blur: multiplies the velocities, within 1e6 (default: " + fmt(mb.velocityScale) + ")");
     mApp->add_option("--velocity-unit", mVelocityUnit, "motion blur: second (world units per second, Houdini's and Blender's) or frame (world units per frame) (default: second)");
     mApp->add_option("--fps", mFps, "motion blur: frames per second, for --velocity-unit second, in [0.001, 1e6] (default: " + fmt(mb.fps) + ")");
@@ -376,12 +377,12 @@ GrantedSettings RenderOptions::grantedExecution() const
 std::string RenderOptions::grantedText() const { return grantedExecution().text; }
 
 RenderSettings RenderOptions::prepare(const std::string& output, const std::string& preview, const RenderSettings& given,
-    std::vector<std::string>& warnings)
+    std::vector<std::string>& warnings, bool attachedVelocity)
 {
     mOutputOptions.prepare(output, preview, warnings); // colour config, spaces, output paths
     RenderSettings working = given;
     mOutputOptions.toWorkingSpace(working, warnings);
-    ignoredOptionWarnings(warnings);
+    ignoredOptionWarnings(warnings, attachedVelocity);
     if (!mTemperatureGrid.empty() && !mOutputOptions.hasLinearRec709()) {
         warnings.push_back("--temperature: the OCIO config has no linear Rec.709 space, so the blackbody's Rec.709 colours are taken as "
                            "working-space values (--ocio-config)");
@@ -406,15 +407,30 @@ GridSource RenderOptions::open(const std::string& path) const { return withExtra
 
 GridSource RenderOptions::withExtraGrids(const GridSource& opened) const
 {
-    GridSource summed = opened;
+    // --velocity-grid: each volume's own, attached before the sum so that each keeps its motion
+    // (withAddedVolume); a volume whose file has none stands still, as long as one volume has it.
+    std::exception_ptr noVelocity;
+    const auto moving = [&](const GridSource& volume) {
+        if (mVelocityGrid.empty()) return volume;
+        try {
+            return volume.withVelocityGrid(mVelocityGrid);
+        } catch (const InputError&) {
+            if (!noVelocity) noVelocity = std::current_exception();
+            return volume;
+        }
+    };
+    GridSource summed = moving(opened);
+    bool moves = summed.hasVelocityGrid();
     for (const std::string& volume : mAddVolumes) {
         const auto [file, grid] = splitVolume(volume);
-        summed = summed.withAddedVolume(GridSource::open(file, grid));
+        const GridSource added = moving(GridSource::open(file, grid));
+        moves = moves || added.hasVelocityGrid();
+        summed = summed.withAddedVolume(added);
     }
+    if (noVelocity && !moves) std::rethrow_exception(noVelocity);
     GridSource grid = mColor.empty() ? summed : summed.withColorGrid(mColor);
     if (!mEmissionGrid.empty()) grid = grid.withEmissionGrid(mEmissionGrid);
     if (!mTemperatureGrid.empty()) grid = grid.withTemperatureGrid(mTemperatureGrid);
-    if (!mVelocityGrid.empty()) grid = grid.withVelocityGrid(mVelocityGrid);
     return grid;
 }
 
@@ -509,7 +525,7 @@ std::vector<Attributes> RenderOptions::resolvedOptions(const GridSource& grid, c
         model.emplace_back("add-volume", volumes);
     }
     if (grid.hasVelocityGrid()) {
-        model.emplace_back("velocity-grid", mVelocityGrid);
+        model.emplace_back("velocity-grid", mVelocityGrid.empty() ? std::string("(attached to the grid)") : mVelocityGrid);
         model.emplace_back("velocity-scale", fmt(rs.motionBlur.velocityScale));
         model.emplace_back("velocity-unit", choiceName(rs.motionBlur.unit, kVelocityUnits));
         model.emplace_back("fps", fmt(rs.motionBlur.fps));
@@ -539,7 +555,7 @@ std::vector<Attributes> RenderOptions::resolvedOptions(const GridSource& grid, c
     return {cameraGroup, model, method, mOutputOptions.resolved()};
 }
 
-void RenderOptions::ignoredOptionWarnings(std::vector<std::string>& warnings) const
+void RenderOptions::ignoredOptionWarnings(std::vector<std::string>& warnings, bool attachedVelocity) const
 {
     const auto given = [&](const char* name) { return mApp->get_option(name)->count() > 0; };
     const std::pair<const char*, std::vector<const char*>> groups[] = {
@@ -552,7 +568,7 @@ void RenderOptions::ignoredOptionWarnings(std::vector<std::string>& warnings) co
         warnings.push_back("--point-light-radius changes nothing without --point-light or --spot-light");
     }
     for (const auto& [main, qualifiers] : groups) {
-        if (given(main)) continue;
+        if (given(main) || (attachedVelocity && std::string(main) == "--velocity-grid")) continue;
         for (const char* q : qualifiers) {
             if (given(q)) warnings.push_back(std::string(q) + " changes nothing without " + main);
         }

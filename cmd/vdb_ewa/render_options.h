@@ -40,8 +40,10 @@ public:
     /// Everything that can fail before rendering (OutputOptions::prepare; @a output empty: an
     /// image kept in memory), then @a given's colours in the working space: the settings to
     /// render with. Warnings (fallbacks, options that change nothing) go to @a warnings.
+    /// @a attachedVelocity: the grid to render has a velocity grid already (a host's), so the
+    /// motion blur options apply without --velocity-grid.
     RenderSettings prepare(const std::string& output, const std::string& preview, const RenderSettings& given,
-        std::vector<std::string>& warnings);
+        std::vector<std::string>& warnings, bool attachedVelocity = false);
 
     /// The grid to render, @a path's --name grid (default: the first scalar floating-point grid).
     GridSource open(const std::string& path) const;
@@ -89,7 +91,7 @@ private:
     /// --threads and --max-memory under the farm's or container's grant (granted_resources.h).
     GrantedSettings grantedExecution() const;
     /// A line for each option given without the one it qualifies: it would change nothing.
-    void ignoredOptionWarnings(std::vector<std::string>& warnings) const;
+    void ignoredOptionWarnings(std::vector<std::string>& warnings, bool attachedVelocity) const;
 
     CLI::App* mApp = nullptr;
     std::string mCameraFile, mName, mRes, mTranslate, mRotate, mLookAt, mUp, mCamera;

@@ -56,8 +56,10 @@ public:
     /// the other (--add-volume). @a other is resampled trilinearly onto this grid's voxels where
     /// its transform differs (name the finest volume first), its densities scaled by the ratio
     /// of the voxel lengths so that its optical depth per world unit is kept (densities are per
-    /// voxel length). It brings its density only: colours, emission and velocities are this
-    /// grid's. The sum is clamped as one density is (1e6).
+    /// voxel length). It brings its density and its velocities (withVelocityGrid, attached to
+    /// either before the sum): the sum moves with the mean of both volumes' velocities weighted
+    /// by their densities, exact where one volume is alone (a volume without a velocity grid
+    /// stands still). Colours and emission are this grid's. The sum is clamped as one density is (1e6).
     /// @throw InputError where either is a level set.
     GridSource withAddedVolume(const GridSource& other) const;
 

@@ -1,6 +1,7 @@
 /// @file grid_source.cpp
 /// @brief Reading grids from .vdb files and from host applications.
 #include "source/grid_source_impl.h"
+#include "source/kernel_motion.h"
 #include "source/vdb_layout_check.h"
 #include "support/openvdb_tools.h"
 
@@ -13,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <mutex>
+#include <optional>
 
 namespace vdb_ewa {
 namespace detail {
@@ -427,6 +429,42 @@ GridSource GridSource::transformed(const Mat4d& m) const
     return GridSource(movedImpl(*mImpl, m));
 }
 
+namespace {
+
+/// The velocity of two fog volumes summed into one field (withAddedVolume): the mean of their
+/// world velocities weighted by their densities, at each active voxel of @a base's grid (a
+/// volume without a velocity grid stands still). Exact where one volume is alone; where they
+/// interpenetrate, their kernels move together. @a added: the other's field on @a base's
+/// voxels, times @a scale. In world units per second or frame, on @a base's transform.
+openvdb::Vec3SGrid::Ptr summedVolumeVelocity(const GridSource::Impl& base, const GridSource::Impl& other,
+    const openvdb::FloatGrid& added, float scale)
+{
+    openvdb::Vec3SGrid::Ptr velocity = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+    velocity->setTransform(base.grid->transform().copy());
+    velocity->setName("velocity");
+    std::optional<detail::VelocitySampler> ownSampler, otherSampler;
+    if (base.velocity) ownSampler.emplace(base);
+    if (other.velocity) otherSampler.emplace(other);
+    const auto own = base.field->getConstAccessor();
+    const auto theirs = added.getConstAccessor();
+    auto out = velocity->getAccessor();
+    openvdb::FloatGrid::Ptr support = base.field->deepCopy();
+    support->topologyUnion(added);
+    support->tree().voxelizeActiveTiles();
+    for (auto it = support->cbeginValueOn(); it; ++it) {
+        const openvdb::Coord c = it.getCoord();
+        const double a = std::max(0.0f, own.getValue(c)), b = std::max(0.0f, theirs.getValue(c) * scale);
+        if (!(a + b > 0.0)) continue;
+        const Vec3d p = base.indexToWorld(Vec3d(c.x(), c.y(), c.z()));
+        const Vec3d va = ownSampler ? ownSampler->at(p) : Vec3d(0.0), vb = otherSampler ? otherSampler->at(p) : Vec3d(0.0);
+        const Vec3d v = (a * va + b * vb) / (a + b);
+        out.setValueOn(c, openvdb::Vec3s(float(v.x), float(v.y), float(v.z)));
+    }
+    return velocity;
+}
+
+} // namespace
+
 GridSource GridSource::withAddedVolume(const GridSource& other) const
 {
     const auto where = [](const Impl& impl) { return (impl.path.empty() ? std::string("host grid") : impl.path) + ": grid '" + impl.name + "'"; };
@@ -457,6 +495,10 @@ GridSource GridSource::withAddedVolume(const GridSource& other) const
     auto impl = std::make_shared<Impl>(*mImpl);
     impl->grid = sum;
     impl->derive();
+    if (mImpl->velocity || other.mImpl->velocity) {
+        impl->velocity = summedVolumeVelocity(*mImpl, *other.mImpl, *added, scale);
+        impl->velocityToWorld = Mat3d(1.0);
+    }
     return GridSource(impl);
 }
 

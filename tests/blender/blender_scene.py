@@ -1,7 +1,7 @@
 """Run inside Blender (blender -b --factory-startup --python blender_scene.py -- PARAMS.json): build
 the test scene from PARAMS (two interpenetrating volume objects loading a .vdb file, each with a
-transform, sharing a Principled Volume; a camera with depth of field aimed at a point; a sun and a
-spot light), render it with PARAMS["engine"] and save Blender's own
+transform, sharing a Principled Volume, the first moving by its velocity grid under the scene's
+motion blur; a camera with depth of field aimed at a point; a sun and a spot light), render it with PARAMS["engine"] and save Blender's own
 render result as a float EXR and as a PNG (Standard view)."""
 import json
 import math
@@ -39,9 +39,17 @@ if params["engine"] == "CYCLES":
     scene.render.threads_mode = "FIXED"
     scene.render.threads = 2
 
-volume = bpy.data.volumes.new("asset")
-volume.filepath = params["asset"]
-obj = bpy.data.objects.new("asset", volume)
+# The first object moves: its file holds a velocity grid (Blender's default name), in world units
+# per second of its object space, scaled; the scene's motion blur is on (Cycles' default shutter).
+moving = bpy.data.volumes.new("moving")
+moving.filepath = params["moving_asset"]
+moving.velocity_grid = "velocity"
+moving.velocity_unit = "SECOND"
+moving.velocity_scale = params["velocity_scale"]
+scene.render.use_motion_blur = True
+scene.render.motion_blur_shutter = params["shutter"]
+scene.render.fps, scene.render.fps_base = params["fps"], 1.0
+obj = bpy.data.objects.new("asset", moving)
 scene.collection.objects.link(obj)
 obj.matrix_world = mathutils.Matrix(params["object_to_world"])
 material = bpy.data.materials.new("volume")
@@ -57,11 +65,14 @@ principled.inputs["Absorption Color"].default_value = (*params["absorption_color
 principled.inputs["Density Attribute"].default_value = params["grid"]
 output = next(n for n in nodes if n.type == "OUTPUT_MATERIAL")
 material.node_tree.links.new(principled.outputs["Volume"], output.inputs["Volume"])
-# A second volume object of the same asset and material, interpenetrating the first.
+# A second volume object of the same asset and material, still, interpenetrating the first.
+volume = bpy.data.volumes.new("asset")
+volume.filepath = params["asset"]
 second = bpy.data.objects.new("asset.second", volume)
 scene.collection.objects.link(second)
 second.matrix_world = mathutils.Matrix(params["second_object_to_world"])
 volume.materials.append(material)
+moving.materials.append(material)
 
 camera_data = bpy.data.cameras.new("camera")
 camera_data.lens = params["focal"]

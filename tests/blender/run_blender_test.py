@@ -1,7 +1,8 @@
 """The Blender add-on in the real client: blender -b builds a scene (a volume object loading a
-.vdb file, moved by a rotation, a non-uniform scale and a translation, with a Principled Volume; a
-camera aimed at a point, with depth of field; a sun and a spot light; a second volume object of
-the same material interpenetrating the first), renders it through the vdb_ewa engine in-process, and saves
+.vdb file, moved by a rotation, a non-uniform scale and a translation, with a Principled Volume,
+and motion-blurred by a velocity grid in its file; a camera aimed at a point, with depth of field;
+a sun and a spot light; a second volume object of the same material, still, interpenetrating the
+first), renders it through the vdb_ewa engine in-process, and saves
 Blender's render result. The CLI renders the same scene from options this script derives on its
 own (the grid rewritten with the moved transform by pyopenvdb, --lookat for the camera, the
 material and lights by docs/blender.md's formulas); the two must agree to 40 dB PSNR.
@@ -110,8 +111,20 @@ def main():
     target = (object_to_world @ centre)[:3]
     extent = np.linalg.norm(file_map[:3, :3] @ (np.array(grid.evalActiveVoxelBoundingBox()[1]) - grid.evalActiveVoxelBoundingBox()[0]))
     eye = target + extent * np.array([0.25, -0.9, 0.35])
+    # The first object moves: the asset with a uniform velocity grid, world units per second of its
+    # object space (x Blender's Velocity Scale): about 6 voxels along its x and 2 along its z over
+    # the shutter (half a frame at 24 fps).
+    voxel_size = grid.transform.voxelSize()[0]
+    velocity_file = np.array([192.0, 0.0, 64.0]) * voxel_size
+    velocity_grid = pyopenvdb.Vec3SGrid()
+    velocity_grid.name = "velocity"
+    velocity_grid.transform = grid.transform
+    lo, hi = grid.evalActiveVoxelBoundingBox()
+    velocity_grid.fill(lo, hi, tuple(velocity_file), True)
+    pyopenvdb.write(out("moving.vdb"), grids=[pyopenvdb.readAll(asset)[0][0], velocity_grid])
     width, height = map(int, args.res.split("x"))
     params = dict(engine=args.engine, addon_dir=os.path.abspath(args.addon_dir), asset=os.path.abspath(asset), grid=grid.name,
+                  moving_asset=out("moving.vdb"), velocity_scale=1.5, shutter=0.5, fps=24,
                   res=[width, height], object_to_world=object_to_world.tolist(), second_object_to_world=second_to_world.tolist(), density=2.0, color=[0.9, 0.7, 0.5],
                   absorption_color=[0.3, 0.2, 0.6], focal=35.0, sensor=36.0, clip=[0.01, 1000.0], eye=eye.tolist(),
                   target=target.tolist(), sun_strength=4.0, sun_color=[1.0, 0.9, 0.8],
@@ -147,7 +160,12 @@ def main():
     half_voxel[:3, 3] = 0.5  # Blender's voxel (i, j, k) is at the centre of the index cell [i, i + 1]^3
     composite = object_to_world @ file_map @ half_voxel
     moved.transform = pyopenvdb.createLinearTransform(composite.T.tolist())  # OpenVDB: row vectors
-    pyopenvdb.write(out("moved.vdb"), grids=[moved])
+    # Its velocities in the world: turned and scaled by the object's transform, as Blender moves them.
+    moved_velocity = pyopenvdb.Vec3SGrid()
+    moved_velocity.name = "velocity"
+    moved_velocity.transform = moved.transform
+    moved_velocity.fill(lo, hi, tuple(object_to_world[:3, :3] @ velocity_file), True)
+    pyopenvdb.write(out("moved.vdb"), grids=[moved, moved_velocity])
     # The second object: finer voxels (unscaled), so the sum's base, rendered first.
     second = pyopenvdb.readAll(asset)[0][0]
     second_composite = second_to_world @ file_map @ half_voxel
@@ -165,6 +183,8 @@ def main():
     cli = [args.cli, out("second.vdb"), out("cli.exr"), "--name", grid.name, "--add-volume", out("moved.vdb") + ":" + grid.name, "--res", args.res, "--translate", join(eye),
            "--lookat", join(target), "--up", "0,0,1", "--focal", "35", "--aperture", "36", "--near", "0.01", "--far", "1000",
            "--fstop", "%.17g" % params["fstop"], "--focus-distance", "%.17g" % params["focus_distance"],
+           "--velocity-grid", "velocity", "--velocity-unit", "second", "--velocity-scale", "%.17g" % params["velocity_scale"],
+           "--fps", "%.17g" % params["fps"], "--shutter", "%.17g,%.17g" % (-0.5 * params["shutter"], 0.5 * params["shutter"]),
            "--light", join(light), "--spot-light", join(spot), "--point-light-radius", "%.17g" % params["spot_radius"], "--gain", "0", "--scatter", join(scatter), "--absorb", join(absorb), "--quality", args.quality,
            "--working-space", "lin_rec709", "--output-space", "lin_rec709", "--exr-type", "float", "-q"]
     done = subprocess.run(cli, capture_output=True, text=True)

@@ -11,10 +11,9 @@ shift || true
 harnesses=("$@")
 [ "${#harnesses[@]}" -gt 0 ] || harnesses=(vdb_file job_file options)
 build=build-san
-if [ ! -f "$build/CMakeCache.txt" ]; then
-  cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ \
-    -DVDB_EWA_BUILD_TESTS=ON -DVDB_EWA_SANITIZE=ON -DVDB_EWA_BUILD_FUZZERS=ON >/dev/null
-fi
+# A campaign needs the whole library instrumented for coverage (scripts/test.sh's replay does not).
+cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ \
+  -DVDB_EWA_BUILD_TESTS=ON -DVDB_EWA_SANITIZE=ON -DVDB_EWA_BUILD_FUZZERS=ON -DVDB_EWA_FUZZ_COVERAGE=ON >/dev/null
 cmake --build "$build" -j"$(nproc)" --target "${harnesses[@]/#/fuzz_}" >/dev/null
 # The sanitizers' options are compiled in (tests/sanitizer/default_options.cpp).
 mkdir -p "$build/fuzz/artifacts"

@@ -104,6 +104,7 @@ def render_options(depsgraph, warnings):
     options = scene_mapping.camera_options(scene, warnings)
     options["light"] = scene_mapping.light_options(depsgraph, warnings) or [(0.0, 0.0, 1.0, 0.0, 0.0, 0.0)]
     options.update(scene_mapping.point_light_options(depsgraph, warnings))
+    options.update(scene_mapping.motion_options(scene))
     # Blender's scene-linear space is linear Rec.709; render and return it there.
     # Cycles' attenuation: shadows fall as exp(-optical depth), without vdb_render's --gain.
     options["gain"] = 0.0
@@ -114,8 +115,11 @@ def render_options(depsgraph, warnings):
 
 
 def volume_options(vdb_ewa, volume):
-    """The grid of @a volume, moved by its object's transform, and its material per voxel length."""
+    """The grid of @a volume, moved by its object's transform (with its velocity grid, which moves
+    with it), and its material per voxel length."""
     grid = vdb_ewa.open(volume.path, volume.density_grid).transformed(volume.object_to_world)
+    if volume.motion:
+        grid = grid.with_velocity_grid(volume.motion["velocity_grid"])
     length = grid.voxel_length
     options = dict(volume.options)
     options["scatter"] = tuple(c * length for c in options["scatter"])
@@ -124,14 +128,19 @@ def volume_options(vdb_ewa, volume):
         options["color"] = options.pop("color_grid")
     if "blackbody_intensity" in options:
         options["blackbody_intensity"] *= length
+    if volume.motion:
+        options.update(velocity_unit=volume.motion["velocity_unit"], velocity_scale=volume.motion["velocity_scale"])
     return grid, options
 
 
 def mergeable(volumes):
     """Volume objects that one field can hold: the same material per world unit, no colour or
-    temperature grid (the sum keeps only the first volume's)."""
+    temperature grid (the sum keeps only the first volume's), and the moving ones' velocities in
+    the same unit and scale (the sum moves with their velocities weighted by their densities)."""
     first = volumes[0].options
-    return all(v.options == first and "color_grid" not in v.options and "temperature" not in v.options for v in volumes)
+    motions = {(m["velocity_unit"], m["velocity_scale"]) for m in (v.motion for v in volumes) if m}
+    return len(motions) <= 1 and all(v.options == first and "color_grid" not in v.options and "temperature" not in v.options
+                                     for v in volumes)
 
 
 class MergedVolumes:
@@ -148,8 +157,9 @@ class MergedVolumes:
         """The summed grid on the finest volume's voxels, and the material per its voxel length."""
         inputs = sorted((volume_options(vdb_ewa, v) for v in self.volumes), key=lambda gm: gm[0].voxel_length)
         grid, material = inputs[0]
-        for other, _ in inputs[1:]:
-            grid = grid.with_added_volume(other)
+        for other, other_material in inputs[1:]:
+            grid = grid.with_added_volume(other)  # with its velocities (volume_options attached them)
+            material = {**other_material, **material}  # a moving volume's velocity unit and scale
         return grid, material
 
 

@@ -13,13 +13,14 @@ FOUR_PI = 4.0 * math.pi
 class Volume:
     """One volume object to render: its grid's file, grid names, transform and material options."""
 
-    def __init__(self, name, path, object_to_world, density_grid, options, depth):
+    def __init__(self, name, path, object_to_world, density_grid, options, depth, motion=None):
         self.name = name
         self.path = path
         self.object_to_world = object_to_world  # 4x4 nested lists, column vectors
         self.density_grid = density_grid
         self.options = options  # material options; scatter/absorb/blackbody per grid value per *world* unit
         self.depth = depth  # of its centre from the camera, to composite several front to back
+        self.motion = motion  # motion blur: dict(velocity_grid, velocity_unit, velocity_scale), or None
 
 
 def resolution(scene):
@@ -74,6 +75,41 @@ def camera_options(scene, warnings):
             else:
                 warnings.append("camera %s: the focus lies behind the camera; focused on the point looked at" % cam.name)
     return options
+
+
+def motion_options(scene):
+    """The scene's motion blur as vdb_ewa's shutter (frames around the frame's time, where Cycles'
+    Motion Blur Position puts Blender's Shutter) and frames per second; {} when it is off."""
+    r = scene.render
+    if not r.use_motion_blur:
+        return {}
+    length = r.motion_blur_shutter
+    position = getattr(scene.cycles, "motion_blur_position", "CENTER") if hasattr(scene, "cycles") else "CENTER"
+    shutter = {"START": (0.0, length), "END": (-length, 0.0)}.get(position, (-0.5 * length, 0.5 * length))
+    return dict(shutter="%.17g,%.17g" % shutter, fps=r.fps / r.fps_base)
+
+
+def volume_motion(obj, scene, warnings):
+    """A volume object's velocity grid (Blender's Velocity Grid, or its split X, Y, Z grids when
+    they are named NAME.x, NAME.y, NAME.z), unit and scale, when the scene's motion blur is on;
+    None for a volume that stands still."""
+    if not scene.render.use_motion_blur:
+        return None
+    data = obj.data
+    where = "volume %s" % obj.name
+    if obj.animation_data is not None and obj.animation_data.action is not None:
+        warnings.append("%s: its object's animation is not blurred (vdb_ewa blurs by the velocity grid only)" % where)
+    name = data.velocity_grid
+    split = (data.velocity_x_grid, data.velocity_y_grid, data.velocity_z_grid)
+    if not (name and grid_of(data, name) is not None):
+        if any(split) and split == tuple(name + "." + a for a in "xyz") and all(grid_of(data, g) is not None for g in split):
+            pass  # vdb_ewa joins NAME.x, NAME.y, NAME.z itself
+        elif any(split):
+            warnings.append("%s: split velocity grids %s are not named %s.x, .y, .z; it is not blurred" % (where, "/".join(split), name))
+            return None
+        else:
+            return None  # no velocity grid: Cycles does not blur it either
+    return dict(velocity_grid=name, velocity_unit=data.velocity_unit.lower(), velocity_scale=data.velocity_scale)
 
 
 def _instances(depsgraph, kind):
@@ -236,6 +272,6 @@ def volumes(depsgraph, camera_location, warnings):
         object_to_world = [[m[r][c] for c in range(4)] for r in range(4)]
         centre = m.translation
         depth = (centre - camera_location).length
-        found.append(Volume(obj.name, path, object_to_world, grid, options, depth))
+        found.append(Volume(obj.name, path, object_to_world, grid, options, depth, volume_motion(obj, depsgraph.scene, warnings)))
     found.sort(key=lambda v: v.depth)
     return found
