@@ -135,11 +135,13 @@ Camera::Camera(const CameraSettings& settings, const Vec3d& defaultTarget) : mSe
         ? 0.5 * mSettings.aperture / mSettings.focal  // tan of the half field of view
         : 0.5 * mSettings.frame;                      // world units
     mFocalPixels = 0.5 * double(mSettings.width) / halfWidth;
+    mPrincipalPoint = Vec2d(0.5 * mSettings.width, 0.5 * mSettings.height);
 
     // Depth of field: a thin lens focal / fstop wide (mm, world units taken as metres), in
     // focus at --focus-distance or at the depth of the point looked at.
     if (mSettings.fstop > 0.0) {
         mLensRadius = mSettings.focal / (2000.0 * mSettings.fstop);
+        mLensCovariance = Mat2d(0.25 * mLensRadius * mLensRadius); // a uniform disc's second moment
         if (mSettings.focusDistance) {
             mFocusDepth = *mSettings.focusDistance;
         } else {
@@ -151,6 +153,57 @@ Camera::Camera(const CameraSettings& settings, const Vec3d& defaultTarget) : mSe
             }
         }
     }
+}
+
+double Camera::confusionRadius(double depth) const
+{
+    if (!(mLensRadius > 0.0)) return 0.0;
+    // The disc of the same largest variance: (R/2)^2 = the covariance's larger eigenvalue.
+    const Mat2d& c = mLensCovariance;
+    const double mean = 0.5 * (c[0][0] + c[1][1]), d = 0.5 * (c[0][0] - c[1][1]);
+    const double largest = mean + std::sqrt(d * d + c[1][0] * c[1][0]);
+    return mFocalPixels * 2.0 * std::sqrt(std::max(largest, 0.0)) * std::abs(1.0 / depth - 1.0 / mFocusDepth);
+}
+
+LensPart lensPart(int part, int parts)
+{
+    if (parts < 1 || part < 0 || part >= parts) throw ValueError("lensPart: part " + std::to_string(part) + " of " + std::to_string(parts));
+    // Rings: about sqrt(parts / 3); ring i takes parts x (its share of the area of equal-width
+    // rings, (2i + 1) / rings^2), the last the rest; its radii keep each part's area 1 / parts.
+    const int rings = std::max(1, int(std::lround(std::sqrt(parts / 3.0))));
+    int first = 0, ring = 0, count = parts;
+    for (; ring < rings; ++ring) {
+        count = ring + 1 == rings ? parts - first : std::max(1, int(std::lround(parts * double(2 * ring + 1) / double(rings * rings))));
+        if (part < first + count) break;
+        first += count;
+    }
+    const double r0 = std::sqrt(double(first) / parts), r1 = std::sqrt(double(first + count) / parts);
+    const double step = 2.0 * kPi / count, a0 = step * (part - first), a1 = a0 + step;
+    // Moments of the annular sector [r0, r1] x [a0, a1] (polar integrals, r dr da).
+    const double area = 0.5 * step * (r1 * r1 - r0 * r0);
+    const double m1 = (r1 * r1 * r1 - r0 * r0 * r0) / 3.0, m2 = (r1 * r1 * r1 * r1 - r0 * r0 * r0 * r0) / 4.0;
+    const Vec2d mean = Vec2d(m1 * (std::sin(a1) - std::sin(a0)), m1 * (std::cos(a0) - std::cos(a1))) / area;
+    const double s2 = 0.25 * (std::sin(2.0 * a1) - std::sin(2.0 * a0));
+    const double xx = m2 * (0.5 * step + s2) / area, yy = m2 * (0.5 * step - s2) / area;
+    const double xy = m2 * 0.5 * (std::sin(a1) * std::sin(a1) - std::sin(a0) * std::sin(a0)) / area;
+    LensPart out;
+    out.centroid = mean;
+    out.covariance = Mat2d(xx - mean.x * mean.x, xy - mean.x * mean.y, xy - mean.x * mean.y, yy - mean.y * mean.y);
+    return out;
+}
+
+Camera Camera::throughLensPart(int part, int parts) const
+{
+    Camera sub = *this;
+    if (!(mLensRadius > 0.0) || parts == 1) return sub;
+    const LensPart p = lensPart(part, parts);
+    // The pinhole at the lens point c: a point at the focus depth, t = (x, y, F), is seen from
+    // it at (x - c.x, y - c.y, F): the principal point moves by f_pixels c / F to keep its image.
+    const Vec2d c = mLensRadius * p.centroid;
+    sub.mEye = mEye + glm::transpose(mCameraFromWorld) * Vec3d(c.x, c.y, 0.0);
+    sub.mPrincipalPoint = mPrincipalPoint + mFocalPixels * c / mFocusDepth;
+    sub.mLensCovariance = (mLensRadius * mLensRadius) * p.covariance;
+    return sub;
 }
 
 Vec2d Camera::rasterFromCamera(const Vec3d& t) const

@@ -168,21 +168,36 @@ void Renderer::renderLevelSet(const GridSource::Impl& grid, const Camera& camera
     }
 }
 
-void Renderer::renderMotionSamples(const GridSource::Impl& g, const Camera& camera, const PassRequest& passes,
+bool Renderer::movesOverTheShutter(const GridSource::Impl& g) const
+{
+    return g.velocity && mSettings.motionBlur.shutterClose > mSettings.motionBlur.shutterOpen;
+}
+
+void Renderer::renderSubFrames(const GridSource::Impl& g, const Camera& camera, const PassRequest& passes,
     Frame& frame, RenderStats& stats, detail::Progress& progress) const
 {
-    if (passes.deep) throw ValueError("--motion-samples averages sub-frames; a deep image has no average: use --motion-samples 1 with --deep");
     const MotionBlur& blur = mSettings.motionBlur;
-    const int n = blur.samples;
+    const bool moving = movesOverTheShutter(g), lens = camera.lensRadius() > 0.0;
+    if (passes.deep && moving && blur.samples > 1) {
+        throw ValueError("--motion-samples averages sub-frames; a deep image has no average: use --motion-samples 1 with --deep");
+    }
+    const int n = passes.deep ? 1 : std::max(moving ? blur.samples : 1, lens ? mSettings.lensSamples : 1);
+    if (passes.deep && lens && mSettings.lensSamples > 1) {
+        stats.warnings.push_back("--deep: one frame through the whole lens (--lens-samples averages sub-frames, which a deep image cannot)");
+    }
     for (int s = 0; s < n; ++s) {
-        // Sub-frame s: the shutter's part [open + s d, open + (s + 1) d], d = (close - open) / n.
+        // Sub-frame s: the shutter's part [open + s d, open + (s + 1) d], d = (close - open) / n,
+        // seen through the lens's part s of n.
         RenderSettings part = mSettings;
         part.motionBlur.samples = 1;
-        part.motionBlur.shutterOpen = blur.shutterOpen + (blur.shutterClose - blur.shutterOpen) * double(s) / double(n);
-        part.motionBlur.shutterClose = blur.shutterOpen + (blur.shutterClose - blur.shutterOpen) * double(s + 1) / double(n);
+        part.lensSamples = 1;
+        if (moving) {
+            part.motionBlur.shutterOpen = blur.shutterOpen + (blur.shutterClose - blur.shutterOpen) * double(s) / double(n);
+            part.motionBlur.shutterClose = blur.shutterOpen + (blur.shutterClose - blur.shutterOpen) * double(s + 1) / double(n);
+        }
         Frame sub;
         RenderStats subStats;
-        Renderer(part).renderFogVolume(g, camera, passes, sub, subStats, progress);
+        Renderer(part).renderFogVolume(g, lens ? camera.throughLensPart(s, n) : camera, passes, sub, subStats, progress);
         // The images' average: colour and alpha (premultiplied), transmittance and the passes;
         // Z, where alpha reaches 0.5, is the nearest sub-frame's.
         const float w = 1.0f / float(n);
@@ -362,8 +377,8 @@ Frame Renderer::renderFrame(const GridSource& grid, const Camera& camera, const 
             frame = detail::rayMarchReference(g, camera, mSettings, passes, stats, &progress);
         } else if (mSettings.method == Method::RayMarchGaussian) {
             frame = detail::rayMarchGaussianSum(g, camera, mSettings, passes, stats, &progress);
-        } else if (g.velocity && mSettings.motionBlur.samples > 1 && mSettings.motionBlur.shutterClose > mSettings.motionBlur.shutterOpen) {
-            renderMotionSamples(g, camera, passes, frame, stats, progress);
+        } else if ((movesOverTheShutter(g) && mSettings.motionBlur.samples > 1) || (camera.lensRadius() > 0.0 && mSettings.lensSamples > 1)) {
+            renderSubFrames(g, camera, passes, frame, stats, progress);
         } else {
             renderFogVolume(g, camera, passes, frame, stats, progress);
         }

@@ -146,6 +146,7 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
            fps: Optional[Number] = None,
            shutter: OptionValue = None,
            motion_samples: Optional[int] = None,
+           lens_samples: Optional[int] = None,
            blur_samples: Optional[int] = None,
            samples: Optional[int] = None,
            threads: Optional[int] = None,
@@ -324,6 +325,12 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
         part of it, averaged; widened kernels blur optical depth where a camera averages images, so
         opaque edges need more to converge (docs/equations.md#motion-blur); about N times the time;
         range [1, 1024] (default: 2; draft 1, high 4, final 8)
+    lens_samples (--lens-samples): depth of field: sub-frames, each through its own part of the lens
+        (rings of sectors of equal area) and blurred by that part's circle of confusion, averaged;
+        widened kernels blur optical depth where a camera averages images, so thick media need more to
+        converge (docs/equations.md#depth-of-field); with motion blur, the larger of it and --motion-
+        samples, each sub-frame a part of both; about N times the time; range [1, 1024] (default: 4;
+        draft 1, high 8, final 16)
     blur_samples (--blur-samples): --method raymarch with motion blur or depth of field: rays per pixel,
         each at its own shutter time and lens point, averaged; range [1, 4096] (default: 16)
     samples (--samples): level sets: vdb_render's rays per pixel; accepted for compatibility, the EWA

@@ -608,7 +608,15 @@ TEST_F(Cli, MotionBlursAPyroShotAndFocusesItsLens)
     const CliRun lens = runCli(mDir, file + " " + mDir.file("lens.exr") + camera + " --fstop 0.02 --focus-distance 2 -v");
     ASSERT_EQ(lens.code, 0) << lens.err;
     EXPECT_NE(lens.out.find("--fstop 0.02 --focus-distance 2"), std::string::npos) << lens.out;
+    EXPECT_NE(lens.out.find("--lens-samples 4"), std::string::npos) << lens.out;
+    EXPECT_EQ(readImageFile(mDir.file("lens.exr")).spec.get_string_attribute("vdb_ewa/lens-samples"), "4");
     EXPECT_GT(maxAbsDiff(readExr(still), readExr(mDir.file("lens.exr"))), 0.02);
+    // One frame through the whole lens differs from four sub-apertures' average.
+    ASSERT_EQ(runCli(mDir, file + " " + mDir.file("lens1.exr") + camera + " --fstop 0.02 --focus-distance 2 --lens-samples 1").code, 0);
+    EXPECT_GT(maxAbsDiff(readExr(mDir.file("lens.exr")), readExr(mDir.file("lens1.exr"))), 1e-3);
+    expectFailure(file + " " + mDir.file("out.exr") + camera + " --fstop 2 --lens-samples 0", 2, "--lens-samples");
+    const CliRun noLens = runCli(mDir, file + " " + mDir.file("nolens.exr") + camera + " --lens-samples 4");
+    EXPECT_NE(noLens.err.find("--lens-samples changes nothing without --fstop"), std::string::npos) << noLens.err;
     expectFailure(file + " " + mDir.file("out.exr") + camera + " --fstop 2 --camera ortho", 2, "--fstop");
     expectFailure(file + " " + mDir.file("out.exr") + camera + " --fstop 2 --focus-distance -1", 2, "--focus-distance");
 }

@@ -116,7 +116,7 @@ private:
     // Motion blur and depth of field.
     std::string mVelocityGrid, mVelocityUnit, mShutter;
     std::optional<double> mVelocityScale, mFps, mFstop, mFocusDistance;
-    std::optional<int> mBlurSamples, mMotionSamples;
+    std::optional<int> mBlurSamples, mMotionSamples, mLensSamples;
     OutputOptions mOutputOptions;
 };
 

@@ -45,6 +45,16 @@ struct VDB_EWA_API CameraSettings
     double fieldOfView() const;
 };
 
+/// Part @a part of the unit disc cut into @a parts parts of equal area: rings of equal-area
+/// sectors, about sqrt(parts / 3) rings, the outer ones cut into more sectors (the centre ring
+/// is a disc or its sectors). Its centroid and its points' covariance about the centroid.
+struct LensPart
+{
+    Vec2d centroid{0.0};
+    Mat2d covariance{0.0};
+};
+VDB_EWA_API LensPart lensPart(int part, int parts);
+
 /// Most pixels an image may have (the frame's memory budget): 2^27, e.g. 16384x8192.
 constexpr long long kMaxPixels = 1LL << 27;
 
@@ -75,19 +85,31 @@ public:
     /// Viewport scale S of Eq. (33): pixels per unit of the t2 = 1 plane (perspective) or per
     /// world unit (orthographic).
     double focalPixels() const { return mFocalPixels; }
-    /// Raster position of the optical axis, pixels.
-    Vec2d principalPoint() const { return {0.5 * width(), 0.5 * height()}; }
+    /// Raster position of the optical axis, pixels: the image's centre (a sub-aperture's is
+    /// shifted, throughLensPart).
+    Vec2d principalPoint() const { return mPrincipalPoint; }
     double near() const { return mSettings.near; }
     double far() const { return mSettings.far; }
     /// Depth of field: the lens's radius in world units (0: a pinhole) and the depth in focus.
     double lensRadius() const { return mLensRadius; }
     double focusDepth() const { return mFocusDepth; }
+    /// Depth of field: the covariance of the lens's points about the pinhole, in the lens plane
+    /// (camera t0, t1; world units^2): a point at depth z spreads over (f_pixels |1/z -
+    /// 1/focus|)^2 times it on the raster. The whole lens, a uniform disc of radius L: (L/2)^2 I;
+    /// a sub-aperture: its part's (throughLensPart). Zero for a pinhole.
+    const Mat2d& lensCovariance() const { return mLensCovariance; }
     /// The raster radius of the circle of confusion of a point at camera depth @a depth (thin
-    /// lens: f_pixels x lens radius x |1/depth - 1/focus|; 0 for a pinhole).
-    double confusionRadius(double depth) const
-    {
-        return mLensRadius > 0.0 ? mFocalPixels * mLensRadius * std::abs(1.0 / depth - 1.0 / mFocusDepth) : 0.0;
-    }
+    /// lens: f_pixels x lens radius x |1/depth - 1/focus|; a sub-aperture's, the radius of the
+    /// disc of its largest variance; 0 for a pinhole).
+    double confusionRadius(double depth) const;
+
+    /// Depth of field by sub-apertures (docs/equations.md#depth-of-field): the lens cut into
+    /// @a parts parts of equal area (rings of sectors, lensPart), seen through part @a part
+    /// alone: a pinhole at the part's centroid whose image of the focus plane is this camera's
+    /// (an off-axis projection: the principal point moves), with a residual lens of the part's
+    /// covariance about its centroid. The average of all parts' images converges to the lens's
+    /// as parts grow. A pinhole, or @a parts 1: this camera.
+    Camera throughLensPart(int part, int parts) const;
 
     /// World point -> camera space t.
     Vec3d cameraFromWorldPoint(const Vec3d& pWorld) const
@@ -111,6 +133,8 @@ private:
     Mat3d mCameraFromWorld;
     double mFocalPixels;
     double mLensRadius = 0.0, mFocusDepth = 1.0;
+    Mat2d mLensCovariance{0.0};
+    Vec2d mPrincipalPoint{0.0};
     bool mLooksDownZ = false;
     bool mUpReplaced = false;
 };

@@ -52,11 +52,13 @@ struct ProjectionParams
     double cutoffRadius = 3.0;   ///< in standard deviations of the filtered footprint
     bool renormalize = true;     ///< divide the peak by the mass kept inside the cut-off
     bool taper = false;          ///< the footprint is the Gaussian less its value at the cut-off (SplatOptions::taper)
-    /// Depth of field (perspective): the thin lens's radius (world units; 0: a pinhole) and
-    /// the depth in focus. A kernel at depth z gains its circle of confusion's covariance,
-    /// (R / 2)^2 I with R = focalPixels x lensRadius x |1/z - 1/focusDepth| pixels (a uniform
-    /// disc of radius R), before the low-pass filter (docs/equations.md#depth-of-field).
-    double lensRadius = 0.0;
+    /// Depth of field (perspective): the lens's covariance in its plane (camera t0, t1; world
+    /// units^2; zero: a pinhole; Camera::lensCovariance) and the depth in focus. A kernel at
+    /// depth z gains its circle of confusion's covariance, (focalPixels |1/z - 1/focusDepth|)^2
+    /// times it: (R / 2)^2 I for a whole lens of radius L, R = focalPixels L |1/z -
+    /// 1/focusDepth| pixels (a uniform disc of radius R), before the low-pass filter
+    /// (docs/equations.md#depth-of-field).
+    Sym2 lens{};
     double focusDepth = 1.0;
 };
 

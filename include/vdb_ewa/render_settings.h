@@ -245,6 +245,12 @@ struct VDB_EWA_API RenderSettings
     SplatOptions splat;         ///< EWA splatting knobs
     SurfaceOptions surface;     ///< level sets and fog iso-surfaces
     MotionBlur motionBlur;      ///< with the grid's velocity grid, if it has one
+    /// Depth of field (CameraSettings::fstop): sub-frames, each through its own part of the lens
+    /// (Camera::throughLensPart) and blurred by that part's circle of confusion, averaged: a
+    /// camera averages images where widened kernels blur optical depth. With motion blur, sub-frame
+    /// s takes part s of both the shutter and the lens, max(samples, lensSamples) of them
+    /// (docs/equations.md#depth-of-field). 1: one frame; presets: draft 1, default 4, high 8, final 16.
+    int lensSamples = 4;
 
     // --- Integration ---
     double cutoff = 0.005;            ///< density cutoff; rays stop where |T|^2 < cutoff (RGB T)

@@ -106,10 +106,12 @@ private:
         RenderStats& stats, detail::Progress& progress) const;
     VDB_EWA_LOCAL void renderFogVolume(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes, Frame& frame,
         RenderStats& stats, detail::Progress& progress) const;
-    /// Fog volumes with motion blur's sub-frames (MotionBlur::samples): each over its part of
-    /// the shutter, averaged.
-    VDB_EWA_LOCAL void renderMotionSamples(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes, Frame& frame,
+    /// Fog volumes in sub-frames (MotionBlur::samples, RenderSettings::lensSamples): each over
+    /// its part of the shutter and through its part of the lens, averaged.
+    VDB_EWA_LOCAL void renderSubFrames(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes, Frame& frame,
         RenderStats& stats, detail::Progress& progress) const;
+    /// True if the grid has a velocity grid and the shutter is open: motion blur moves its kernels.
+    VDB_EWA_LOCAL bool movesOverTheShutter(const GridSource::Impl& grid) const;
 
     RenderSettings mSettings;
 };

@@ -53,14 +53,16 @@ Vec3d jacobianPoint(const Vec3d& tCentre, double size, const ProjectionParams& p
     return tJ;
 }
 
-/// Depth of field: @a cov convolved with the circle of confusion at camera depth @a depth, a
-/// uniform disc of radius R whose covariance is (R/2)^2 I (ProjectionParams::lensRadius).
+/// Depth of field: @a cov convolved with the circle of confusion at camera depth @a depth, the
+/// lens's covariance scaled by (focalPixels |1/z - 1/focus|)^2: a whole lens, a uniform disc of
+/// radius R, gives (R/2)^2 I (ProjectionParams::lens).
 Sym2 withConfusion(Sym2 cov, double depth, const ProjectionParams& params)
 {
-    if (!(params.lensRadius > 0.0) || !params.perspective) return cov;
-    const double r = params.focalPixels * params.lensRadius * std::abs(1.0 / depth - 1.0 / params.focusDepth);
-    cov.xx += 0.25 * r * r;
-    cov.yy += 0.25 * r * r;
+    if (!(params.lens.xx > 0.0 || params.lens.yy > 0.0) || !params.perspective) return cov;
+    const double k = params.focalPixels * std::abs(1.0 / depth - 1.0 / params.focusDepth), k2 = k * k;
+    cov.xx += k2 * params.lens.xx;
+    cov.xy += k2 * params.lens.xy;
+    cov.yy += k2 * params.lens.yy;
     return cov;
 }
 

@@ -45,7 +45,8 @@ ProjectionParams projectionParams(const Camera& camera, const SplatOptions& spla
     p.cutoffRadius = splat.cutoffRadius;
     p.renormalize = splat.renormalize;
     p.taper = splat.taper;
-    p.lensRadius = camera.lensRadius();
+    const Mat2d& lens = camera.lensCovariance();
+    p.lens = Sym2{lens[0][0], lens[1][0], lens[1][1]};
     p.focusDepth = camera.focusDepth();
     return p;
 }
