@@ -182,9 +182,6 @@ void Renderer::renderSubFrames(const GridSource::Impl& g, const Camera& camera, 
         throw ValueError("--motion-samples averages sub-frames; a deep image has no average: use --motion-samples 1 with --deep");
     }
     const int n = passes.deep ? 1 : std::max(moving ? blur.samples : 1, lens ? mSettings.lensSamples : 1);
-    if (passes.deep && lens && mSettings.lensSamples > 1) {
-        stats.warnings.push_back("--deep: one frame through the whole lens (--lens-samples averages sub-frames, which a deep image cannot)");
-    }
     for (int s = 0; s < n; ++s) {
         // Sub-frame s: the shutter's part [open + s d, open + (s + 1) d], d = (close - open) / n,
         // seen through the lens's part s of n.
@@ -227,6 +224,9 @@ void Renderer::renderSubFrames(const GridSource::Impl& g, const Camera& camera, 
                      {&stats.lightRaysMarched, total.lightRaysMarched}, {&stats.kernelsCulled, total.kernelsCulled}})
                 *sum += add;
         }
+    }
+    if (passes.deep && lens && mSettings.lensSamples > 1) {
+        stats.warnings.push_back("--deep: one frame through the whole lens (--lens-samples averages sub-frames, which a deep image cannot)");
     }
 }
 

@@ -140,6 +140,7 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
            temperature_offset: Optional[Number] = None,
            blackbody_intensity: Optional[Number] = None,
            add_volume: OptionValue = None,
+           add_volume_transform: OptionValue = None,
            velocity_grid: OptionValue = None,
            velocity_scale: Optional[Number] = None,
            velocity_unit: OptionValue = None,
@@ -310,6 +311,11 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
         interpenetrate hide and shadow each other in one sweep; same optical model; with --velocity-
         grid, each moves with its own velocity grid of that name (none: it stands still); repeat for
         more (default: none)
+    add_volume_transform (--add-volume-transform): the object-to-world transform of the --add-volume of
+        the same rank (the first for the first): 16 numbers, a 4x4 matrix row by row, or its first 12
+        (the last row 0,0,0,1); column vectors, world = M (x, y, z, 1), after the file's own index-to-
+        world map, as a DCC object's transform moves its volume (its velocities turn with it); finite,
+        affine and invertible; one for every --add-volume, or none (default: none, the identity)
     velocity_grid (--velocity-grid): motion blur: name of the velocity grid in the input file, a vec3s
         or vec3d grid (Houdini's v or vel) or the float grids NAME.x, NAME.y, NAME.z (Blender's); each
         kernel moves linearly over the shutter with the velocity at its centre; naming one turns motion

@@ -621,6 +621,62 @@ TEST_F(Cli, MotionBlursAPyroShotAndFocusesItsLens)
     expectFailure(file + " " + mDir.file("out.exr") + camera + " --fstop 2 --focus-distance -1", 2, "--focus-distance");
 }
 
+TEST_F(Cli, AddsVolumesMovedByTheirTransformsFromTheCommandLineAndAJobFile)
+{
+    // A ball and a second ball whose file places it at the origin: moved by its transform (a
+    // DCC object's), it renders as the same ball written where the transform puts it; a job
+    // file's volumes list says the same; wrong transforms and per-volume materials fail on one line.
+    const auto ball = [](const std::string& name, const Vec3d& move) {
+        auto g = makeFogGrid(openvdb::Coord(-5), openvdb::Coord(5), [](const openvdb::Coord& c) { return c.asVec3d().length() < 5.0 ? 0.4f : 0.0f; }, 0.1);
+        g->setName(name);
+        g->transform().postTranslate(openvdb::Vec3d(move.x, move.y, move.z));
+        return g;
+    };
+    const std::string a = mDir.file("a.vdb"), b = mDir.file("b.vdb"), moved = mDir.file("moved.vdb");
+    openvdb::io::File(a).write({ball("density", Vec3d(0.0))});
+    openvdb::io::File(b).write({ball("density", Vec3d(0.0))});
+    openvdb::io::File(moved).write({ball("density", Vec3d(0.3, 0.2, 0.0))});
+    const std::string camera = " -res 48x32 -translate 0.15,0.1,3 --lookat 0.15,0.1,0";
+    const std::string shift = "1,0,0,0.3,0,1,0,0.2,0,0,1,0";
+    // The reference integrator: equal fields, equal images. (The splatter's are not quite: OpenVDB
+    // resamples through an affine map into a shell of active zeros that a scale-and-translate
+    // map leaves inactive, and an active voxel below the cutoff gets neither a kernel nor a
+    // quasi-interpolation halo: a few % at the ball's edge; noted on issue 38.)
+    const std::string reference = " --method raymarch --step 0.25";
+    const CliRun run = runCli(mDir, a + " " + mDir.file("t.exr") + camera + reference + " --add-volume " + b + ":density --add-volume-transform " + shift + " -v");
+    ASSERT_EQ(run.code, 0) << run.err;
+    EXPECT_NE(run.out.find("--add-volume-transform " + shift), std::string::npos) << run.out;
+    ASSERT_EQ(runCli(mDir, a + " " + mDir.file("m.exr") + camera + reference + " --add-volume " + moved).code, 0);
+    ASSERT_EQ(runCli(mDir, a + " " + mDir.file("u.exr") + camera + reference + " --add-volume " + b).code, 0);
+    EXPECT_LT(maxAbsDiff(readExr(mDir.file("t.exr")), readExr(mDir.file("m.exr"))), 1e-5) << "moved by its transform";
+    EXPECT_GT(maxAbsDiff(readExr(mDir.file("t.exr")), readExr(mDir.file("u.exr"))), 0.05) << "the transform shows";
+    // A job file's volumes: each its file, grid and transform (4 rows; the identity where none).
+    const std::string job = mDir.file("volumes.json");
+    std::ofstream(job) << R"({"input": ")" << a << R"(", "output": ")" << mDir.file("job.exr") << R"(", "res": "48x32", "translate": [0.15, 0.1, 3], "lookat": [0.15, 0.1, 0], "method": "raymarch", "step": 0.25,
+        "volumes": [{"file": ")" << b << R"(", "grid": "density", "transform": [[1, 0, 0, 0.3], [0, 1, 0, 0.2], [0, 0, 1, 0], [0, 0, 0, 1]]}]})";
+    const CliRun jobRun = runCli(mDir, "render --job " + job);
+    ASSERT_EQ(jobRun.code, 0) << jobRun.err;
+    EXPECT_EQ(maxAbsDiff(readExr(mDir.file("t.exr")), readExr(mDir.file("job.exr"))), 0.0);
+    const auto jobFailure = [&](const std::string& volumes, const std::string& needle) {
+        std::ofstream(job) << R"({"input": ")" << a << R"(", "output": ")" << mDir.file("out.exr") << R"(", "res": "48x32", )" << volumes << "}";
+        expectFailure("render --job " + job, 2, needle);
+    };
+    jobFailure(R"("volumes": [{"file": ")" + b + R"(", "scatter": 2}])", "materials per volume are not supported yet");
+    jobFailure(R"("volumes": [{"grid": "density"}])", "volumes[0]: no file");
+    jobFailure(R"("volumes": [{"file": ")" + b + R"(", "size": 2}])", "unknown key 'size'");
+    jobFailure(R"("volumes": [{"file": ")" + b + R"("}], "add-volume": [")" + b + R"("])", "give 'volumes' or 'add-volume', not both");
+    // Wrong transforms: counted, sized, affine, invertible; an output may not overwrite a volume.
+    const std::string base = a + " " + mDir.file("out.exr") + camera + " --add-volume " + b;
+    expectFailure(base + " --add-volume-transform " + shift + " --add-volume-transform " + shift, 2, "--add-volume-transform: 2 given for 1 --add-volume");
+    expectFailure(base + " --add-volume-transform 1,0,0,0,0,1,0,0,0,0,1", 2, "expected 16 numbers");
+    expectFailure(base + " --add-volume-transform 1,0,0,0,0,1,0,0,0,0,1,0,0,0,1,1", 2, "the last row must be 0,0,0,1");
+    expectFailure(base + " --add-volume-transform 1,0,0,0,0,0,0,0,0,0,1,0", 2, "the matrix is singular");
+    const CliRun overwrite = runCli(mDir, a + " " + b + camera + " --add-volume " + b);
+    EXPECT_NE(overwrite.code, 0);
+    EXPECT_NE(overwrite.err.find(b), std::string::npos) << overwrite.err;
+    EXPECT_NO_THROW(GridSource::open(b)); // untouched
+}
+
 TEST_F(Cli, LightsAFireFromInsideWithPointAndSpotLights)
 {
     // A light at the core of a ball and a spot from outside: -v, the header and a job file say

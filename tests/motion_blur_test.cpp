@@ -495,4 +495,16 @@ TEST(DepthOfField, LensSamplesConvergeToTheLenssAverageOfAThickEdge)
     EXPECT_LT(four, 0.6 * one);
     EXPECT_LT(sixteen, 0.6 * four);
     EXPECT_LT(sixteen, 0.1);
+    // A deep image has no average: one frame through the whole lens, and a warning says so.
+    PassRequest deep;
+    deep.deep = true;
+    RenderStats said;
+    s.lensSamples = 4;
+    const Frame parts = Renderer(s).renderFrame(slab, Camera(cam, slab.worldCentre()), deep, &said);
+    s.lensSamples = 1;
+    const Frame whole = Renderer(s).renderFrame(slab, Camera(cam, slab.worldCentre()), deep);
+    EXPECT_EQ(maxAbsDiff(parts.beauty, whole.beauty), 0.0f);
+    std::string warnings;
+    for (const std::string& w : said.warnings) warnings += w + "\n";
+    EXPECT_NE(warnings.find("--deep: one frame through the whole lens"), std::string::npos) << warnings;
 }

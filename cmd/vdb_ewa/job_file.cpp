@@ -34,6 +34,60 @@ std::string word(const nlohmann::json& v, const std::string& where)
     throw ValueError(where + ": expected a string, number or true/false");
 }
 
+/// A `volumes` entry's transform as --add-volume-transform's text: a 4x4 (or 3x4) list of rows,
+/// or their 16 (or 12) numbers in one list, row by row.
+std::string transformText(const nlohmann::json& transform, const std::string& where)
+{
+    std::string text;
+    const auto add = [&](const nlohmann::json& v) {
+        if (!v.is_number()) throw ValueError(where + ": expected numbers: a 4x4 matrix as 4 rows (or 3), or its 16 (or 12) numbers row by row");
+        text += (text.empty() ? "" : ",") + word(v, where);
+    };
+    if (!transform.is_array()) throw ValueError(where + ": expected a 4x4 matrix as a list of rows");
+    for (const auto& row : transform) {
+        if (row.is_array()) {
+            for (const auto& v : row) add(v);
+        } else {
+            add(row);
+        }
+    }
+    return text;
+}
+
+/// The job file's `volumes` list as --add-volume and --add-volume-transform arguments: each
+/// entry an object with `file`, and optionally `grid` and `transform`.
+std::vector<std::string> volumeArguments(const nlohmann::json& volumes, const std::string& where)
+{
+    if (!volumes.is_array() || volumes.empty()) throw ValueError(where + ": expected a list of volumes, each {\"file\": ..., \"grid\": ..., \"transform\": ...}");
+    std::vector<std::string> args, transforms;
+    bool anyTransform = false;
+    for (std::size_t i = 0; i < volumes.size(); ++i) {
+        const nlohmann::json& v = volumes[i];
+        const std::string at = where + "[" + std::to_string(i) + "]";
+        if (!v.is_object()) throw ValueError(at + ": expected an object {\"file\": ..., \"grid\": ..., \"transform\": ...}");
+        std::string file, grid, transform = "1,0,0,0,0,1,0,0,0,0,1,0";
+        for (const auto& [key, value] : v.items()) {
+            if (key == "file" || key == "grid") {
+                if (!value.is_string() || value.get<std::string>().empty()) throw ValueError(at + ": " + key + ": expected a name");
+                (key == "file" ? file : grid) = value.get<std::string>();
+            } else if (key == "transform") {
+                transform = transformText(value, at + ": transform");
+                anyTransform = true;
+            } else if (key == "absorb" || key == "scatter" || key == "emission" || key == "color" || key == "emission-grid" || key == "temperature") {
+                throw ValueError(at + ": " + key + ": a volume takes the frame's optical model (--absorb, --scatter, --emission; colours and "
+                                 "emission from the input's grids): materials per volume are not supported yet");
+            } else {
+                throw ValueError(at + ": unknown key '" + key + "' (file, grid, transform)");
+            }
+        }
+        if (file.empty()) throw ValueError(at + ": no file");
+        args.insert(args.end(), {"--add-volume", grid.empty() ? file : file + ":" + grid});
+        transforms.insert(transforms.end(), {"--add-volume-transform", transform});
+    }
+    if (anyTransform) args.insert(args.end(), transforms.begin(), transforms.end());
+    return args;
+}
+
 } // namespace
 
 std::vector<std::string> optionArguments(const std::string& key, const nlohmann::json& value, bool flag, const std::string& where)
@@ -106,6 +160,15 @@ std::vector<std::string> jobArguments(const std::string& path, const std::vector
             continue;
         }
         if (key == "job") throw ValueError(where + ": a job file cannot name another job file");
+        if (key == "volumes") { // --add-volume and --add-volume-transform, one entry a volume
+            if (job.contains("add-volume") || job.contains("add-volume-transform")) {
+                throw ValueError(where + ": give 'volumes' or 'add-volume', not both");
+            }
+            if (contains(givenOnCommandLine, "add-volume")) continue;
+            const std::vector<std::string> volumes = volumeArguments(value, where);
+            args.insert(args.end(), volumes.begin(), volumes.end());
+            continue;
+        }
         if (!contains(knownOptions, key)) throw ValueError(path + ": unknown key '" + key + "' (keys are the long option names of vdb_ewa render --help)");
         if (contains(givenOnCommandLine, key)) continue;
         const std::vector<std::string> option = optionArguments(key, value, contains(flags, key), where);

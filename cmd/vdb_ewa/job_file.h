@@ -18,7 +18,9 @@ namespace vdb_ewa::cli {
 /// Values: strings as they are, numbers, true/false for flags and on/off switches, arrays of
 /// numbers joined with commas (`"translate": [0, 0, 5]`), arrays of strings joined
 /// (`"aov": ["shadow", "emission"]`), arrays of arrays repeat the option once per inner array
-/// (`"light": [[1, 1, 0], [-1, 0.5, 0, 0.2, 0.3, 0.6]]`).
+/// (`"light": [[1, 1, 0], [-1, 0.5, 0, 0.2, 0.3, 0.6]]`). One key is not an option: `volumes`,
+/// a list of objects `{"file": F, "grid": G, "transform": [[4 rows of 4]]}` (grid and transform
+/// optional), given as --add-volume F:G and --add-volume-transform, one each.
 /// @throw IoError (unreadable, not JSON) or ValueError (unknown key, wrong value) naming the
 ///        file and the key.
 std::vector<std::string> jobArguments(const std::string& path, const std::vector<std::string>& knownOptions,

@@ -189,6 +189,12 @@ void RenderOptions::add(CLI::App* app)
             "volume first), so volumes that interpenetrate hide and shadow each other in one sweep; same optical model; with "
             "--velocity-grid, each moves with its own velocity grid of that name (none: it stands still); repeat for more (default: none)")
         ->allow_extra_args(false);
+    mApp->add_option("--add-volume-transform", mAddVolumeTransforms,
+            "the object-to-world transform of the --add-volume of the same rank (the first for the first): 16 numbers, "
+            "a 4x4 matrix row by row, or its first 12 (the last row 0,0,0,1); column vectors, world = M (x, y, z, 1), "
+            "after the file's own index-to-world map, as a DCC object's transform moves its volume (its velocities turn "
+            "with it); finite, affine and invertible; one for every --add-volume, or none (default: none, the identity)")
+        ->allow_extra_args(false);
     // Motion blur (fog volumes).
     const MotionBlur mb;
     mApp->add_option("--velocity-grid", mVelocityGrid,
@@ -272,6 +278,11 @@ void RenderOptions::resolve(std::optional<int> frame, CameraSettings& cam, Rende
     if (!mScatter.empty()) rs.medium.scatter = parseVec3("scatter", mScatter, true);
     if (!mEmission.empty()) rs.medium.emission = parseVec3("emission", mEmission, true);
     if (!mAmbient.empty()) rs.ambient = parseVec3("ambient", mAmbient, true);
+    if (!mAddVolumeTransforms.empty() && mAddVolumeTransforms.size() != mAddVolumes.size()) {
+        throw ValueError("--add-volume-transform: " + std::to_string(mAddVolumeTransforms.size()) + " given for " +
+                         std::to_string(mAddVolumes.size()) + " --add-volume; give one for each, in the same order");
+    }
+    for (std::size_t i = 0; i < mAddVolumeTransforms.size(); ++i) addedVolumeTransform(i); // each checked before any file is read
     if (!mLights.empty()) {
         const Light defaults;
         rs.lights.clear();
@@ -427,9 +438,10 @@ GridSource RenderOptions::withExtraGrids(const GridSource& opened) const
     };
     GridSource summed = moving(opened);
     bool moves = summed.hasVelocityGrid();
-    for (const std::string& volume : mAddVolumes) {
-        const auto [file, grid] = splitVolume(volume);
-        const GridSource added = moving(GridSource::open(file, grid));
+    for (std::size_t i = 0; i < mAddVolumes.size(); ++i) {
+        const auto [file, grid] = splitVolume(mAddVolumes[i]);
+        const GridSource opened = GridSource::open(file, grid);
+        const GridSource added = moving(mAddVolumeTransforms.empty() ? opened : opened.transformed(addedVolumeTransform(i)));
         moves = moves || added.hasVelocityGrid();
         summed = summed.withAddedVolume(added);
     }
@@ -530,6 +542,11 @@ std::vector<Attributes> RenderOptions::resolvedOptions(const GridSource& grid, c
         for (const std::string& v : mAddVolumes) volumes += (volumes.empty() ? "" : "; ") + v;
         model.emplace_back("add-volume", volumes);
     }
+    if (!mAddVolumeTransforms.empty()) {
+        std::string transforms;
+        for (const std::string& t : mAddVolumeTransforms) transforms += (transforms.empty() ? "" : "; ") + t;
+        model.emplace_back("add-volume-transform", transforms);
+    }
     if (grid.hasVelocityGrid()) {
         model.emplace_back("velocity-grid", mVelocityGrid.empty() ? std::string("(attached to the grid)") : mVelocityGrid);
         model.emplace_back("velocity-scale", fmt(rs.motionBlur.velocityScale));
@@ -600,6 +617,24 @@ std::pair<std::string, std::string> RenderOptions::pointLightsText(const std::ve
         }
     }
     return {points, spots};
+}
+
+Mat4d RenderOptions::addedVolumeTransform(std::size_t i) const
+{
+    const std::string& text = mAddVolumeTransforms[i];
+    const std::string where = "--add-volume-transform " + std::to_string(i + 1) + " ('" + text.substr(0, 120) + "')";
+    const std::vector<double> v = parseNumbers("add-volume-transform", text);
+    if (v.size() != 12 && v.size() != 16) throw ValueError(where + ": expected 16 numbers (a 4x4 matrix row by row) or its first 12");
+    Mat4d m(1.0);
+    for (std::size_t k = 0; k < v.size(); ++k) {
+        if (!std::isfinite(v[k])) throw ValueError(where + ": every number must be finite");
+        m[int(k % 4)][int(k / 4)] = v[k]; // GLM: column, row
+    }
+    if (m[0][3] != 0.0 || m[1][3] != 0.0 || m[2][3] != 0.0 || m[3][3] != 1.0) {
+        throw ValueError(where + ": the last row must be 0,0,0,1 (an affine transform)");
+    }
+    if (!(std::abs(glm::determinant(Mat3d(m))) > 1e-300)) throw ValueError(where + ": the matrix is singular");
+    return m;
 }
 
 std::pair<std::string, std::string> RenderOptions::splitVolume(const std::string& volume)

@@ -75,6 +75,8 @@ public:
     const std::string& environment() const { return mEnvironment; }
     /// The files of --add-volume: inputs an output must not overwrite either.
     std::vector<std::string> addedVolumeFiles() const;
+    /// The i-th --add-volume-transform as a matrix (column vectors). @throw ValueError naming it.
+    Mat4d addedVolumeTransform(std::size_t i) const;
     /// --add-volume's FILE[:GRID] as (file, grid): the whole text where it names a file.
     static std::pair<std::string, std::string> splitVolume(const std::string& volume);
     OutputOptions& output() { return mOutputOptions; }
@@ -95,7 +97,7 @@ private:
 
     CLI::App* mApp = nullptr;
     std::string mCameraFile, mName, mRes, mTranslate, mRotate, mLookAt, mUp, mCamera;
-    std::vector<std::string> mLights, mPointLights, mSpotLights, mAddVolumes;
+    std::vector<std::string> mLights, mPointLights, mSpotLights, mAddVolumes, mAddVolumeTransforms;
     std::optional<double> mPointLightRadius;
     std::string mAbsorb, mScatter, mEmission, mAmbient, mAa, mMethod, mQuality, mExp, mRenormalize, mTaper, mPrefilter, mPrecision;
     std::optional<int> mTileSpacing, mRefine, mRefineEmission, mSamples;

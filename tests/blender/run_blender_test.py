@@ -5,7 +5,7 @@ a sun and a spot light; a second volume object of the same material, still, inte
 first), renders it through the vdb_ewa engine in-process, and saves
 Blender's render result. The CLI renders the same scene from options this script derives on its
 own (the grid rewritten with the moved transform by pyopenvdb, --lookat for the camera, the
-material and lights by docs/blender.md's formulas); the two must agree to 40 dB PSNR.
+material and lights by docs/blender.md's formulas); the two must agree to 60 dB PSNR.
 
 Exit 77 (ctest's skip) with a message where Blender, pyopenvdb or OpenImageIO is missing.
 
@@ -199,8 +199,8 @@ def main():
           % (value, engine[..., 3].max(), reference[..., 3].max(), 100 * coverage))
     if coverage < 0.05:
         sys.exit("FAIL: the CLI's image is nearly empty: the test scene does not frame the grid")
-    if value < 40.0:
-        sys.exit("FAIL: %.1f dB < 40 dB: the engine's scene conversion differs from the CLI's" % value)
+    if value < 60.0:  # they agree to 120 dB or more; a Velocity Scale of 1 for 1.5 gives 41 dB
+        sys.exit("FAIL: %.1f dB < 60 dB: the engine's scene conversion differs from the CLI's" % value)
     # Esc: the engine stopped after its second progress report, well before a final render's end.
     with open(out("blender.exr") + ".progress.json") as f:
         progress = json.load(f)
