@@ -245,9 +245,7 @@ TEST(MotionBlur, TheStreamedFrameEqualsTheWholeFrame)
         EXPECT_TRUE(statsOn.streamed);
         EXPECT_GT(statsOn.motionSubKernels, 0u);
         EXPECT_EQ(statsOn.motionSubKernels, statsOff.motionSubKernels);
-        double worst = 0.0;
-        for (std::size_t i = 0; i < a.beauty.rgba.size(); ++i) worst = std::max(worst, double(std::abs(a.beauty.rgba[i] - b.beauty.rgba[i])));
-        EXPECT_LT(worst, 1e-5) << "simd " << simd;
+        EXPECT_LT(maxAbsDiff(a.beauty, b.beauty), 1e-5) << "simd " << simd;
         for (const std::string& w : statsOn.warnings) EXPECT_EQ(w.find("in front of their window"), std::string::npos) << w;
     }
 }
@@ -507,4 +505,28 @@ TEST(DepthOfField, LensSamplesConvergeToTheLenssAverageOfAThickEdge)
     std::string warnings;
     for (const std::string& w : said.warnings) warnings += w + "\n";
     EXPECT_NE(warnings.find("--deep: one frame through the whole lens"), std::string::npos) << warnings;
+}
+
+TEST(DepthOfField, TheStreamedFrameEqualsTheWholeFrameThroughEachSubAperture)
+{
+    // A dense block overflowing the frame, seen through four sub-apertures: each part's eye and
+    // principal point move, and the streamed frame's brick bounds and opaque tiles must follow.
+    auto grid = makeFogGrid(openvdb::Coord(-24), openvdb::Coord(24), [](const openvdb::Coord& c) { return 0.6f + 0.01f * float(c.x() - c.z()); }, 0.05);
+    const GridSource block = gridSourceFromOpenVDB(grid);
+    CameraSettings cam = lookAtCamera(Vec3d(0.3, 0.2, 3.0), Vec3d(0.0), 64, 48);
+    cam.fstop = 0.1;
+    cam.focusDistance = 2.2; // circles of confusion of several pixels across the block
+    RenderSettings on;
+    on.lensSamples = 4;
+    RenderSettings off = on;
+    off.cull = false;
+    RenderStats statsOn, statsOff;
+    for (const bool simd : {true, false}) {
+        on.simd = off.simd = simd;
+        const Frame a = render(block, cam, on, &statsOn), b = render(block, cam, off, &statsOff);
+        EXPECT_TRUE(statsOn.streamed);
+        EXPECT_GT(statsOn.bricksHidden, 0u) << "opaque tiles hide bricks";
+        EXPECT_LT(maxAbsDiff(a.beauty, b.beauty), 1e-5) << "simd " << simd;
+        for (const std::string& w : statsOn.warnings) EXPECT_EQ(w.find("in front of their window"), std::string::npos) << w;
+    }
 }
