@@ -514,8 +514,8 @@ TEST(DepthOfField, TheStreamedFrameEqualsTheWholeFrameThroughEachSubAperture)
     auto grid = makeFogGrid(openvdb::Coord(-24), openvdb::Coord(24), [](const openvdb::Coord& c) { return 0.6f + 0.01f * float(c.x() - c.z()); }, 0.05);
     const GridSource block = gridSourceFromOpenVDB(grid);
     CameraSettings cam = lookAtCamera(Vec3d(0.3, 0.2, 3.0), Vec3d(0.0), 64, 48);
-    cam.fstop = 0.1;
-    cam.focusDistance = 2.2; // circles of confusion of several pixels across the block
+    cam.fstop = 0.02;
+    cam.focusDistance = 2.2; // the parts' principal points move by up to 20 pixels
     RenderSettings on;
     on.lensSamples = 4;
     RenderSettings off = on;
