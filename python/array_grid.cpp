@@ -90,4 +90,22 @@ GridSource withArrayEmitter(const GridSource& grid, const py::array& values, con
     return kind == "emission" ? withEmissionGrid(grid, emitter) : withTemperatureGrid(grid, emitter);
 }
 
+GridSource withArrayVelocity(const GridSource& grid, const py::array& values, const py::object& indexToWorld)
+{
+    const auto dense = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(values);
+    if (!dense || dense.ndim() != 4 || dense.shape(3) != 3) throw ValueError("velocity: expected an array of the density's shape and 3 components, [i, j, k, xyz]");
+    const openvdb::math::Mat4d matrix = indexToWorldMatrix(indexToWorld);
+    const openvdb::CoordBBox box(openvdb::Coord(0), openvdb::Coord(int(dense.shape(0)) - 1, int(dense.shape(1)) - 1, int(dense.shape(2)) - 1));
+    auto velocity = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+    {
+        py::gil_scoped_release release;
+        // [i, j, k, xyz] in C order: a Vec3s a voxel, z varying fastest.
+        const openvdb::tools::Dense<openvdb::Vec3s, openvdb::tools::LayoutZYX> view(box, reinterpret_cast<openvdb::Vec3s*>(const_cast<float*>(dense.data())));
+        openvdb::tools::copyFromDense(view, *velocity, openvdb::Vec3s(0.0f));
+    }
+    velocity->setTransform(openvdb::math::Transform::createLinearTransform(matrix));
+    velocity->setName("velocity");
+    return withVelocityGrid(grid, velocity);
+}
+
 } // namespace vdb_ewa::python

@@ -27,4 +27,9 @@ GridSource gridFromArray(const pybind11::array& values, const pybind11::object& 
 GridSource withArrayEmitter(const GridSource& grid, const pybind11::array& values, const pybind11::object& indexToWorld,
     const std::string& kind);
 
+/// @a grid with motion blur from the velocity array @a values, shaped (the density's shape, 3):
+/// the vector at [i, j, k] in world units per second or frame (render's velocity_unit), on the
+/// density's voxels and transform. @throw ValueError for another shape.
+GridSource withArrayVelocity(const GridSource& grid, const pybind11::array& values, const pybind11::object& indexToWorld);
+
 } // namespace vdb_ewa::python

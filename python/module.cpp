@@ -241,7 +241,7 @@ PYBIND11_MODULE(vdb_ewa, m)
         "vdb_render). Raises vdb_ewa.IoError (missing, unreadable, truncated file) or vdb_ewa.InputError (no such\n"
         "grid, not a scalar floating-point grid).");
     m.def("from_array", [](const py::array& array, const py::object& indexToWorld, const std::string& name, const py::object& emission,
-              const py::object& temperature) {
+              const py::object& temperature, const py::object& velocity) {
         GridSource grid = gridFromArray(array, indexToWorld, name);
         for (const auto& [values, kind] : {std::pair{&emission, "emission"}, {&temperature, "temperature"}}) {
             if (values->is_none()) continue;
@@ -251,9 +251,16 @@ PYBIND11_MODULE(vdb_ewa, m)
             }
             grid = withArrayEmitter(grid, a, indexToWorld, kind);
         }
+        if (!velocity.is_none()) {
+            const py::array v = py::array::ensure(velocity);
+            if (!v || v.ndim() != 4 || !std::equal(array.shape(), array.shape() + array.ndim(), v.shape()) || v.shape(3) != 3) {
+                throw vdb_ewa::ValueError("velocity: expected an array of the density's shape and 3 components, [i, j, k, xyz]");
+            }
+            grid = withArrayVelocity(grid, v, indexToWorld);
+        }
         return grid;
     }, py::arg("array"), py::arg("index_to_world") = py::none(), py::arg("name") = "density", py::kw_only(),
-        py::arg("emission") = py::none(), py::arg("temperature") = py::none(),
+        py::arg("emission") = py::none(), py::arg("temperature") = py::none(), py::arg("velocity") = py::none(),
         "A fog volume from a 3D numpy array: voxel (i, j, k) holds array[i, j, k] (pyopenvdb's copyFromArray\n"
         "layout); values equal to 0 are inactive.\n\n"
         "Args:\n"
@@ -263,7 +270,9 @@ PYBIND11_MODULE(vdb_ewa, m)
         "    name: the grid's name.\n"
         "    emission: None, or an array of the same layout: an emission grid (render's emission_color and\n"
         "        emission_intensity), as --emission-grid.\n"
-        "    temperature: None, or an array of temperatures: blackbody emission, as --temperature.\n\n"
+        "    temperature: None, or an array of temperatures: blackbody emission, as --temperature.\n"
+        "    velocity: None, or an array of the density's shape and 3 components ([i, j, k, xyz]): motion blur, the\n"
+        "        vectors in world units per second or frame (render's velocity_unit), as --velocity-grid.\n\n"
         "Raises vdb_ewa.ValueError for a wrong shape or matrix.");
 
     py::class_<CancelToken, std::shared_ptr<CancelToken>>(m, "CancelToken",

@@ -278,7 +278,7 @@ std::shared_ptr<RenderedFrame> render(const py::object& gridOrPath, const py::ob
         for (const char* keyword : {"color", "emission_grid", "temperature", "velocity_grid"}) {
             if (opened.path().empty() && kwargs.contains(keyword) && !kwargs[keyword].is_none()) {
                 throw ValueError(std::string(keyword) + ": the grid came from an array, with no file to read grids from (from_array takes "
-                                 "emission= and temperature= arrays)");
+                                 "emission=, temperature= and velocity= arrays)");
             }
         }
         py::gil_scoped_release release; // reads and resamples the colour and emission grids

@@ -203,6 +203,34 @@ class Module(unittest.TestCase):
         self.assertEqual(code, 3, err)
         self.assertIn("no grid named 'v'", err)
 
+    @unittest.skipIf(pyopenvdb is None or oiio is None, "needs Debian's python3-openvdb and python3-openimageio")
+    def test_array_velocity_blurs_as_the_cli_blurs_the_same_vectors_from_a_file(self):
+        a = smoke_block((16, 18, 20), 4)
+        v = np.zeros(a.shape + (3,), np.float32)
+        v[..., 0] = 6.0
+        v[..., 2] = np.linspace(-3.0, 3.0, a.shape[2], dtype=np.float32)  # varies along k
+        g = pyopenvdb.FloatGrid()
+        g.copyFromArray(a)
+        g.transform = pyopenvdb.createLinearTransform(MATRIX.T.tolist())
+        g.name = "density"
+        w = pyopenvdb.Vec3SGrid()
+        w.copyFromArray(v)
+        w.transform = g.transform
+        w.name = "v"
+        pyopenvdb.write(self.path("moving_block.vdb"), grids=[g, w])
+        shot = ["--res", "64x48", "--translate", "2,1,6", "--lookat", "2,0.9,1.5"]
+        code, err = cli(self.path("moving_block.vdb"), self.path("moving_cli.exr"), *shot, "--velocity-grid", "v", "--exr-type", "float", "-q")
+        self.assertEqual(code, 0, err)
+        expected, _ = read_exr(self.path("moving_cli.exr"))
+        options = dict(res="64x48", translate=(2, 1, 6), lookat=(2, 0.9, 1.5))
+        frame = vdb_ewa.render(vdb_ewa.from_array(a, MATRIX, velocity=v), **options)
+        np.testing.assert_array_equal(frame.beauty, expected[..., :4])
+        self.assertGreater(np.abs(frame.beauty - vdb_ewa.render(vdb_ewa.from_array(a, MATRIX), **options).beauty).max(), 0.02)
+        with self.assertRaisesRegex(vdb_ewa.ValueError, "velocity: expected an array of the density's shape and 3 components"):
+            vdb_ewa.from_array(a, MATRIX, velocity=v[..., :2])
+        with self.assertRaisesRegex(vdb_ewa.ValueError, "velocity: expected an array of the density's shape"):
+            vdb_ewa.from_array(a, MATRIX, velocity=v[1:])
+
     # --- progress, cancellation, the GIL ---
 
     def long_render(self, **kw):
