@@ -49,22 +49,31 @@ openvdb::math::Mat4d indexToWorldMatrix(const py::object& m)
     return rowVector;
 }
 
+/// The grid of C-ordered float data @a dense shaped [i, j, k] (scalars) or [i, j, k, 3] (Vec3s
+/// values): voxels equal to zero inactive, placed by @a indexToWorld.
+template <typename GridType>
+typename GridType::Ptr gridFromDense(const py::array_t<float, py::array::c_style | py::array::forcecast>& dense, const py::object& indexToWorld)
+{
+    using Value = typename GridType::ValueType;
+    const openvdb::math::Mat4d matrix = indexToWorldMatrix(indexToWorld);
+    const openvdb::CoordBBox box(openvdb::Coord(0), openvdb::Coord(int(dense.shape(0)) - 1, int(dense.shape(1)) - 1, int(dense.shape(2)) - 1));
+    auto grid = GridType::create(Value(0.0f));
+    {
+        py::gil_scoped_release release; // large arrays take a while; the array stays alive
+        // LayoutZYX: z varies fastest, as a C-ordered array [i, j, k] (of xyz for a vector).
+        const openvdb::tools::Dense<Value, openvdb::tools::LayoutZYX> view(box, reinterpret_cast<Value*>(const_cast<float*>(dense.data()))); // read only
+        openvdb::tools::copyFromDense(view, *grid, Value(0.0f));
+    }
+    grid->setTransform(openvdb::math::Transform::createLinearTransform(matrix));
+    return grid;
+}
+
 openvdb::FloatGrid::Ptr floatGrid(const py::array& values, const py::object& indexToWorld, const std::string& argument)
 {
     const auto dense = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(values);
     if (!dense || dense.ndim() != 3) throw ValueError(argument + ": expected a 3D array of numbers, indexed [i, j, k]");
     if (dense.size() == 0) throw ValueError(argument + ": the array is empty");
-    const openvdb::math::Mat4d matrix = indexToWorldMatrix(indexToWorld);
-    const openvdb::CoordBBox box(openvdb::Coord(0), openvdb::Coord(int(dense.shape(0)) - 1, int(dense.shape(1)) - 1, int(dense.shape(2)) - 1));
-    auto grid = openvdb::FloatGrid::create(0.0f);
-    {
-        py::gil_scoped_release release; // large arrays take a while; the array stays alive
-        // LayoutZYX: z varies fastest, as a C-ordered array [i, j, k].
-        const openvdb::tools::Dense<float, openvdb::tools::LayoutZYX> view(box, const_cast<float*>(dense.data())); // read only
-        openvdb::tools::copyFromDense(view, *grid, 0.0f);
-    }
-    grid->setTransform(openvdb::math::Transform::createLinearTransform(matrix));
-    return grid;
+    return gridFromDense<openvdb::FloatGrid>(dense, indexToWorld);
 }
 
 } // namespace
@@ -94,16 +103,7 @@ GridSource withArrayVelocity(const GridSource& grid, const py::array& values, co
 {
     const auto dense = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(values);
     if (!dense || dense.ndim() != 4 || dense.shape(3) != 3) throw ValueError("velocity: expected an array of the density's shape and 3 components, [i, j, k, xyz]");
-    const openvdb::math::Mat4d matrix = indexToWorldMatrix(indexToWorld);
-    const openvdb::CoordBBox box(openvdb::Coord(0), openvdb::Coord(int(dense.shape(0)) - 1, int(dense.shape(1)) - 1, int(dense.shape(2)) - 1));
-    auto velocity = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
-    {
-        py::gil_scoped_release release;
-        // [i, j, k, xyz] in C order: a Vec3s a voxel, z varying fastest.
-        const openvdb::tools::Dense<openvdb::Vec3s, openvdb::tools::LayoutZYX> view(box, reinterpret_cast<openvdb::Vec3s*>(const_cast<float*>(dense.data())));
-        openvdb::tools::copyFromDense(view, *velocity, openvdb::Vec3s(0.0f));
-    }
-    velocity->setTransform(openvdb::math::Transform::createLinearTransform(matrix));
+    openvdb::Vec3SGrid::Ptr velocity = gridFromDense<openvdb::Vec3SGrid>(dense, indexToWorld);
     velocity->setName("velocity");
     return withVelocityGrid(grid, velocity);
 }

@@ -435,9 +435,10 @@ namespace {
 /// world velocities weighted by their densities, at each active voxel of @a base's grid (a
 /// volume without a velocity grid stands still). Exact where one volume is alone; where they
 /// interpenetrate, their kernels move together. @a added: the other's field on @a base's
-/// voxels, times @a scale. In world units per second or frame, on @a base's transform.
+/// voxels, times @a scale; @a sum: their sum, whose active values (voxels and tiles) are the
+/// voxels to fill. In world units per second or frame, on @a base's transform.
 openvdb::Vec3SGrid::Ptr summedVolumeVelocity(const GridSource::Impl& base, const GridSource::Impl& other,
-    const openvdb::FloatGrid& added, float scale)
+    const openvdb::FloatGrid& added, float scale, const openvdb::FloatGrid& sum)
 {
     openvdb::Vec3SGrid::Ptr velocity = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
     velocity->setTransform(base.grid->transform().copy());
@@ -448,17 +449,15 @@ openvdb::Vec3SGrid::Ptr summedVolumeVelocity(const GridSource::Impl& base, const
     const auto own = base.field->getConstAccessor();
     const auto theirs = added.getConstAccessor();
     auto out = velocity->getAccessor();
-    openvdb::FloatGrid::Ptr support = base.field->deepCopy();
-    support->topologyUnion(added);
-    support->tree().voxelizeActiveTiles();
-    for (auto it = support->cbeginValueOn(); it; ++it) {
-        const openvdb::Coord c = it.getCoord();
-        const double a = std::max(0.0f, own.getValue(c)), b = std::max(0.0f, theirs.getValue(c) * scale);
-        if (!(a + b > 0.0)) continue;
-        const Vec3d p = base.indexToWorld(Vec3d(c.x(), c.y(), c.z()));
-        const Vec3d va = ownSampler ? ownSampler->at(p) : Vec3d(0.0), vb = otherSampler ? otherSampler->at(p) : Vec3d(0.0);
-        const Vec3d v = (a * va + b * vb) / (a + b);
-        out.setValueOn(c, openvdb::Vec3s(float(v.x), float(v.y), float(v.z)));
+    for (auto it = sum.cbeginValueOn(); it; ++it) {
+        for (const openvdb::Coord& c : it.getBoundingBox()) { // a voxel, or each voxel of a tile
+            const double a = std::max(0.0f, own.getValue(c)), b = std::max(0.0f, theirs.getValue(c) * scale);
+            if (!(a + b > 0.0)) continue;
+            const Vec3d p = base.indexToWorld(Vec3d(c.x(), c.y(), c.z()));
+            const Vec3d va = ownSampler ? ownSampler->at(p) : Vec3d(0.0), vb = otherSampler ? otherSampler->at(p) : Vec3d(0.0);
+            const Vec3d v = (a * va + b * vb) / (a + b);
+            out.setValueOn(c, openvdb::Vec3s(float(v.x), float(v.y), float(v.z)));
+        }
     }
     return velocity;
 }
@@ -496,7 +495,7 @@ GridSource GridSource::withAddedVolume(const GridSource& other) const
     impl->grid = sum;
     impl->derive();
     if (mImpl->velocity || other.mImpl->velocity) {
-        impl->velocity = summedVolumeVelocity(*mImpl, *other.mImpl, *added, scale);
+        impl->velocity = summedVolumeVelocity(*mImpl, *other.mImpl, *added, scale, *sum);
         impl->velocityToWorld = Mat3d(1.0);
     }
     return GridSource(impl);

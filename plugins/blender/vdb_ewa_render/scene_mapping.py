@@ -100,16 +100,16 @@ def volume_motion(obj, scene, warnings):
     if obj.animation_data is not None and obj.animation_data.action is not None:
         warnings.append("%s: its object's animation is not blurred (vdb_ewa blurs by the velocity grid only)" % where)
     name = data.velocity_grid
+    motion = dict(velocity_grid=name, velocity_unit=data.velocity_unit.lower(), velocity_scale=data.velocity_scale)
+    if name and grid_of(data, name) is not None:
+        return motion
     split = (data.velocity_x_grid, data.velocity_y_grid, data.velocity_z_grid)
-    if not (name and grid_of(data, name) is not None):
-        if any(split) and split == tuple(name + "." + a for a in "xyz") and all(grid_of(data, g) is not None for g in split):
-            pass  # vdb_ewa joins NAME.x, NAME.y, NAME.z itself
-        elif any(split):
-            warnings.append("%s: split velocity grids %s are not named %s.x, .y, .z; it is not blurred" % (where, "/".join(split), name))
-            return None
-        else:
-            return None  # no velocity grid: Cycles does not blur it either
-    return dict(velocity_grid=name, velocity_unit=data.velocity_unit.lower(), velocity_scale=data.velocity_scale)
+    if not any(split):
+        return None  # no velocity grid: Cycles does not blur it either
+    if split == tuple(name + "." + a for a in "xyz") and all(grid_of(data, g) is not None for g in split):
+        return motion  # vdb_ewa joins NAME.x, NAME.y, NAME.z itself
+    warnings.append("%s: split velocity grids %s are not named %s.x, .y, .z; it is not blurred" % (where, "/".join(split), name))
+    return None
 
 
 def _instances(depsgraph, kind):
