@@ -4,7 +4,9 @@
 #include "raster/raster.h"
 #include "shading/shading.h"
 
+#include <algorithm>
 #include <sstream>
+#include <utility>
 
 namespace vdb_ewa {
 namespace detail {
@@ -20,6 +22,22 @@ std::string countLine(std::uint64_t n, const std::string& what)
     std::ostringstream s;
     s << n << " " << what;
     return s.str();
+}
+
+void addToAverage(Frame& average, Frame&& sub, int s, int n)
+{
+    const float w = 1.0f / float(n);
+    if (s == 0) {
+        average = std::move(sub);
+        for (float& v : average.beauty.rgba) v *= w;
+        for (std::vector<float>* plane : {&average.transmittance, &average.shadow, &average.emission})
+            for (float& v : *plane) v *= w;
+        return;
+    }
+    for (std::size_t i = 0; i < average.beauty.rgba.size(); ++i) average.beauty.rgba[i] += w * sub.beauty.rgba[i];
+    for (const auto& [to, from] : {std::pair{&average.transmittance, &sub.transmittance}, {&average.shadow, &sub.shadow}, {&average.emission, &sub.emission}})
+        for (std::size_t i = 0; i < to->size(); ++i) (*to)[i] += w * (*from)[i];
+    for (std::size_t i = 0; i < average.depth.size(); ++i) average.depth[i] = std::min(average.depth[i], sub.depth[i]);
 }
 
 void addRasterStats(const RasterStats& raster, RenderStats& stats)
@@ -45,15 +63,17 @@ void addMotionStats(const MotionStats& motion, RenderStats& stats)
     stats.motionSubKernels += motion.subKernels;
 }
 
-void motionWarnings(const MotionStats& motion, std::vector<std::string>& warnings)
+void motionWarnings(const MotionStats& motion, double splitSigmas, std::vector<std::string>& warnings)
 {
     if (motion.clamped) {
         warnings.push_back(countLine(motion.clamped, "kernels travelled more than 4096 voxel lengths over the shutter and were slowed to it "
                                                      "(check --velocity-scale, --velocity-unit and --fps)"));
     }
     if (motion.longPaths) {
-        warnings.push_back(countLine(motion.longPaths, "kernels travelled so far that 64 sub-kernels each stand for more than 2 of their "
-                                                       "standard deviations of the path (the blur is smoother than a box there)"));
+        std::ostringstream what;
+        what << "kernels travelled so far that " << kMaxSubKernels << " sub-kernels each stand for more than " << splitSigmas
+             << " of their standard deviations of the path (--motion-split; the blur is smoother than a box there)";
+        warnings.push_back(countLine(motion.longPaths, what.str()));
     }
 }
 

@@ -43,6 +43,11 @@ MemoryBudget budgetFor(const GridSource::Impl& grid, const RenderSettings& setti
 /// "@a n @a what": a warning line.
 std::string countLine(std::uint64_t n, const std::string& what);
 
+/// Sub-frame @a s of @a n added to @a average (the first replaces it): colour and alpha
+/// (premultiplied), transmittance and the passes weighted 1/n; Z, where alpha reaches 0.5, is
+/// the nearest sub-frame's.
+void addToAverage(Frame& average, Frame&& sub, int s, int n);
+
 /// The volume rasteriser's counters in the frame's stats.
 void addRasterStats(const RasterStats& raster, RenderStats& stats);
 
@@ -56,8 +61,8 @@ void splatWarnings(std::uint64_t beforeNear, std::uint64_t clampedNear, std::uin
 /// Motion blur's counters, added to @a stats.
 void addMotionStats(const MotionStats& motion, RenderStats& stats);
 
-/// What motion blur clamped or stretched, a line each.
-void motionWarnings(const MotionStats& motion, std::vector<std::string>& warnings);
+/// What motion blur clamped or stretched, a line each (@a splitSigmas: MotionBlur::splitSigmas).
+void motionWarnings(const MotionStats& motion, double splitSigmas, std::vector<std::string>& warnings);
 
 /// The light maps' rays in all and marched, into @a stats (the point lights' are marched whole).
 void addLightStats(const std::vector<LightMap>& lights, const PointLights& pointLights, RenderStats& stats);

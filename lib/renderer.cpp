@@ -181,6 +181,16 @@ void Renderer::renderSubFrames(const GridSource::Impl& g, const Camera& camera, 
     if (passes.deep && moving && blur.samples > 1) {
         throw ValueError("--motion-samples averages sub-frames; a deep image has no average: use --motion-samples 1 with --deep");
     }
+    const bool deepLens = passes.deep && lens && mSettings.lensSamples > 1;
+    const char* const deepLensWarning = "--deep: one frame through the whole lens (--lens-samples averages sub-frames, which a deep image cannot)";
+    // One sweep for every sub-frame where the streamed frame can take them (their images fit).
+    if (!notStreamable(mSettings, g)) {
+        renderStreamedFogVolume(g, camera, passes, frame, stats, progress);
+        if (stats.streamed) {
+            if (deepLens) stats.warnings.push_back(deepLensWarning);
+            return;
+        }
+    }
     const int n = passes.deep ? 1 : std::max(moving ? blur.samples : 1, lens ? mSettings.lensSamples : 1);
     for (int s = 0; s < n; ++s) {
         // Sub-frame s: the shutter's part [open + s d, open + (s + 1) d], d = (close - open) / n,
@@ -195,20 +205,7 @@ void Renderer::renderSubFrames(const GridSource::Impl& g, const Camera& camera, 
         Frame sub;
         RenderStats subStats;
         Renderer(part).renderFogVolume(g, lens ? camera.throughLensPart(s, n) : camera, passes, sub, subStats, progress);
-        // The images' average: colour and alpha (premultiplied), transmittance and the passes;
-        // Z, where alpha reaches 0.5, is the nearest sub-frame's.
-        const float w = 1.0f / float(n);
-        if (s == 0) {
-            frame = std::move(sub);
-            for (float& v : frame.beauty.rgba) v *= w;
-            for (std::vector<float>* plane : {&frame.transmittance, &frame.shadow, &frame.emission})
-                for (float& v : *plane) v *= w;
-        } else {
-            for (std::size_t i = 0; i < frame.beauty.rgba.size(); ++i) frame.beauty.rgba[i] += w * sub.beauty.rgba[i];
-            for (const auto& [to, from] : {std::pair{&frame.transmittance, &sub.transmittance}, {&frame.shadow, &sub.shadow}, {&frame.emission, &sub.emission}})
-                for (std::size_t i = 0; i < to->size(); ++i) (*to)[i] += w * (*from)[i];
-            for (std::size_t i = 0; i < frame.depth.size(); ++i) frame.depth[i] = std::min(frame.depth[i], sub.depth[i]);
-        }
+        detail::addToAverage(frame, std::move(sub), s, n);
         // Counts and times add up over the sub-frames; the warnings are each sub-frame's alike.
         const RenderStats total = stats;
         stats = subStats;
@@ -225,9 +222,7 @@ void Renderer::renderSubFrames(const GridSource::Impl& g, const Camera& camera, 
                 *sum += add;
         }
     }
-    if (passes.deep && lens && mSettings.lensSamples > 1) {
-        stats.warnings.push_back("--deep: one frame through the whole lens (--lens-samples averages sub-frames, which a deep image cannot)");
-    }
+    if (deepLens) stats.warnings.push_back(deepLensWarning);
 }
 
 void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, const PassRequest& passes,
@@ -317,7 +312,7 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
         stats.warnings.push_back(w.str());
     }
     valueWarnings(kernels.notANumber, kernels.clamped, stats.warnings);
-    detail::motionWarnings(motion, stats.warnings);
+    detail::motionWarnings(motion, mSettings.motionBlur.splitSigmas, stats.warnings);
     splatWarnings(splats.beforeNear, splats.clampedNear, splats.clampedGrazing, 0, stats.warnings);
     if (splats.requestedThickness > 0.0) {
         std::ostringstream w;

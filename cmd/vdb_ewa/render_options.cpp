@@ -211,6 +211,11 @@ void RenderOptions::add(CLI::App* app)
         "motion blur: sub-frames over the shutter, each blurred over its part of it, averaged; widened kernels blur optical "
         "depth where a camera averages images, so opaque edges need more to converge (docs/equations.md#motion-blur); "
         "about N times the time; range [1, 1024] (default: 2; draft 1, high 4, final 8)");
+    mApp->add_option("--motion-split", mMotionSplit,
+        "motion blur: a kernel whose path over its sub-frame is longer on the screen than this many of its standard "
+        "deviations is split into sub-kernels of at most that length; smaller keeps the blur's box shape closer (a single "
+        "kernel's blur within 1.2 % of its peak at 2, 4.6 % at 3, 11 % at 4) at the cost of more kernels; in [0.5, 64] "
+        "(default: " + fmt(mb.splitSigmas) + "; draft 4, high and final 2)");
     mApp->add_option("--lens-samples", mLensSamples,
         "depth of field: sub-frames, each through its own part of the lens (rings of sectors of equal area) and blurred by "
         "that part's circle of confusion, averaged; widened kernels blur optical depth where a camera averages images, so "
@@ -380,6 +385,7 @@ void RenderOptions::resolve(std::optional<int> frame, CameraSettings& cam, Rende
     }
     if (mBlurSamples) rs.blurSamples = *mBlurSamples;
     if (mMotionSamples) rs.motionBlur.samples = *mMotionSamples;
+    if (mMotionSplit) rs.motionBlur.splitSigmas = *mMotionSplit;
     if (mLensSamples) rs.lensSamples = *mLensSamples;
     const GrantedSettings granted = grantedExecution();
     rs.threads = granted.threads;
@@ -554,6 +560,7 @@ std::vector<Attributes> RenderOptions::resolvedOptions(const GridSource& grid, c
         model.emplace_back("fps", fmt(rs.motionBlur.fps));
         model.emplace_back("shutter", fmt(rs.motionBlur.shutterOpen) + "," + fmt(rs.motionBlur.shutterClose));
         model.emplace_back("motion-samples", std::to_string(rs.motionBlur.samples));
+        model.emplace_back("motion-split", fmt(rs.motionBlur.splitSigmas));
     }
     Attributes method{{"method", choiceName(rs.method, kMethods)}};
     if (rs.method != Method::Splat) method.emplace_back("step", fmt(rs.step));
@@ -586,7 +593,7 @@ void RenderOptions::ignoredOptionWarnings(std::vector<std::string>& warnings, bo
         {"--emission-grid", {"--emission-color", "--emission-intensity"}},
         {"--temperature", {"--temperature-scale", "--temperature-offset", "--blackbody-intensity"}},
         {"--environment", {"--environment-lights", "--environment-intensity"}},
-        {"--velocity-grid", {"--velocity-scale", "--velocity-unit", "--fps", "--shutter", "--motion-samples"}},
+        {"--velocity-grid", {"--velocity-scale", "--velocity-unit", "--fps", "--shutter", "--motion-samples", "--motion-split"}},
         {"--fstop", {"--focus-distance", "--lens-samples"}}};
     if (given("--point-light-radius") && !given("--point-light") && !given("--spot-light")) {
         warnings.push_back("--point-light-radius changes nothing without --point-light or --spot-light");

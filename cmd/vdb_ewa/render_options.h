@@ -119,6 +119,7 @@ private:
     std::string mVelocityGrid, mVelocityUnit, mShutter;
     std::optional<double> mVelocityScale, mFps, mFstop, mFocusDistance;
     std::optional<int> mBlurSamples, mMotionSamples, mLensSamples;
+    std::optional<double> mMotionSplit;
     OutputOptions mOutputOptions;
 };
 

@@ -210,6 +210,12 @@ struct MotionBlur
     /// sub-frames converge to the shutter's average, at their cost in time
     /// (docs/equations.md#motion-blur). 1: one frame; presets: draft 1, default 2, high 4, final 8.
     int samples = 2;
+    /// A kernel whose path over its sub-frame is longer on the screen than this many of its
+    /// standard deviations along it (the low-pass filter's included) is split into sub-kernels
+    /// of at most that length: a Gaussian convolved with a box is then one Gaussian of the
+    /// box's variance added to within 1.2 % (2), 4.6 % (3) or 11 % (4) of its peak
+    /// (docs/equations.md#motion-blur). Presets: draft 4, default 3, high and final 2.
+    double splitSigmas = 3.0;
 
     /// Seconds (VelocityUnit::Second) or frames a velocity is multiplied by to move a point over
     /// the time from the frame's to @a frames frames later, scale included.

@@ -65,12 +65,25 @@ struct Travel
 
 } // namespace
 
+std::vector<Vec3d> kernelVelocities(const GridSource::Impl& grid, const KernelSet& kernels)
+{
+    if (!grid.velocity) return {};
+    std::vector<Vec3d> out(kernels.kernels.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.size(), 4096), [&](const tbb::blocked_range<std::size_t>& range) {
+        VelocitySampler velocity(grid);
+        for (std::size_t i = range.begin(); i < range.end(); ++i) out[i] = velocity.at(grid.indexToWorld(kernels.kernels[i].pIndex));
+    });
+    return out;
+}
+
 MotionStats moveKernels(const GridSource::Impl& grid, const RenderSettings& settings, const Camera& camera, KernelSet& kernels,
-    std::vector<Rgb>& colors, const MemoryBudget* budget)
+    std::vector<Rgb>& colors, const MemoryBudget* budget, const std::vector<Vec3d>* velocities)
 {
     MotionStats stats;
     kernels.motion.clear();
     if (!grid.velocity || kernels.kernels.empty()) return stats;
+    const std::vector<Vec3d> sampled = velocities ? std::vector<Vec3d>() : kernelVelocities(grid, kernels);
+    const std::vector<Vec3d>& velocity = velocities ? *velocities : sampled;
     const MotionBlur& blur = settings.motionBlur;
     const double open = blur.displacementPerVelocity(blur.shutterOpen), close = blur.displacementPerVelocity(blur.shutterClose);
     const double mid = 0.5 * (open + close), length = close - open;
@@ -86,11 +99,10 @@ MotionStats moveKernels(const GridSource::Impl& grid, const RenderSettings& sett
     const std::size_t n = kernels.kernels.size();
     std::vector<Travel> travel(n);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& range) {
-        VelocitySampler velocity(grid);
         for (std::size_t i = range.begin(); i < range.end(); ++i) {
             const Kernel& k = kernels.kernels[i];
             const Vec3d pWorld = grid.indexToWorld(k.pIndex);
-            Vec3d v = velocity.at(pWorld);
+            Vec3d v = velocity[i];
             Travel& t = travel[i];
             const double speed = glm::length(v);
             if (!(speed > 0.0)) continue;
@@ -117,7 +129,7 @@ MotionStats moveKernels(const GridSource::Impl& grid, const RenderSettings& sett
             }
             const double sigmaPixels = kernelSigmaVoxels(k, settings.splat.kernelSigma) * narrowest * pixelsPerUnit;
             const double footprint = std::sqrt(std::max(sigmaPixels * sigmaPixels, floor));
-            double pieces = std::ceil(pixels / (kMaxSubPathSigmas * footprint));
+            double pieces = std::ceil(pixels / (blur.splitSigmas * footprint));
             if (!(pieces >= 1.0)) pieces = 1.0; // also NaN (a degenerate transform)
             t.longPath = pieces > double(kMaxSubKernels);
             t.pieces = int(std::clamp(pieces, 1.0, double(kMaxSubKernels)));

@@ -19,12 +19,6 @@
 namespace vdb_ewa {
 namespace detail {
 
-/// A sub-path over the shutter is at most this many of the kernel's standard deviations along
-/// it, on the screen (the low-pass filter's included: the image resolves no finer): a Gaussian
-/// convolved with a box of length L is then a Gaussian of variance sigma^2 + L^2 / 12 to within
-/// 1 % of its peak, and the sub-kernels' sum is flat along the path to within 0.3 %
-/// (docs/equations.md#motion-blur).
-inline constexpr double kMaxSubPathSigmas = 2.0;
 /// At most this many sub-kernels a kernel; longer paths make longer sub-paths (counted).
 inline constexpr int kMaxSubKernels = 64;
 /// A kernel travels at most this many voxel lengths over the shutter (absurd velocities are
@@ -55,14 +49,19 @@ struct MotionStats
     std::uint64_t clamped = 0;    ///< kernels whose travel was clamped to kMaxTravelVoxels
 };
 
+/// The velocity at every kernel's centre (VelocitySampler), in kernel order: what the
+/// sub-frames of one sweep share (moveKernels' @a velocities). Empty without a velocity grid.
+std::vector<Vec3d> kernelVelocities(const GridSource::Impl& grid, const KernelSet& kernels);
+
 /// Motion blur: every kernel of @a kernels moved to its centre at the shutter's mid-time and
 /// given its path over the shutter (KernelSet::motion); a path whose image through @a camera
-/// is longer than kMaxSubPathSigmas of the kernel's filtered footprint along it is split into
-/// that many sub-kernels, each a share of the weight over an equal part of the path (@a colors,
+/// is longer than MotionBlur::splitSigmas of the kernel's filtered footprint along it is split
+/// into that many sub-kernels, each a share of the weight over an equal part of the path (@a colors,
 /// KernelSet::emitted and emitterBegin follow). Nothing changes without a velocity grid.
 /// @a budget: the sub-kernels are counted before they are allocated (BudgetError).
+/// @a velocities: kernelVelocities(grid, kernels), where already sampled (null: sampled here).
 MotionStats moveKernels(const GridSource::Impl& grid, const RenderSettings& settings, const Camera& camera, KernelSet& kernels,
-    std::vector<Rgb>& colors, const MemoryBudget* budget);
+    std::vector<Rgb>& colors, const MemoryBudget* budget, const std::vector<Vec3d>* velocities = nullptr);
 
 /// How far any kernel of @a grid can be from its still centre over the shutter, at most, in
 /// world units (the velocity grid's largest vector): what the streamed frame's brick bounds
