@@ -176,7 +176,9 @@ PYBIND11_MODULE(vdb_ewa, m)
               "    frame.beauty                                      # (540, 960, 4) float32\n"
               "    frame.write('smoke.exr')\n\n"
               "help(vdb_ewa.render) lists every option (vdb_ewa render's, - spelled _). docs/python.md.";
-    m.attr("__version__") = versionString();
+    // PEP 440: the version alone ("0.1.0"); versionString() adds the commit ("0.1.0 (git 657cd57)").
+    const std::string version = versionString();
+    m.attr("__version__") = version.substr(0, version.find(' '));
     registerExceptions(m);
     m.attr("RenderWarning") = py::reinterpret_steal<py::object>(
         PyErr_NewExceptionWithDoc("vdb_ewa.RenderWarning", "A setting was clamped or a fallback taken (the CLI's 'warning:' lines).",

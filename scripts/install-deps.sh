@@ -15,6 +15,7 @@ packages=(
   libopenvdb-tools   # vdb_render: the peer the tests and benchmarks compare against
   openimageio-tools  # oiiotool: EXR -> PNG previews and image diffs
   clang libclang-rt-14-dev  # the sanitized test build and the libFuzzer harnesses (tests/fuzz)
+  dpkg-dev           # dpkg-shlibdeps: the .deb's Depends (scripts/package.sh, ctest package.deb)
 )
 if [ "${1:-}" = "--test" ]; then
   # The Python module's test reads EXRs and writes VDBs with OpenVDB's own binding; the Blender

@@ -40,7 +40,7 @@ Command& CommandLine::parse(std::vector<std::string> args)
     // vdb_render's command line, `vdb_ewa IN OUT [options]`: without a subcommand it is `render`,
     // and `vdb_ewa --help` lists render's options, as `vdb_render -help` lists its own.
     const bool named = std::any_of(mCommands.begin(), mCommands.end(), [&](const auto& cmd) { return cmd->subcommand()->get_name() == args.front(); });
-    if (!named && args.front() != "--version" && args.front() != "--help-all") args.insert(args.begin(), "render");
+    if (!named && args.front() != "--version") args.insert(args.begin(), "render");
     // --job FILE: the job's settings go before the command line's, which override them.
     if (args.front() == "render") {
         std::vector<std::string> rest = applyJobFile({args.begin() + 1, args.end()}, *mCommands.front()->subcommand());

@@ -30,7 +30,7 @@ int main(int argc, char* argv[])
     Command* command = nullptr;
     try {
         command = &commandLine.parse({argv + 1, argv + argc});
-    } catch (const CLI::Success& e) { // --help, --help-all, --version
+    } catch (const CLI::Success& e) { // --help, --version
         return commandLine.app().exit(e);
     } catch (const CLI::ParseError& e) {
         printError(std::runtime_error(inOurWords(e) + " (see vdb_ewa --help)"));

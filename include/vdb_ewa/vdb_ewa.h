@@ -24,7 +24,8 @@
 
 namespace vdb_ewa {
 
-/// Library version, "MAJOR.MINOR.PATCH".
+/// Library version and the git commit it was configured from, "MAJOR.MINOR.PATCH (git COMMIT)"
+/// (COMMIT "unknown" outside a git checkout, "-dirty" with changed tracked files).
 VDB_EWA_API const char* versionString();
 
 } // namespace vdb_ewa

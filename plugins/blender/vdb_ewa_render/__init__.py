@@ -43,8 +43,9 @@ class VdbEwaPreferences(bpy.types.AddonPreferences):
     bl_idname = __name__
     module_path: bpy.props.StringProperty(
         name="vdb_ewa module folder", subtype='DIR_PATH',
-        description="Folder holding the vdb_ewa Python module (cmake --install puts it in lib/python3.11/dist-packages; "
-                    "empty: Python's path)")
+        description="Folder holding the vdb_ewa Python module (empty: Python's path, where scripts/setup.sh "
+                    "and the Debian package install it: /usr/local/lib/python3.11/dist-packages, "
+                    "/usr/lib/python3/dist-packages)")
 
     def draw(self, context):
         self.layout.prop(self, "module_path")
