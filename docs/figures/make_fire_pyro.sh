@@ -14,27 +14,18 @@
 #   writes DIR/fire_pyro.png (default DIR: a new temporary folder; --out docs replaces the
 #   committed image).
 set -euo pipefail
-out=""
-while [ $# -gt 0 ]; do
-  case "$1" in
-    --out) out="$2"; shift 2 ;;
-    *) echo "usage: $0 [--out DIR]" >&2; exit 2 ;;
-  esac
-done
-absolute() { case "$1" in /*) echo "$1" ;; */*) echo "$PWD/$1" ;; *) echo "$1" ;; esac; } # a bare name: PATH
-path_of() { case "$1" in /*) echo "$1" ;; *) echo "$PWD/$1" ;; esac; }
-ewa="$(absolute "${VDB_EWA_BIN:-${VDB_EWA:-vdb_ewa}}")"
-out="$(path_of "${out:-$(mktemp -d)}")"
-[ -n "${VDB_EWA_ASSETS:-}" ] && VDB_EWA_ASSETS="$(path_of "$VDB_EWA_ASSETS")"
+source "$(dirname "$0")/figure_common.sh"
+out_option "$@"
+ewa="$(ewa_bin)"
+out="$(out_dir "$out")"
+absolute_assets
 cd "$(dirname "$0")/../.."
-assets="${VDB_EWA_ASSETS:-../shared/grids}"
+assets="$(assets_dir)"
 python="${PYTHON:-/usr/bin/python3}"
-font="${FIGURE_FONT:-/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf}"
-for tool in "$ewa" "$python" oiiotool; do
-  command -v "$tool" >/dev/null || { echo "$0: $tool not found" >&2; exit 1; }
-done
-[ -f "$assets/pyro.vdb" ] || { echo "$0: $assets/pyro.vdb not found (set VDB_EWA_ASSETS)" >&2; exit 1; }
-[ -f "$font" ] || { echo "$0: font $font not found (fonts-dejavu-core, or set FIGURE_FONT)" >&2; exit 1; }
+font="$(figure_font)"
+need_tools "$ewa" "$python" oiiotool
+need_asset "$assets/pyro.vdb"
+need_font "$font"
 mkdir -p "$out"
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT

@@ -21,6 +21,7 @@
 #   writes DIR/lod_dolly.png (default DIR: a new temporary folder; --out docs replaces the
 #   committed image, which only makes sense with --before-bin).
 set -euo pipefail
+source "$(dirname "$0")/figure_common.sh"
 out="" before=""
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -29,18 +30,14 @@ while [ $# -gt 0 ]; do
     *) echo "usage: $0 [--out DIR] [--before-bin VDB_EWA_AT_C4FC237]" >&2; exit 2 ;;
   esac
 done
-absolute() { case "$1" in /*) echo "$1" ;; */*) echo "$PWD/$1" ;; *) echo "$1" ;; esac; } # a bare name: PATH
-path_of() { case "$1" in /*) echo "$1" ;; *) echo "$PWD/$1" ;; esac; }
-ewa="$(absolute "${VDB_EWA_BIN:-${VDB_EWA:-vdb_ewa}}")"
-out="$(path_of "${out:-$(mktemp -d)}")"
+ewa="$(ewa_bin)"
+out="$(out_dir "$out")"
 [ -n "$before" ] && before="$(path_of "$before")"
-[ -n "${VDB_EWA_ASSETS:-}" ] && VDB_EWA_ASSETS="$(path_of "$VDB_EWA_ASSETS")"
+absolute_assets
 cd "$(dirname "$0")/../.."
-assets="${VDB_EWA_ASSETS:-../shared/grids}"
-for tool in "$ewa" oiiotool ${before:+"$before"}; do
-  command -v "$tool" >/dev/null || { echo "$0: $tool not found" >&2; exit 1; }
-done
-[ -f "$assets/pyro.vdb" ] || { echo "$0: $assets/pyro.vdb not found (set VDB_EWA_ASSETS)" >&2; exit 1; }
+assets="$(assets_dir)"
+need_tools "$ewa" oiiotool ${before:+"$before"}
+need_asset "$assets/pyro.vdb"
 mkdir -p "$out"
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT

@@ -20,6 +20,7 @@
 #   writes DIR/pareto_1080.png (default DIR: a new temporary folder; --out docs replaces the
 #   committed image).
 set -euo pipefail
+source "$(dirname "$0")/figure_common.sh"
 out="" measure="" cache=""
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -29,22 +30,15 @@ while [ $# -gt 0 ]; do
     *) echo "usage: $0 [--out DIR] [--measure [--cache DIR]]" >&2; exit 2 ;;
   esac
 done
-absolute() { case "$1" in /*) echo "$1" ;; */*) echo "$PWD/$1" ;; *) echo "$1" ;; esac; } # a bare name: PATH
-path_of() { case "$1" in /*) echo "$1" ;; *) echo "$PWD/$1" ;; esac; }
-out="$(path_of "${out:-$(mktemp -d)}")"
+out="$(out_dir "$out")"
 [ -n "$cache" ] && cache="$(path_of "$cache")"
-VDB_EWA_BIN="$(absolute "${VDB_EWA_BIN:-${VDB_EWA:-vdb_ewa}}")"
-[ -n "${VDB_EWA_ASSETS:-}" ] && export VDB_EWA_ASSETS="$(path_of "$VDB_EWA_ASSETS")"
-export VDB_EWA_BIN
+bench_env
 cd "$(dirname "$0")/../.."
 python="${PYTHON:-/usr/bin/python3}"
-"$python" -c "import matplotlib" 2>/dev/null ||
-  { echo "$0: $python has no matplotlib (apt-get install python3-matplotlib)" >&2; exit 1; }
+need_matplotlib "$python"
 mkdir -p "$out"
 if [ -n "$measure" ]; then
-  for tool in "$VDB_EWA_BIN" vdb_render oiiotool; do
-    command -v "$tool" >/dev/null || { echo "$0: $tool not found" >&2; exit 1; }
-  done
+  need_tools "$VDB_EWA_BIN" vdb_render oiiotool
   "$python" bench/bench.py tradeoff --scenes smoke,pyro,pig,fog_tommy_v5,brain_mri,cloud,tiles,smoke_double --res 1920x1080 \
     ${cache:+--cache "$cache"} --plot "$out/pareto_1080.png" | tee "$out/tradeoff_1920x1080.txt"
 else
