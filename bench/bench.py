@@ -891,6 +891,32 @@ def timed_peak(cmd):
     return dt, peak, p.stdout, p.returncode
 
 
+def plot_scaling(rows, res, path):
+    """The scaling table's plot (cmd_scaling, docs/figures/make_scaling.py): wall time and peak memory
+    against active voxels."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.5))
+    v = [r["voxels"] for r in rows]
+    for key, colour, label in (("vdb_render", "tab:red", "vdb_render defaults"), ("default", "tab:blue", "vdb_ewa default"),
+                               ("draft", "tab:green", "vdb_ewa draft")):
+        ax1.plot(v, [r[key] for r in rows], "o-", color=colour, label=label)
+    ax1.plot(v, [rows[0]["default"] * x / v[0] for x in v], ":", color="grey", label="linear in voxels")
+    for key, colour, label in (("default_peak", "tab:blue", "vdb_ewa default"), ("draft_peak", "tab:green", "vdb_ewa draft")):
+        ax2.plot(v, [r[key] for r in rows], "o-", color=colour, label=label)
+    ax2.plot(v, [40e-6 * x for x in v], ":", color="grey", label="40 bytes per voxel (issue 37)")
+    for ax, title in ((ax1, "wall time (s)"), (ax2, "peak memory (MB)")):
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("active voxels")
+        ax.set_title(f"{title}, {res}")
+        ax.grid(True, alpha=0.3)
+        ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+
+
 def cmd_scaling(args):
     """Issue 17: the same cloud (make-grid cloud) at voxel sizes giving 0.1M to 100M active voxels,
     rendered at one camera: time and peak memory of vdb_ewa --quality default and draft, and of
@@ -931,31 +957,13 @@ def cmd_scaling(args):
         print("| " + " | ".join(cells) + " |", flush=True)
     if args.plot:
         try:
-            import matplotlib
-            matplotlib.use("Agg")
-            import matplotlib.pyplot as plt
+            import matplotlib  # noqa: F401 (plot_scaling draws with it)
         except ImportError:
             print("# no plot: apt-get install python3-matplotlib", file=sys.stderr)
             return
-        fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.5))
-        v = [r["voxels"] for r in rows]
-        for key, colour, label in (("vdb_render", "tab:red", "vdb_render defaults"), ("default", "tab:blue", "vdb_ewa default"),
-                                   ("draft", "tab:green", "vdb_ewa draft")):
-            ax1.plot(v, [r[key] for r in rows], "o-", color=colour, label=label)
-        ax1.plot(v, [rows[0]["default"] * x / v[0] for x in v], ":", color="grey", label="linear in voxels")
-        for key, colour, label in (("default_peak", "tab:blue", "vdb_ewa default"), ("draft_peak", "tab:green", "vdb_ewa draft")):
-            ax2.plot(v, [r[key] for r in rows], "o-", color=colour, label=label)
-        ax2.plot(v, [40e-6 * x for x in v], ":", color="grey", label="40 bytes per voxel (issue 37)")
-        for ax, title in ((ax1, "wall time (s)"), (ax2, "peak memory (MB)")):
-            ax.set_xscale("log")
-            ax.set_yscale("log")
-            ax.set_xlabel("active voxels")
-            ax.set_title(f"{title}, {args.res}")
-            ax.grid(True, alpha=0.3)
-            ax.legend()
-        fig.tight_layout()
-        fig.savefig(args.plot, dpi=110)
+        plot_scaling(rows, args.res, args.plot)
         print(f"# wrote {args.plot}")
+
 
 STABILITY_SCENES = ["smoke", "pyro", "pig", "brain_mri", "cloud (grids/)"]
 

@@ -6,7 +6,7 @@ voxels, vdb_ewa default and draft and vdb_render's defaults (up to 3M voxels): t
 
 Two ways:
 - default: redraw the plot from the saved table, bench/results/scaling_1920x1080.txt (or
-  --table FILE), in seconds, with the plotting code of bench.py scaling (kept in step with it
+  --table FILE), in seconds, with the plotting code of bench.py scaling (bench.plot_scaling; kept in step with it
   here). The committed image's memory panel labels its dotted line "80 bytes per voxel": it was
   drawn before bench.py's line became 40 bytes per voxel (issue 37), so a redraw differs there.
 - --measure: run bench.py scaling again (the grids up to 100M voxels take several GB of disk
@@ -48,28 +48,10 @@ def rows_of(table):
 
 
 def plot(rows, path):
-    """bench.py cmd_scaling's plot."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.5))
-    v = [r["voxels"] for r in rows]
-    for key, colour, label in (("vdb_render", "tab:red", "vdb_render defaults"), ("default", "tab:blue", "vdb_ewa default"),
-                               ("draft", "tab:green", "vdb_ewa draft")):
-        ax1.plot(v, [r[key] for r in rows], "o-", color=colour, label=label)
-    ax1.plot(v, [rows[0]["default"] * x / v[0] for x in v], ":", color="grey", label="linear in voxels")
-    for key, colour, label in (("default_peak", "tab:blue", "vdb_ewa default"), ("draft_peak", "tab:green", "vdb_ewa draft")):
-        ax2.plot(v, [r[key] for r in rows], "o-", color=colour, label=label)
-    ax2.plot(v, [40e-6 * x for x in v], ":", color="grey", label="40 bytes per voxel (issue 37)")
-    for ax, title in ((ax1, "wall time (s)"), (ax2, "peak memory (MB)")):
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        ax.set_xlabel("active voxels")
-        ax.set_title(f"{title}, {RES}")
-        ax.grid(True, alpha=0.3)
-        ax.legend()
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    """bench.py cmd_scaling's plot (bench.plot_scaling)."""
+    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "bench"))
+    import bench
+    bench.plot_scaling(rows, RES, path)
 
 
 def main():
