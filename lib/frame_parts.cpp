@@ -24,6 +24,24 @@ std::string countLine(std::uint64_t n, const std::string& what)
     return s.str();
 }
 
+int subFrameCount(const RenderSettings& settings, bool moving, bool lens, bool deep)
+{
+    return deep ? 1 : std::max(moving ? settings.motionBlur.samples : 1, lens ? settings.lensSamples : 1);
+}
+
+RenderSettings subFrameSettings(const RenderSettings& settings, bool moving, int s, int n)
+{
+    RenderSettings part = settings;
+    part.motionBlur.samples = 1;
+    part.lensSamples = 1;
+    if (moving) {
+        const MotionBlur& blur = settings.motionBlur;
+        part.motionBlur.shutterOpen = blur.shutterOpen + (blur.shutterClose - blur.shutterOpen) * double(s) / double(n);
+        part.motionBlur.shutterClose = blur.shutterOpen + (blur.shutterClose - blur.shutterOpen) * double(s + 1) / double(n);
+    }
+    return part;
+}
+
 void addToAverage(Frame& average, Frame&& sub, int s, int n)
 {
     const float w = 1.0f / float(n);

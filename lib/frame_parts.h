@@ -43,6 +43,14 @@ MemoryBudget budgetFor(const GridSource::Impl& grid, const RenderSettings& setti
 /// "@a n @a what": a warning line.
 std::string countLine(std::uint64_t n, const std::string& what);
 
+/// How many sub-frames a frame averages (Renderer::renderSubFrames): the motion samples where
+/// the grid @a moving over the shutter, the lens samples through a @a lens; one for a @a deep image.
+int subFrameCount(const RenderSettings& settings, bool moving, bool lens, bool deep);
+
+/// Sub-frame @a s of @a n's settings: one sample each, and (@a moving) the shutter's part
+/// [open + s d, open + (s + 1) d], d = (close - open) / n.
+RenderSettings subFrameSettings(const RenderSettings& settings, bool moving, int s, int n);
+
 /// Sub-frame @a s of @a n added to @a average (the first replaces it): colour and alpha
 /// (premultiplied), transmittance and the passes weighted 1/n; Z, where alpha reaches 0.5, is
 /// the nearest sub-frame's.

@@ -191,17 +191,10 @@ void Renderer::renderSubFrames(const GridSource::Impl& g, const Camera& camera, 
             return;
         }
     }
-    const int n = passes.deep ? 1 : std::max(moving ? blur.samples : 1, lens ? mSettings.lensSamples : 1);
+    const int n = detail::subFrameCount(mSettings, moving, lens, passes.deep);
     for (int s = 0; s < n; ++s) {
-        // Sub-frame s: the shutter's part [open + s d, open + (s + 1) d], d = (close - open) / n,
-        // seen through the lens's part s of n.
-        RenderSettings part = mSettings;
-        part.motionBlur.samples = 1;
-        part.lensSamples = 1;
-        if (moving) {
-            part.motionBlur.shutterOpen = blur.shutterOpen + (blur.shutterClose - blur.shutterOpen) * double(s) / double(n);
-            part.motionBlur.shutterClose = blur.shutterOpen + (blur.shutterClose - blur.shutterOpen) * double(s + 1) / double(n);
-        }
+        // Sub-frame s: the shutter's part s of n, seen through the lens's part s of n.
+        const RenderSettings part = detail::subFrameSettings(mSettings, moving, s, n);
         Frame sub;
         RenderStats subStats;
         Renderer(part).renderFogVolume(g, lens ? camera.throughLensPart(s, n) : camera, passes, sub, subStats, progress);

@@ -72,20 +72,12 @@ void Renderer::renderStreamedFogVolume(const GridSource::Impl& g, const Camera& 
     // budget, renderSubFrames renders them one after the other.
     const MotionBlur& blur = mSettings.motionBlur;
     const bool moving = movesOverTheShutter(g) && blur.samples > 1, lens = camera.lensRadius() > 0.0 && mSettings.lensSamples > 1;
-    const int n = passes.deep ? 1 : std::max(moving ? blur.samples : 1, lens ? mSettings.lensSamples : 1);
+    const int n = detail::subFrameCount(mSettings, moving, lens, passes.deep);
     const double pixels = double(camera.width()) * double(camera.height());
     if (n > 1 && double(n) * pixels > budget.itemsWithin(0.5, detail::kBytesPerPixel)) return;
     std::vector<std::unique_ptr<StreamedView>> views;
     for (int s = 0; s < n; ++s) {
-        RenderSettings part = mSettings;
-        if (n > 1) {
-            part.motionBlur.samples = 1;
-            part.lensSamples = 1;
-        }
-        if (moving) {
-            part.motionBlur.shutterOpen = blur.shutterOpen + (blur.shutterClose - blur.shutterOpen) * double(s) / double(n);
-            part.motionBlur.shutterClose = blur.shutterOpen + (blur.shutterClose - blur.shutterOpen) * double(s + 1) / double(n);
-        }
+        RenderSettings part = n > 1 ? detail::subFrameSettings(mSettings, moving, s, n) : mSettings;
         views.push_back(std::make_unique<StreamedView>(std::move(part), lens ? camera.throughLensPart(s, n) : camera));
     }
     stats.streamed = true;
