@@ -332,6 +332,22 @@ std::uint64_t peakResidentBytes()
     return kB * 1024u;
 }
 
+void Renderer::renderGrid(const GridSource::Impl& g, const Camera& camera, const PassRequest& passes, Frame& frame, RenderStats& stats,
+    detail::Progress& progress) const
+{
+    if (g.grid->getGridClass() == openvdb::GRID_LEVEL_SET) {
+        renderLevelSet(g, camera, passes, frame, stats, progress);
+    } else if (mSettings.method == Method::RayMarch) {
+        frame = detail::rayMarchReference(g, camera, mSettings, passes, stats, &progress);
+    } else if (mSettings.method == Method::RayMarchGaussian) {
+        frame = detail::rayMarchGaussianSum(g, camera, mSettings, passes, stats, &progress);
+    } else if ((movesOverTheShutter(g) && mSettings.motionBlur.samples > 1) || (camera.lensRadius() > 0.0 && mSettings.lensSamples > 1)) {
+        renderSubFrames(g, camera, passes, frame, stats, progress);
+    } else {
+        renderFogVolume(g, camera, passes, frame, stats, progress);
+    }
+}
+
 Image Renderer::render(const GridSource& grid, const Camera& camera, RenderStats* statsOut, Interrupter* interrupter) const
 {
     return renderFrame(grid, camera, PassRequest{}, statsOut, interrupter).beauty;
@@ -359,17 +375,14 @@ Frame Renderer::renderFrame(const GridSource& grid, const Camera& camera, const 
     const GridSource::Impl& g = grid.impl();
     budgetFor(g, mSettings).check(double(camera.width()) * double(camera.height()), "pixels", detail::kBytesPerPixel);
     auto run = [&] {
-        if (grid.isLevelSet()) {
-            renderLevelSet(g, camera, passes, frame, stats, progress);
-        } else if (mSettings.method == Method::RayMarch) {
-            frame = detail::rayMarchReference(g, camera, mSettings, passes, stats, &progress);
-        } else if (mSettings.method == Method::RayMarchGaussian) {
-            frame = detail::rayMarchGaussianSum(g, camera, mSettings, passes, stats, &progress);
-        } else if ((movesOverTheShutter(g) && mSettings.motionBlur.samples > 1) || (camera.lensRadius() > 0.0 && mSettings.lensSamples > 1)) {
-            renderSubFrames(g, camera, passes, frame, stats, progress);
-        } else {
-            renderFogVolume(g, camera, passes, frame, stats, progress);
+        if (g.addedMaterials.empty()) {
+            renderGrid(g, camera, passes, frame, stats, progress);
+            return;
         }
+        // Volumes with optical models of their own: mixed into one for this render's medium.
+        const detail::MixedFrame mixed = detail::mixMaterials(g, mSettings);
+        Renderer(mixed.settings).renderGrid(*mixed.grid, camera, passes, frame, stats, progress);
+        stats.warnings.insert(stats.warnings.begin(), mixed.warnings.begin(), mixed.warnings.end());
     };
     if (mSettings.threads > 0) {
         tbb::task_arena arena(mSettings.threads);

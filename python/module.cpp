@@ -209,17 +209,40 @@ PYBIND11_MODULE(vdb_ewa, m)
             "The same grid moved by a 4x4 object-to-world matrix, column vectors: world = M @ (x, y, z, 1) (Blender's\n"
             "matrix_world); its colour and emission grids move with it, also those the render attaches by name.\n"
             "Raises vdb_ewa.ValueError for a matrix that is not 4x4, finite, affine and invertible.")
-        .def("with_added_volume", [](const GridSource& g, const GridSource& other) {
-            py::gil_scoped_release release; // resamples and sums the fields
-            return g.withAddedVolume(other);
+        .def("with_added_volume", [](const GridSource& g, const GridSource& other, const py::object& absorb, const py::object& scatter,
+                                         const py::object& emission) {
+            if (absorb.is_none() && scatter.is_none() && emission.is_none()) {
+                py::gil_scoped_release release; // resamples and sums the fields
+                return g.withAddedVolume(other);
+            }
+            Medium medium;
+            for (const auto& [value, name, out] : {std::tuple{&absorb, "absorb", &medium.absorb}, {&scatter, "scatter", &medium.scatter},
+                     {&emission, "emission", &medium.emission}}) {
+                if (value->is_none()) continue;
+                std::vector<double> v;
+                try {
+                    v = py::isinstance<py::sequence>(*value) ? value->cast<std::vector<double>>() : std::vector<double>{value->cast<double>()};
+                } catch (const py::cast_error&) {
+                    throw ValueError(std::string("with_added_volume: ") + name + ": expected a number or (R, G, B)");
+                }
+                if (v.size() != 1 && v.size() != 3) throw ValueError(std::string("with_added_volume: ") + name + ": expected a number or (R, G, B)");
+                *out = v.size() == 1 ? Vec3d(v[0]) : Vec3d(v[0], v[1], v[2]);
+            }
+            py::gil_scoped_release release;
+            return g.withAddedVolume(other, medium);
         },
-            py::arg("other"),
+            py::arg("other"), py::kw_only(), py::arg("absorb") = py::none(), py::arg("scatter") = py::none(), py::arg("emission") = py::none(),
             "This fog volume and another in one field, their densities summed (render's add_volume): both go through\n"
             "one front-to-back sweep, so where they interpenetrate each hides and shadows the other. other is resampled\n"
             "onto this grid's voxels where its transform differs (put the finest volume first), its densities scaled by\n"
             "the voxel lengths' ratio (densities are per voxel length). Velocities attached before (with_velocity_grid) are\n"
             "summed too: the sum moves with both volumes' velocities weighted by their densities (a volume without one\n"
-            "stands still). Colours and emission are this grid's. Raises vdb_ewa.InputError where either is a level set.")
+            "stands still). Colours and emission are this grid's.\n"
+            "With absorb, scatter or emission (a number or (R, G, B), per unit of other's density per voxel length; those\n"
+            "not given take vdb_render's defaults), other has an optical model of its own, and its own colour, emission\n"
+            "and temperature grids (attached to it before): each render mixes them voxel by voxel with its own medium as\n"
+            "this grid's (render's add_volume_material). Raises vdb_ewa.InputError where either is a level set,\n"
+            "vdb_ewa.ValueError for a negative or non-finite coefficient.")
         .def("with_velocity_grid", [](const GridSource& g, const std::string& name) {
             py::gil_scoped_release release; // reads the file
             return g.withVelocityGrid(name);

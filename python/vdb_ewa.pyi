@@ -142,6 +142,7 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
            blackbody_intensity: Optional[Number] = None,
            add_volume: OptionValue = None,
            add_volume_transform: OptionValue = None,
+           add_volume_material: OptionValue = None,
            velocity_grid: OptionValue = None,
            velocity_scale: Optional[Number] = None,
            velocity_unit: OptionValue = None,
@@ -318,6 +319,13 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
         (the last row 0,0,0,1); column vectors, world = M (x, y, z, 1), after the file's own index-to-
         world map, as a DCC object's transform moves its volume (its velocities turn with it); finite,
         affine and invertible; one for every --add-volume, or none (default: none, the identity)
+    add_volume_material (--add-volume-material): the optical model of the --add-volume of the same rank,
+        its own where they interpenetrate: KEY=VALUE words, absorb=R,G,B scatter=R,G,B emission=R,G,B
+        (per unit of its density per voxel length, as --absorb, --scatter, --emission; one number: grey;
+        what it does not name is the input's) and color=GRID emission-grid=GRID temperature=GRID (its
+        file's grids, as --color, --emission-grid, --temperature); 'same': the input's model, colour and
+        emission grids; one for every --add-volume, or none (default: none, every volume takes the
+        input's)
     velocity_grid (--velocity-grid): motion blur: name of the velocity grid in the input file, a vec3s
         or vec3d grid (Houdini's v or vel) or the float grids NAME.x, NAME.y, NAME.z (Blender's); each
         kernel moves linearly over the shutter with the velocity at its centre; naming one turns motion

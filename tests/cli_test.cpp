@@ -625,7 +625,7 @@ TEST_F(Cli, AddsVolumesMovedByTheirTransformsFromTheCommandLineAndAJobFile)
 {
     // A ball and a second ball whose file places it at the origin: moved by its transform (a
     // DCC object's), it renders as the same ball written where the transform puts it; a job
-    // file's volumes list says the same; wrong transforms and per-volume materials fail on one line.
+    // file's volumes list says the same; wrong transforms and volumes fail on one line.
     const auto ball = [](const std::string& name, const Vec3d& move) {
         auto g = makeFogGrid(openvdb::Coord(-5), openvdb::Coord(5), [](const openvdb::Coord& c) { return c.asVec3d().length() < 5.0 ? 0.4f : 0.0f; }, 0.1);
         g->setName(name);
@@ -661,7 +661,8 @@ TEST_F(Cli, AddsVolumesMovedByTheirTransformsFromTheCommandLineAndAJobFile)
         std::ofstream(job) << R"({"input": ")" << a << R"(", "output": ")" << mDir.file("out.exr") << R"(", "res": "48x32", )" << volumes << "}";
         expectFailure("render --job " + job, 2, needle);
     };
-    jobFailure(R"("volumes": [{"file": ")" + b + R"(", "scatter": 2}])", "materials per volume are not supported yet");
+    jobFailure(R"("volumes": [{"file": ")" + b + R"(", "scatter": "x"}])", "volumes[0]: scatter: expected a number or [R, G, B]");
+    jobFailure(R"("volumes": [{"file": ")" + b + R"(", "color": "a b"}])", "volumes[0]: color: expected a grid name");
     jobFailure(R"("volumes": [{"grid": "density"}])", "volumes[0]: no file");
     jobFailure(R"("volumes": [{"file": ")" + b + R"(", "size": 2}])", "unknown key 'size'");
     jobFailure(R"("volumes": [{"file": ")" + b + R"("}], "add-volume": [")" + b + R"("])", "give 'volumes' or 'add-volume', not both");
@@ -675,6 +676,52 @@ TEST_F(Cli, AddsVolumesMovedByTheirTransformsFromTheCommandLineAndAJobFile)
     EXPECT_NE(overwrite.code, 0);
     EXPECT_NE(overwrite.err.find(b), std::string::npos) << overwrite.err;
     EXPECT_NO_THROW(GridSource::open(b)); // untouched
+}
+
+TEST_F(Cli, AddsVolumesWithOpticalModelsOfTheirOwn)
+{
+    // Smoke and a fire in another file with its own medium, colour and emission grids: the
+    // command line, -v's echo of it and a job file's volumes give the same image; 'same' is the
+    // plain sum; the fire's own model changes the image; wrong materials fail on one line.
+    const std::string smoke = mDir.file("smoke.vdb"), fire = mDir.file("fire.vdb");
+    const auto ball = [](float peak) {
+        return makeFogGrid(openvdb::Coord(-6), openvdb::Coord(6), [peak](const openvdb::Coord& c) { return c.asVec3d().length() < 6.0 ? peak : 0.0f; }, 0.1);
+    };
+    openvdb::io::File(smoke).write({ball(0.3f)});
+    auto density = ball(0.2f), flame = ball(0.5f);
+    flame->setName("flame");
+    auto cd = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+    cd->setName("Cd");
+    cd->setTransform(density->transform().copy());
+    cd->tree().topologyUnion(density->tree());
+    cd->tree().voxelizeActiveTiles();
+    for (auto it = cd->beginValueOn(); it; ++it) it.setValue(openvdb::Vec3s(1.0f, 0.3f, 0.1f));
+    openvdb::io::File(fire).write({density, flame, cd});
+    const std::string camera = " -res 32x32 -translate 0.2,0,3 --lookat 0.2,0,0";
+    const std::string material = "absorb=0.4 scatter=1,0.5,0.2 emission=0.2,0.1,0 color=Cd emission-grid=flame";
+    const std::string base = smoke + " " + mDir.file("own.exr") + camera + " --add-volume " + fire + " --add-volume-transform 1,0,0,0.4,0,1,0,0,0,0,1,0";
+    const CliRun run = runCli(mDir, base + " --add-volume-material \"" + material + "\" -v");
+    ASSERT_EQ(run.code, 0) << run.err;
+    EXPECT_NE(run.out.find("--add-volume-material \"" + material + "\""), std::string::npos) << run.out;
+    const Image own = readExr(mDir.file("own.exr"));
+    ASSERT_EQ(runCli(mDir, smoke + " " + mDir.file("same.exr") + camera + " --add-volume " + fire + " --add-volume-transform 1,0,0,0.4,0,1,0,0,0,0,1,0 --add-volume-material same").code, 0);
+    ASSERT_EQ(runCli(mDir, smoke + " " + mDir.file("sum.exr") + camera + " --add-volume " + fire + " --add-volume-transform 1,0,0,0.4,0,1,0,0,0,0,1,0").code, 0);
+    EXPECT_EQ(maxAbsDiff(readExr(mDir.file("same.exr")), readExr(mDir.file("sum.exr"))), 0.0f) << "'same' is the plain sum";
+    EXPECT_GT(maxAbsDiff(own, readExr(mDir.file("sum.exr"))), 0.05f) << "the fire's own model shows";
+    const std::string job = mDir.file("own.json");
+    std::ofstream(job) << R"({"input": ")" << smoke << R"(", "output": ")" << mDir.file("job.exr") << R"(", "res": "32x32", "translate": [0.2, 0, 3], "lookat": [0.2, 0, 0],
+        "volumes": [{"file": ")" << fire << R"(", "transform": [[1, 0, 0, 0.4], [0, 1, 0, 0], [0, 0, 1, 0]], "absorb": 0.4, "scatter": [1, 0.5, 0.2],
+                     "emission": [0.2, 0.1, 0], "color": "Cd", "emission-grid": "flame"}]})";
+    const CliRun jobRun = runCli(mDir, "render --job " + job);
+    ASSERT_EQ(jobRun.code, 0) << jobRun.err;
+    EXPECT_EQ(maxAbsDiff(own, readExr(mDir.file("job.exr"))), 0.0f);
+    const std::string out = smoke + " " + mDir.file("out.exr") + camera + " --add-volume " + fire;
+    expectFailure(out + " --add-volume-material same --add-volume-material same", 2, "--add-volume-material: 2 given for 1 --add-volume");
+    expectFailure(out + " --add-volume-material shiny=1", 2, "--add-volume-material 1 ('shiny=1'): unknown key 'shiny'");
+    expectFailure(out + " --add-volume-material absorb=-1", 2, "absorb: each component must be in [0, 1e6]");
+    expectFailure(out + " --add-volume-material absorb=1,2", 2, "absorb: expected R,G,B or one number");
+    expectFailure(out + " --add-volume-material \"same absorb=1\"", 2, "give it alone");
+    expectFailure(out + " --add-volume-material color=nope", 3, "nope");
 }
 
 TEST_F(Cli, LightsAFireFromInsideWithPointAndSpotLights)

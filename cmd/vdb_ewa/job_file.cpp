@@ -54,18 +54,20 @@ std::string transformText(const nlohmann::json& transform, const std::string& wh
     return text;
 }
 
-/// The job file's `volumes` list as --add-volume and --add-volume-transform arguments: each
-/// entry an object with `file`, and optionally `grid` and `transform`.
+/// The job file's `volumes` list as --add-volume, --add-volume-transform and
+/// --add-volume-material arguments: each entry an object with `file`, and optionally `grid`,
+/// `transform` and its own optical model (`absorb`, `scatter`, `emission`: a number or
+/// [R, G, B]; `color`, `emission-grid`, `temperature`: grid names).
 std::vector<std::string> volumeArguments(const nlohmann::json& volumes, const std::string& where)
 {
     if (!volumes.is_array() || volumes.empty()) throw ValueError(where + ": expected a list of volumes, each {\"file\": ..., \"grid\": ..., \"transform\": ...}");
-    std::vector<std::string> args, transforms;
-    bool anyTransform = false;
+    std::vector<std::string> args, transforms, materials;
+    bool anyTransform = false, anyMaterial = false;
     for (std::size_t i = 0; i < volumes.size(); ++i) {
         const nlohmann::json& v = volumes[i];
         const std::string at = where + "[" + std::to_string(i) + "]";
         if (!v.is_object()) throw ValueError(at + ": expected an object {\"file\": ..., \"grid\": ..., \"transform\": ...}");
-        std::string file, grid, transform = "1,0,0,0,0,1,0,0,0,0,1,0";
+        std::string file, grid, transform = "1,0,0,0,0,1,0,0,0,0,1,0", material;
         for (const auto& [key, value] : v.items()) {
             if (key == "file" || key == "grid") {
                 if (!value.is_string() || value.get<std::string>().empty()) throw ValueError(at + ": " + key + ": expected a name");
@@ -73,18 +75,30 @@ std::vector<std::string> volumeArguments(const nlohmann::json& volumes, const st
             } else if (key == "transform") {
                 transform = transformText(value, at + ": transform");
                 anyTransform = true;
-            } else if (key == "absorb" || key == "scatter" || key == "emission" || key == "color" || key == "emission-grid" || key == "temperature") {
-                throw ValueError(at + ": " + key + ": a volume takes the frame's optical model (--absorb, --scatter, --emission; colours and "
-                                 "emission from the input's grids): materials per volume are not supported yet");
+            } else if (key == "absorb" || key == "scatter" || key == "emission") { // its own optical model: --add-volume-material
+                std::string rgb;
+                for (const auto& c : value.is_array() ? value : nlohmann::json::array({value})) {
+                    if (!c.is_number()) throw ValueError(at + ": " + key + ": expected a number or [R, G, B]");
+                    rgb += (rgb.empty() ? "" : ",") + word(c, at + ": " + key);
+                }
+                material += (material.empty() ? "" : " ") + key + "=" + rgb;
+            } else if (key == "color" || key == "emission-grid" || key == "temperature") {
+                if (!value.is_string() || value.get<std::string>().empty() || value.get<std::string>().find_first_of(" \t") != std::string::npos) {
+                    throw ValueError(at + ": " + key + ": expected a grid name (without spaces)");
+                }
+                material += (material.empty() ? "" : " ") + key + "=" + value.get<std::string>();
             } else {
-                throw ValueError(at + ": unknown key '" + key + "' (file, grid, transform)");
+                throw ValueError(at + ": unknown key '" + key + "' (file, grid, transform, absorb, scatter, emission, color, emission-grid, temperature)");
             }
         }
         if (file.empty()) throw ValueError(at + ": no file");
         args.insert(args.end(), {"--add-volume", grid.empty() ? file : file + ":" + grid});
         transforms.insert(transforms.end(), {"--add-volume-transform", transform});
+        materials.insert(materials.end(), {"--add-volume-material", material.empty() ? "same" : material});
+        anyMaterial = anyMaterial || !material.empty();
     }
     if (anyTransform) args.insert(args.end(), transforms.begin(), transforms.end());
+    if (anyMaterial) args.insert(args.end(), materials.begin(), materials.end());
     return args;
 }
 
@@ -160,8 +174,8 @@ std::vector<std::string> jobArguments(const std::string& path, const std::vector
             continue;
         }
         if (key == "job") throw ValueError(where + ": a job file cannot name another job file");
-        if (key == "volumes") { // --add-volume and --add-volume-transform, one entry a volume
-            if (job.contains("add-volume") || job.contains("add-volume-transform")) {
+        if (key == "volumes") { // --add-volume, --add-volume-transform and --add-volume-material, one entry a volume
+            if (job.contains("add-volume") || job.contains("add-volume-transform") || job.contains("add-volume-material")) {
                 throw ValueError(where + ": give 'volumes' or 'add-volume', not both");
             }
             if (contains(givenOnCommandLine, "add-volume")) continue;

@@ -20,7 +20,9 @@ namespace vdb_ewa::cli {
 /// (`"aov": ["shadow", "emission"]`), arrays of arrays repeat the option once per inner array
 /// (`"light": [[1, 1, 0], [-1, 0.5, 0, 0.2, 0.3, 0.6]]`). One key is not an option: `volumes`,
 /// a list of objects `{"file": F, "grid": G, "transform": [[4 rows of 4]]}` (grid and transform
-/// optional), given as --add-volume F:G and --add-volume-transform, one each.
+/// optional) with, optionally, the volume's own optical model (`absorb`, `scatter`, `emission`,
+/// `color`, `emission-grid`, `temperature`), given as --add-volume F:G, --add-volume-transform
+/// and --add-volume-material, one each.
 /// @throw IoError (unreadable, not JSON) or ValueError (unknown key, wrong value) naming the
 ///        file and the key.
 std::vector<std::string> jobArguments(const std::string& path, const std::vector<std::string>& knownOptions,

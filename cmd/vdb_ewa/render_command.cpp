@@ -312,10 +312,12 @@ private:
         for (std::size_t g = 0; g < groups.size(); ++g) {
             out << "\nvdb_ewa: " << titles[g];
             for (const auto& [key, value] : groups[g]) {
-                if (key == "light" || key == "point-light" || key == "spot-light" || key == "add-volume" || key == "add-volume-transform") { // one option each (lightsText)
+                if (key == "light" || key == "point-light" || key == "spot-light" || key == "add-volume" || key == "add-volume-transform" ||
+                    key == "add-volume-material") { // one option each (lightsText)
                     for (std::size_t at = 0, end; at != std::string::npos; at = end == std::string::npos ? end : end + 2) {
                         end = value.find("; ", at);
-                        out << " --" << key << " " << value.substr(at, end == std::string::npos ? end : end - at);
+                        const std::string one = value.substr(at, end == std::string::npos ? end : end - at);
+                        out << " --" << key << " " << (one.find(' ') != std::string::npos ? "\"" + one + "\"" : one);
                     }
                     continue;
                 }

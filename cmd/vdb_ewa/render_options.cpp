@@ -195,6 +195,13 @@ void RenderOptions::add(CLI::App* app)
             "after the file's own index-to-world map, as a DCC object's transform moves its volume (its velocities turn "
             "with it); finite, affine and invertible; one for every --add-volume, or none (default: none, the identity)")
         ->allow_extra_args(false);
+    mApp->add_option("--add-volume-material", mAddVolumeMaterials,
+            "the optical model of the --add-volume of the same rank, its own where they interpenetrate: KEY=VALUE words, "
+            "absorb=R,G,B scatter=R,G,B emission=R,G,B (per unit of its density per voxel length, as --absorb, --scatter, "
+            "--emission; one number: grey; what it does not name is the input's) and color=GRID emission-grid=GRID "
+            "temperature=GRID (its file's grids, as --color, --emission-grid, --temperature); 'same': the input's model, "
+            "colour and emission grids; one for every --add-volume, or none (default: none, every volume takes the input's)")
+        ->allow_extra_args(false);
     // Motion blur (fog volumes).
     const MotionBlur mb;
     mApp->add_option("--velocity-grid", mVelocityGrid,
@@ -288,6 +295,11 @@ void RenderOptions::resolve(std::optional<int> frame, CameraSettings& cam, Rende
                          std::to_string(mAddVolumes.size()) + " --add-volume; give one for each, in the same order");
     }
     for (std::size_t i = 0; i < mAddVolumeTransforms.size(); ++i) addedVolumeTransform(i); // each checked before any file is read
+    if (!mAddVolumeMaterials.empty() && mAddVolumeMaterials.size() != mAddVolumes.size()) {
+        throw ValueError("--add-volume-material: " + std::to_string(mAddVolumeMaterials.size()) + " given for " +
+                         std::to_string(mAddVolumes.size()) + " --add-volume; give one for each, in the same order ('same': the input's)");
+    }
+    for (std::size_t i = 0; i < mAddVolumeMaterials.size(); ++i) addedVolumeMaterial(i);
     if (!mLights.empty()) {
         const Light defaults;
         rs.lights.clear();
@@ -449,7 +461,15 @@ GridSource RenderOptions::withExtraGrids(const GridSource& opened) const
         const GridSource opened = GridSource::open(file, grid);
         const GridSource added = moving(mAddVolumeTransforms.empty() ? opened : opened.transformed(addedVolumeTransform(i)));
         moves = moves || added.hasVelocityGrid();
-        summed = summed.withAddedVolume(added);
+        const std::optional<VolumeMaterial> material = mAddVolumeMaterials.empty() ? std::nullopt : addedVolumeMaterial(i);
+        if (!material) {
+            summed = summed.withAddedVolume(added);
+            continue;
+        }
+        GridSource own = material->color.empty() ? added : added.withColorGrid(material->color);
+        if (!material->emissionGrid.empty()) own = own.withEmissionGrid(material->emissionGrid);
+        if (!material->temperature.empty()) own = own.withTemperatureGrid(material->temperature);
+        summed = summed.withAddedVolume(own, material->medium);
     }
     if (noVelocity && !moves) std::rethrow_exception(noVelocity);
     GridSource grid = mColor.empty() ? summed : summed.withColorGrid(mColor);
@@ -548,6 +568,11 @@ std::vector<Attributes> RenderOptions::resolvedOptions(const GridSource& grid, c
         for (const std::string& v : mAddVolumes) volumes += (volumes.empty() ? "" : "; ") + v;
         model.emplace_back("add-volume", volumes);
     }
+    if (!mAddVolumeMaterials.empty()) {
+        std::string materials;
+        for (const std::string& m : mAddVolumeMaterials) materials += (materials.empty() ? "" : "; ") + m;
+        model.emplace_back("add-volume-material", materials);
+    }
     if (!mAddVolumeTransforms.empty()) {
         std::string transforms;
         for (const std::string& t : mAddVolumeTransforms) transforms += (transforms.empty() ? "" : "; ") + t;
@@ -641,6 +666,49 @@ Mat4d RenderOptions::addedVolumeTransform(std::size_t i) const
         throw ValueError(where + ": the last row must be 0,0,0,1 (an affine transform)");
     }
     if (!(std::abs(glm::determinant(Mat3d(m))) > 1e-300)) throw ValueError(where + ": the matrix is singular");
+    return m;
+}
+
+std::optional<RenderOptions::VolumeMaterial> RenderOptions::addedVolumeMaterial(std::size_t i) const
+{
+    const std::string& text = mAddVolumeMaterials[i];
+    const std::string where = "--add-volume-material " + std::to_string(i + 1) + " ('" + text.substr(0, 120) + "')";
+    std::istringstream words(text);
+    std::string word;
+    VolumeMaterial m;
+    if (!mAbsorb.empty()) m.medium.absorb = parseVec3("absorb", mAbsorb, true);
+    if (!mScatter.empty()) m.medium.scatter = parseVec3("scatter", mScatter, true);
+    if (!mEmission.empty()) m.medium.emission = parseVec3("emission", mEmission, true);
+    bool any = false, same = false;
+    while (words >> word) {
+        if (word == "same") {
+            same = true;
+            continue;
+        }
+        any = true;
+        const std::size_t eq = word.find('=');
+        const std::string key = word.substr(0, eq), value = eq == std::string::npos ? "" : word.substr(eq + 1);
+        if (eq == std::string::npos || value.empty()) throw ValueError(where + ": expected KEY=VALUE words, got '" + word.substr(0, 60) + "'");
+        if (key == "absorb" || key == "scatter" || key == "emission") {
+            Vec3d v;
+            try {
+                v = parseVec3(key, value, true);
+            } catch (const ValueError&) {
+                throw ValueError(where + ": " + key + ": expected R,G,B or one number, got '" + value.substr(0, 60) + "'");
+            }
+            for (int c = 0; c < 3; ++c) {
+                if (!(v[c] >= 0.0 && v[c] <= 1e6)) throw ValueError(where + ": " + key + ": each component must be in [0, 1e6]");
+            }
+            (key == "absorb" ? m.medium.absorb : key == "scatter" ? m.medium.scatter : m.medium.emission) = v;
+        } else if (key == "color" || key == "emission-grid" || key == "temperature") {
+            (key == "color" ? m.color : key == "emission-grid" ? m.emissionGrid : m.temperature) = value;
+        } else {
+            throw ValueError(where + ": unknown key '" + key.substr(0, 60) + "' (absorb, scatter, emission, color, emission-grid, temperature)");
+        }
+    }
+    if (same && any) throw ValueError(where + ": 'same' takes the input's optical model; give it alone, or KEY=VALUE words without it");
+    if (!same && !any) throw ValueError(where + ": empty; give KEY=VALUE words, or 'same' for the input's optical model");
+    if (same) return std::nullopt;
     return m;
 }
 

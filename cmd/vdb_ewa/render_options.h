@@ -77,6 +77,15 @@ public:
     std::vector<std::string> addedVolumeFiles() const;
     /// The i-th --add-volume-transform as a matrix (column vectors). @throw ValueError naming it.
     Mat4d addedVolumeTransform(std::size_t i) const;
+    /// The i-th --add-volume-material: the volume's own medium (input space; what it does not
+    /// name is the input's --absorb, --scatter, --emission) and grids, or none ("same": the
+    /// input's optical model). @throw ValueError naming it.
+    struct VolumeMaterial
+    {
+        Medium medium;
+        std::string color, emissionGrid, temperature;
+    };
+    std::optional<VolumeMaterial> addedVolumeMaterial(std::size_t i) const;
     /// --add-volume's FILE[:GRID] as (file, grid): the whole text where it names a file.
     static std::pair<std::string, std::string> splitVolume(const std::string& volume);
     OutputOptions& output() { return mOutputOptions; }
@@ -97,7 +106,7 @@ private:
 
     CLI::App* mApp = nullptr;
     std::string mCameraFile, mName, mRes, mTranslate, mRotate, mLookAt, mUp, mCamera;
-    std::vector<std::string> mLights, mPointLights, mSpotLights, mAddVolumes, mAddVolumeTransforms;
+    std::vector<std::string> mLights, mPointLights, mSpotLights, mAddVolumes, mAddVolumeTransforms, mAddVolumeMaterials;
     std::optional<double> mPointLightRadius;
     std::string mAbsorb, mScatter, mEmission, mAmbient, mAa, mMethod, mQuality, mExp, mRenormalize, mTaper, mPrefilter, mPrecision;
     std::optional<int> mTileSpacing, mRefine, mRefineEmission, mSamples;

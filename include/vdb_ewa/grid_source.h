@@ -12,6 +12,8 @@
 
 namespace vdb_ewa {
 
+struct Medium;
+
 class VDB_EWA_API GridSource
 {
 public:
@@ -62,6 +64,20 @@ public:
     /// stands still). Colours and emission are this grid's. The sum is clamped as one density is (1e6).
     /// @throw InputError where either is a level set.
     GridSource withAddedVolume(const GridSource& other) const;
+
+    /// As withAddedVolume(other), @a other with an optical model of its own: @a medium's
+    /// absorb, scatter and emission per unit of its density per voxel length, and the colour,
+    /// emission and temperature grids attached to @a other (withColorGrid, withEmissionGrid,
+    /// withTemperatureGrid) in place of this grid's. Each render mixes the volumes where they
+    /// interpenetrate, voxel by voxel, with the render's RenderSettings::medium as this grid's:
+    /// extinctions and scattered and emitted light add, each weighed by its own density
+    /// (docs/equations.md#volumes-with-optical-models-of-their-own). @a medium's colours are
+    /// taken in the input space, as the colour grid's (RenderSettings::inputToWorking). Light
+    /// maps march one extinction colour: a volume whose extinction is not in proportion to this
+    /// grid's (another hue) is taken as grey at its mean, its scattered light kept (the render
+    /// warns). @throw InputError as withAddedVolume; ValueError for a negative or non-finite
+    /// coefficient.
+    GridSource withAddedVolume(const GridSource& other, const Medium& medium) const;
 
     /// The same grid moved by @a objectToWorld (column vectors: world = M (x, y, z, 1); a DCC
     /// object's transform, e.g. Blender's matrix_world): its index-to-world map is followed by

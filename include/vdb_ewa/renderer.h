@@ -96,6 +96,9 @@ public:
         RenderStats* stats = nullptr, Interrupter* interrupter = nullptr) const;
 
 private:
+    /// @a grid by its kind and the method: a level set, the reference, sub-frames or one frame.
+    VDB_EWA_LOCAL void renderGrid(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes, Frame& frame,
+        RenderStats& stats, detail::Progress& progress) const;
     /// Level sets: flattened surface kernels (Sec. 6.3, 6.4) and a z-buffer (Sec. 7.2).
     VDB_EWA_LOCAL void renderLevelSet(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes, Frame& frame,
         RenderStats& stats, detail::Progress& progress) const;

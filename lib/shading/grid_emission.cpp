@@ -64,10 +64,24 @@ Vec3d EmissionModel::blackbodyColour(double value) const
     return (1.0 - f) * mTable[std::size_t(i)] + f * mTable[std::size_t(i) + 1];
 }
 
+namespace {
+
+/// The emission colour per voxel (GridSource::Impl::emissionColor) at index point @a p; white
+/// without one.
+Vec3d emissionColor(std::optional<openvdb::Vec3SGrid::ConstAccessor>& acc, const openvdb::Vec3d& p)
+{
+    if (!acc) return Vec3d(1.0);
+    const openvdb::Vec3s c = openvdb::tools::BoxSampler::sample(*acc, p);
+    return Vec3d(c.x(), c.y(), c.z());
+}
+
+} // namespace
+
 EmissionSampler::EmissionSampler(const GridSource::Impl& grid, const EmissionModel* model) : mModel(model)
 {
     if (!model) return;
     if (grid.emission) mEmission.emplace(grid.emission->field->getConstAccessor());
+    if (grid.emissionColor) mEmissionColor.emplace(grid.emissionColor->getConstAccessor());
     if (grid.temperature) mTemperature.emplace(grid.temperature->field->getConstAccessor());
 }
 
@@ -75,7 +89,9 @@ Vec3d EmissionSampler::at(const Vec3d& pIndex)
 {
     const openvdb::Vec3d p(pIndex.x, pIndex.y, pIndex.z);
     Vec3d out(0.0);
-    if (mEmission) out += mModel->emitted(double(openvdb::tools::BoxSampler::sample(*mEmission, p)));
+    if (mEmission) {
+        out += mModel->emitted(double(openvdb::tools::BoxSampler::sample(*mEmission, p))) * emissionColor(mEmissionColor, p);
+    }
     if (mTemperature && inTemperatureCell(*mTemperature, p)) {
         out += mModel->blackbody(double(openvdb::tools::BoxSampler::sample(*mTemperature, p)));
     }
@@ -431,10 +447,26 @@ EmitterKernels emitterKernels(const GridSource::Impl& grid, const RenderSettings
         KernelSet set = kernelsOf(*grid.emission, grid, settings, lod, progress, budget);
         const Vec3d c = model.emitted(1.0);
         const Rgb colour{float(c.x), float(c.y), float(c.z)};
+        // Times the colour per voxel where there is one (a mixed frame's), at each kernel.
+        const auto coloured = [c](std::optional<openvdb::Vec3SGrid::ConstAccessor>& acc, const openvdb::Vec3d& p) {
+            const Vec3d e = c * emissionColor(acc, p);
+            return Rgb{float(e.x), float(e.y), float(e.z)};
+        };
         std::vector<Rgb> radiance(set.kernels.size(), colour);
+        if (grid.emissionColor) {
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, radiance.size(), 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+                std::optional<openvdb::Vec3SGrid::ConstAccessor> acc(grid.emissionColor->getConstAccessor());
+                for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                    const Vec3d& p = set.kernels[i].pIndex;
+                    radiance[i] = coloured(acc, openvdb::Vec3d(p.x, p.y, p.z));
+                }
+            });
+        }
         refine(set, radiance, *grid.emission->field, [&] {
-            return [acc = grid.emission->field->getConstAccessor(), colour](const openvdb::Vec3d& p) mutable {
-                return LightSample{std::max(double(openvdb::tools::BoxSampler::sample(acc, p)), 0.0), colour};
+            std::optional<openvdb::Vec3SGrid::ConstAccessor> chroma;
+            if (grid.emissionColor) chroma.emplace(grid.emissionColor->getConstAccessor());
+            return [acc = grid.emission->field->getConstAccessor(), chroma, coloured](const openvdb::Vec3d& p) mutable {
+                return LightSample{std::max(double(openvdb::tools::BoxSampler::sample(acc, p)), 0.0), coloured(chroma, p)};
             };
         });
         append(out, set, radiance);

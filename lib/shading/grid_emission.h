@@ -78,6 +78,7 @@ public:
 private:
     const EmissionModel* mModel;
     std::optional<openvdb::FloatGrid::ConstAccessor> mEmission, mTemperature;
+    std::optional<openvdb::Vec3SGrid::ConstAccessor> mEmissionColor; ///< GridSource::Impl::emissionColor
 };
 
 /// The splatter's kernels of a grid's emission and temperature grids, none without either:

@@ -8,6 +8,7 @@
 #include "shading/blackbody.h"
 #include "shading/grid_emission.h"
 #include "shading/light_map.h"
+#include "shading/material_mix.h"
 #include "shading/optical_model.h"
 #include "shading/point_light_map.h"
 #include "shading/shadow_transmittance.h"

@@ -257,6 +257,12 @@ std::shared_ptr<GridSource::Impl> movedImpl(const GridSource::Impl& impl, const 
     copy->velocityToWorld = Mat3d(m) * impl.velocityToWorld;
     if (impl.emission) copy->emission = movedImpl(*impl.emission, m);
     if (impl.temperature) copy->temperature = movedImpl(*impl.temperature, m);
+    copy->emissionColor = moved<openvdb::Vec3SGrid>(impl.emissionColor, m);
+    copy->ownDensity = moved<openvdb::FloatGrid>(impl.ownDensity, m);
+    for (GridSource::Impl::AddedMaterial& added : copy->addedMaterials) {
+        added.density = moved<openvdb::FloatGrid>(added.density, m);
+        added.volume = movedImpl(*added.volume, m);
+    }
     copy->placement = m * impl.placement;
     copy->derive();
     return copy;
@@ -464,40 +470,76 @@ openvdb::Vec3SGrid::Ptr summedVolumeVelocity(const GridSource::Impl& base, const
 
 } // namespace
 
-GridSource GridSource::withAddedVolume(const GridSource& other) const
+namespace {
+
+/// This volume (@a base) and @a other summed into one field (withAddedVolume): the sum's Impl,
+/// and @a other's density on @a base's voxels per base's voxel length (@a addedOut).
+std::shared_ptr<GridSource::Impl> summedVolumes(const GridSource::Impl& base, const GridSource::Impl& other, openvdb::FloatGrid::Ptr& addedOut)
 {
+    using Impl = GridSource::Impl;
     const auto where = [](const Impl& impl) { return (impl.path.empty() ? std::string("host grid") : impl.path) + ": grid '" + impl.name + "'"; };
-    for (const Impl* impl : {mImpl.get(), other.mImpl.get()}) {
+    for (const Impl* impl : {&base, &other}) {
         if (impl->grid->getGridClass() == openvdb::GRID_LEVEL_SET) {
             throw InputError(where(*impl) + " is a level set; --add-volume sums fog volumes");
         }
     }
     // The other's field on this grid's voxels, its densities per this grid's voxel length.
     openvdb::FloatGrid::Ptr added;
-    if (other.mImpl->field->transform() == mImpl->grid->transform()) {
-        added = other.mImpl->field->deepCopy();
+    if (other.field->transform() == base.grid->transform()) {
+        added = other.field->deepCopy();
     } else {
         added = openvdb::FloatGrid::create(0.0f);
-        added->setTransform(mImpl->grid->transform().copy());
-        openvdb::tools::resampleToMatch<openvdb::tools::BoxSampler>(*other.mImpl->field, *added);
+        added->setTransform(base.grid->transform().copy());
+        openvdb::tools::resampleToMatch<openvdb::tools::BoxSampler>(*other.field, *added);
     }
     added->tree().voxelizeActiveTiles();
-    const float scale = float(mImpl->voxelLength / other.mImpl->voxelLength);
-    openvdb::FloatGrid::Ptr sum = mImpl->field->deepCopy();
+    const float scale = float(base.voxelLength / other.voxelLength);
+    openvdb::FloatGrid::Ptr sum = base.field->deepCopy();
     auto acc = sum->getAccessor();
-    for (auto it = added->cbeginValueOn(); it; ++it) {
+    for (auto it = added->beginValueOn(); it; ++it) {
         const openvdb::Coord c = it.getCoord();
-        acc.setValueOn(c, fieldValue(acc.getValue(c) + *it * scale));
+        it.setValue(fieldValue(*it * scale));
+        acc.setValueOn(c, fieldValue(acc.getValue(c) + *it));
     }
     sum->setGridClass(openvdb::GRID_FOG_VOLUME);
-    sum->setName(mImpl->name);
-    auto impl = std::make_shared<Impl>(*mImpl);
+    sum->setName(base.name);
+    auto impl = std::make_shared<Impl>(base);
     impl->grid = sum;
     impl->derive();
-    if (mImpl->velocity || other.mImpl->velocity) {
-        impl->velocity = summedVolumeVelocity(*mImpl, *other.mImpl, *added, scale, *sum);
+    if (base.velocity || other.velocity) {
+        impl->velocity = summedVolumeVelocity(base, other, *added, 1.0f, *sum);
         impl->velocityToWorld = Mat3d(1.0);
     }
+    addedOut = added;
+    return impl;
+}
+
+} // namespace
+
+GridSource GridSource::withAddedVolume(const GridSource& other) const
+{
+    openvdb::FloatGrid::Ptr added;
+    auto impl = summedVolumes(*mImpl, *other.mImpl, added);
+    if (!mImpl->addedMaterials.empty()) { // it takes this grid's optical model: one of the own densities
+        openvdb::FloatGrid::Ptr own = mImpl->ownDensity->deepCopy();
+        auto acc = own->getAccessor();
+        for (auto it = added->cbeginValueOn(); it; ++it) acc.setValueOn(it.getCoord(), fieldValue(acc.getValue(it.getCoord()) + *it));
+        impl->ownDensity = own;
+    }
+    return GridSource(impl);
+}
+
+GridSource GridSource::withAddedVolume(const GridSource& other, const Medium& medium) const
+{
+    for (const auto& [name, v] : {std::pair{"absorb", medium.absorb}, {"scatter", medium.scatter}, {"emission", medium.emission}}) {
+        for (int c = 0; c < 3; ++c) {
+            if (!(v[c] >= 0.0 && v[c] <= 1e6)) throw ValueError(std::string("withAddedVolume: the added volume's ") + name + " must be in [0, 1e6]");
+        }
+    }
+    openvdb::FloatGrid::Ptr added;
+    auto impl = summedVolumes(*mImpl, *other.mImpl, added);
+    if (!impl->ownDensity) impl->ownDensity = mImpl->field;
+    impl->addedMaterials.push_back({added, medium, other.mImpl});
     return GridSource(impl);
 }
 

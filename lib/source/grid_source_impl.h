@@ -3,6 +3,9 @@
 #pragma once
 
 #include <vdb_ewa/grid_source.h>
+#include <vdb_ewa/render_settings.h>
+
+#include <vector>
 
 #include "support/openvdb.h"
 
@@ -45,6 +48,25 @@ struct VDB_EWA_LOCAL GridSource::Impl
     openvdb::FloatGrid::ConstPtr field;
     /// The moves of transformed(), composed (column vectors): applied to grids read later.
     Mat4d placement{1.0};
+
+    /// A volume added with an optical model of its own (withAddedVolume(other, medium)): its
+    /// density on this grid's voxels, per this grid's voxel length; its medium (input space);
+    /// and the volume itself, for its colour, emission and temperature grids.
+    struct AddedMaterial
+    {
+        openvdb::FloatGrid::ConstPtr density;
+        Medium medium;
+        std::shared_ptr<const Impl> volume;
+    };
+    /// With volumes of their own optical models: @c field is every volume's density summed (for
+    /// the topology, the bounds and the velocities) and this holds the parts; each render mixes
+    /// them (detail::mixMaterials). @c ownDensity: the densities that take the render's medium
+    /// and this grid's colour and emission grids (this grid's, and volumes added without one).
+    std::vector<AddedMaterial> addedMaterials;
+    openvdb::FloatGrid::ConstPtr ownDensity;
+    /// A mixed frame's emission colour per voxel, multiplying the emission grid's values (the
+    /// volumes' own emission colours and constant emission); null: GridEmission's colour.
+    openvdb::Vec3SGrid::ConstPtr emissionColor;
 
     /// Fill the derived fields from @a grid.
     void derive();

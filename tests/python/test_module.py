@@ -202,6 +202,18 @@ class Module(unittest.TestCase):
         code, err = cli(files[1], self.path("none.exr"), "--velocity-grid", "v", *shot, "-q")
         self.assertEqual(code, 3, err)
         self.assertIn("no grid named 'v'", err)
+        # A volume of its own medium: the keywords are the CLI's --add-volume-material, bit for bit.
+        code, err = cli(files[1], self.path("own_cli.exr"), "--add-volume", files[0], "--add-volume-material",
+                        "absorb=0.5,0.3,0.1 scatter=1", *shot, "--exr-type", "float", "-q")
+        self.assertEqual(code, 0, err)
+        expected, _ = read_exr(self.path("own_cli.exr"))
+        own = vdb_ewa.open(files[1]).with_added_volume(vdb_ewa.open(files[0]), absorb=(0.5, 0.3, 0.1), scatter=1)
+        np.testing.assert_array_equal(vdb_ewa.render(own, **options).beauty, expected[..., :4])
+        self.assertGreater(np.abs(vdb_ewa.render(own, **options).beauty - still.beauty).max(), 0.02)
+        with self.assertRaisesRegex(vdb_ewa.ValueError, "absorb: expected a number or"):
+            vdb_ewa.open(files[1]).with_added_volume(vdb_ewa.open(files[0]), absorb=(1, 2))
+        with self.assertRaisesRegex(vdb_ewa.ValueError, "scatter must be in"):
+            vdb_ewa.open(files[1]).with_added_volume(vdb_ewa.open(files[0]), scatter=-1)
 
     @unittest.skipIf(pyopenvdb is None or oiio is None, "needs Debian's python3-openvdb and python3-openimageio")
     def test_array_velocity_blurs_as_the_cli_blurs_the_same_vectors_from_a_file(self):
