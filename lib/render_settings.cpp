@@ -138,6 +138,7 @@ RenderSettings RenderSettings::preset(Quality quality)
         s.splat.refineEmission = 4;
         s.motionBlur.samples = 4;
         s.motionBlur.splitSigmas = 2.0;
+        s.motionBlur.lightFollows = true;
         s.lensSamples = 8;
         break;
     case Quality::Final: // high, with refined kernels where voxels span 2 pixels or more

@@ -13,6 +13,7 @@
 #include <pybind11/stl.h>
 
 #include <sstream>
+#include <tuple>
 
 namespace py = pybind11;
 using namespace vdb_ewa;
@@ -184,10 +185,10 @@ PYBIND11_MODULE(vdb_ewa, m)
         PyErr_NewExceptionWithDoc("vdb_ewa.RenderWarning", "A setting was clamped or a fallback taken (the CLI's 'warning:' lines).",
             PyExc_UserWarning, nullptr));
 
-    py::class_<GridSource>(m, "Grid",
+    py::class_<GridSource> grid(m, "Grid",
         "A scalar volume to render: a fog volume or a level set, from a .vdb file (vdb_ewa.open) or a numpy array "
-        "(vdb_ewa.from_array).")
-        .def_property_readonly("name", &GridSource::name, "The grid's name.")
+        "(vdb_ewa.from_array).");
+    grid.def_property_readonly("name", &GridSource::name, "The grid's name.")
         .def_property_readonly("path", &GridSource::path, "The file the grid came from; '' for an array.")
         .def_property_readonly("stored_type", &GridSource::storedType, "'float' or 'double': the value type in the file.")
         .def_property_readonly("is_level_set", &GridSource::isLevelSet, "True for a level set (rendered as its iso-surface).")
@@ -243,19 +244,35 @@ PYBIND11_MODULE(vdb_ewa, m)
             "and temperature grids (attached to it before): each render mixes them voxel by voxel with its own medium as\n"
             "this grid's (render's add_volume_material). Raises vdb_ewa.InputError where either is a level set,\n"
             "vdb_ewa.ValueError for a negative or non-finite coefficient.")
-        .def("with_velocity_grid", [](const GridSource& g, const std::string& name) {
-            py::gil_scoped_release release; // reads the file
-            return g.withVelocityGrid(name);
-        },
-            py::arg("name"),
-            "The same grid with motion blur from the velocity grid name of its file (render's velocity_grid, which\n"
-            "attaches it to the input instead): a vec3s or vec3d grid, or the float grids name.x, .y, .z. Attach it\n"
-            "before with_added_volume so that each volume keeps its own motion; velocity_unit, velocity_scale, fps\n"
-            "and shutter still apply. Raises vdb_ewa.IoError or vdb_ewa.InputError (no such grid, wrong type).")
         .def("__repr__", [](const GridSource& g) {
             return "<vdb_ewa.Grid '" + g.name() + "'" + (g.path().empty() ? std::string(" (array)") : " from " + g.path()) + ", " +
                    std::to_string(g.activeVoxelCount()) + " active voxels" + (g.isLevelSet() ? ", level set>" : ">");
         });
+    // The grids of a volume's own file attached by name: each reads the file.
+    using Attach = GridSource (GridSource::*)(const std::string&) const;
+    const std::tuple<const char*, Attach, const char*> attachers[] = {
+        {"with_velocity_grid", &GridSource::withVelocityGrid,
+            "The same grid with motion blur from the velocity grid name of its file (render's velocity_grid, which\n"
+            "attaches it to the input instead): a vec3s or vec3d grid, or the float grids name.x, .y, .z. Attach it\n"
+            "before with_added_volume so that each volume keeps its own motion; velocity_unit, velocity_scale, fps\n"
+            "and shutter still apply. Raises vdb_ewa.IoError or vdb_ewa.InputError (no such grid, wrong type)."},
+        {"with_color_grid", &GridSource::withColorGrid,
+            "The same grid with material colours from the vec3s grid name of its file (render's color attaches it to\n"
+            "the input instead): attach it to a volume before with_added_volume(other, absorb=..., scatter=...) to give\n"
+            "that volume its own colours. Raises vdb_ewa.IoError or vdb_ewa.InputError (no such grid, wrong type)."},
+        {"with_emission_grid", &GridSource::withEmissionGrid,
+            "The same grid with emission from the float grid name of its file (render's emission_grid, for the\n"
+            "input), for a volume added with an optical model of its own. Raises vdb_ewa.IoError or vdb_ewa.InputError."},
+        {"with_temperature_grid", &GridSource::withTemperatureGrid,
+            "The same grid with blackbody emission from the float grid name of its file (render's temperature, for\n"
+            "the input), for a volume added with an optical model of its own; the render's temperature_scale,\n"
+            "temperature_offset and blackbody_intensity apply. Raises vdb_ewa.IoError or vdb_ewa.InputError."}};
+    for (const auto& [name, attach, doc] : attachers) {
+        grid.def(name, [attach = attach](const GridSource& g, const std::string& gridName) {
+            py::gil_scoped_release release;
+            return (g.*attach)(gridName);
+        }, py::arg("name"), doc);
+    }
 
     m.def("open", [](const py::object& path, const std::string& name) {
         const std::string p = py::module_::import("os").attr("fspath")(path).cast<std::string>();

@@ -585,6 +585,7 @@ TEST_F(Cli, MotionBlursAPyroShotAndFocusesItsLens)
     EXPECT_NE(moving.out.find("moving over the shutter"), std::string::npos) << moving.out;
     EXPECT_EQ(readImageFile(blurred).spec.get_string_attribute("vdb_ewa/velocity-grid"), "v");
     EXPECT_EQ(readImageFile(blurred).spec.get_string_attribute("vdb_ewa/shutter"), "-0.25,0.25");
+    EXPECT_EQ(readImageFile(blurred).spec.get_string_attribute("vdb_ewa/motion-light"), "still");
     EXPECT_GT(maxAbsDiff(readExr(still), readExr(blurred)), 0.02) << "the blur shows";
     ASSERT_EQ(runCli(mDir, file + " " + split + camera + " --velocity-grid vel").code, 0);
     EXPECT_EQ(maxAbsDiff(readExr(blurred), readExr(split)), 0.0) << "split components are the same vectors";
@@ -601,6 +602,7 @@ TEST_F(Cli, MotionBlursAPyroShotAndFocusesItsLens)
     expectFailure(file + " " + mDir.file("out.exr") + camera + " --velocity-grid density", 3, "needs a vec3s or vec3d grid");
     expectFailure(file + " " + mDir.file("out.exr") + camera + " --velocity-grid v --shutter 0.5", 2, "--shutter");
     expectFailure(file + " " + mDir.file("out.exr") + camera + " --velocity-grid v --shutter 0.5,0", 2, "--shutter");
+    expectFailure(file + " " + mDir.file("out.exr") + camera + " --velocity-grid v --motion-light moving", 2, "--motion-light");
     const CliRun unused = runCli(mDir, file + " " + mDir.file("unused.exr") + camera + " --shutter 0,1");
     EXPECT_NE(unused.err.find("--shutter changes nothing without --velocity-grid"), std::string::npos) << unused.err;
 

@@ -25,6 +25,7 @@ const Choices<ExpEvaluation> kExpEvaluations = {
 const Choices<bool> kOnOff = {{"on", true}, {"off", false}};
 const Choices<bool> kPrecisions = {{"double", true}, {"float", false}}; // doublePrecision
 const Choices<VelocityUnit> kVelocityUnits = {{"second", VelocityUnit::Second}, {"frame", VelocityUnit::Frame}};
+const Choices<bool> kMotionLights = {{"follow", true}, {"still", false}};
 const Choices<SurfaceShader> kShaders = {{"diffuse", SurfaceShader::Diffuse}, {"matte", SurfaceShader::Matte},
     {"normal", SurfaceShader::Normal}, {"position", SurfaceShader::Position}};
 
@@ -223,6 +224,11 @@ void RenderOptions::add(CLI::App* app)
         "deviations is split into sub-kernels of at most that length; smaller keeps the blur's box shape closer (a single "
         "kernel's blur within 1.2 % of its peak at 2, 4.6 % at 3, 11 % at 4) at the cost of more kernels; in [0.5, 64] "
         "(default: " + fmt(mb.splitSigmas) + "; draft 4, high and final 2)");
+    mApp->add_option("--motion-light", mMotionLight,
+        "motion blur: follow (each slab sample lit where its material was in the still field, as the reference carries "
+        "each point's light along its path) or still (lit by the still field's light where the material is now: the "
+        "shutter's mid-time shadows, about 1.2x faster and 2 dB further from the reference on pyro) "
+        "(default: " + std::string(mb.lightFollows ? "follow" : "still") + "; draft still, high and final follow)");
     mApp->add_option("--lens-samples", mLensSamples,
         "depth of field: sub-frames, each through its own part of the lens (rings of sectors of equal area) and blurred by "
         "that part's circle of confusion, averaged; widened kernels blur optical depth where a camera averages images, so "
@@ -398,6 +404,7 @@ void RenderOptions::resolve(std::optional<int> frame, CameraSettings& cam, Rende
     if (mBlurSamples) rs.blurSamples = *mBlurSamples;
     if (mMotionSamples) rs.motionBlur.samples = *mMotionSamples;
     if (mMotionSplit) rs.motionBlur.splitSigmas = *mMotionSplit;
+    if (!mMotionLight.empty()) rs.motionBlur.lightFollows = parseChoice("motion-light", mMotionLight, kMotionLights);
     if (mLensSamples) rs.lensSamples = *mLensSamples;
     const GrantedSettings granted = grantedExecution();
     rs.threads = granted.threads;
@@ -586,6 +593,7 @@ std::vector<Attributes> RenderOptions::resolvedOptions(const GridSource& grid, c
         model.emplace_back("shutter", fmt(rs.motionBlur.shutterOpen) + "," + fmt(rs.motionBlur.shutterClose));
         model.emplace_back("motion-samples", std::to_string(rs.motionBlur.samples));
         model.emplace_back("motion-split", fmt(rs.motionBlur.splitSigmas));
+        model.emplace_back("motion-light", choiceName(rs.motionBlur.lightFollows, kMotionLights));
     }
     Attributes method{{"method", choiceName(rs.method, kMethods)}};
     if (rs.method != Method::Splat) method.emplace_back("step", fmt(rs.step));
@@ -618,7 +626,7 @@ void RenderOptions::ignoredOptionWarnings(std::vector<std::string>& warnings, bo
         {"--emission-grid", {"--emission-color", "--emission-intensity"}},
         {"--temperature", {"--temperature-scale", "--temperature-offset", "--blackbody-intensity"}},
         {"--environment", {"--environment-lights", "--environment-intensity"}},
-        {"--velocity-grid", {"--velocity-scale", "--velocity-unit", "--fps", "--shutter", "--motion-samples", "--motion-split"}},
+        {"--velocity-grid", {"--velocity-scale", "--velocity-unit", "--fps", "--shutter", "--motion-samples", "--motion-split", "--motion-light"}},
         {"--fstop", {"--focus-distance", "--lens-samples"}}};
     if (given("--point-light-radius") && !given("--point-light") && !given("--spot-light")) {
         warnings.push_back("--point-light-radius changes nothing without --point-light or --spot-light");

@@ -125,7 +125,7 @@ private:
     std::string mCull;
     std::string mMaxMemory;
     // Motion blur and depth of field.
-    std::string mVelocityGrid, mVelocityUnit, mShutter;
+    std::string mVelocityGrid, mVelocityUnit, mShutter, mMotionLight;
     std::optional<double> mVelocityScale, mFps, mFstop, mFocusDistance;
     std::optional<int> mBlurSamples, mMotionSamples, mLensSamples;
     std::optional<double> mMotionSplit;

@@ -274,6 +274,12 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels, c
         std::copy_n(passSources.data() + i * passFloats, passFloats, passSources.data() + kept * passFloats);
         ++kept;
     }
+    if (!kernels.motion.empty() && settings.motionBlur.lightFollows) {
+        out.shifts.resize(3 * kept);
+        for (std::size_t i = 0, at = 0; i < n; ++i) {
+            if (visible[i]) std::copy_n(kernels.motion[i].shift, 3, out.shifts.data() + 3 * at++);
+        }
+    }
     splats.resize(kept);
     passSources.resize(kept * passFloats);
     out.splats = std::move(splats);

@@ -67,6 +67,10 @@ struct SplatSet
     /// optical depth x source colour), passSourceCount x RGB per splat, in splat order.
     int passSourceCount = 0;
     LargeArray<float> passSources;
+    /// Motion blur: each splat's move from where its material is in the still field (world,
+    /// KernelMotion::shift), 3 floats per splat in splat order; empty: none moved. The
+    /// compositor looks each slab sample's light up where its material came from.
+    LargeArray<float> shifts;
 };
 
 /// Kernels end at +-3 standard deviations along the ray (99.73 %).

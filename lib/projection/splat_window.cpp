@@ -8,8 +8,8 @@ namespace vdb_ewa {
 namespace detail {
 namespace {
 
-/// Append the splats @a which (indices into @a from, in order), their shares, moments and pass
-/// sources, to @a to: sized once, then copied.
+/// Append the splats @a which (indices into @a from, in order), their shares, moments, pass
+/// sources and shifts, to @a to: sized once, then copied.
 void appendSome(SplatSet& to, const SplatSet& from, const std::vector<std::size_t>& which)
 {
     const std::size_t passFloats = std::size_t(from.passSourceCount) * 3; // the same in both
@@ -18,6 +18,9 @@ void appendSome(SplatSet& to, const SplatSet& from, const std::vector<std::size_
     std::size_t splat = to.splats.size(), share = to.shares.size();
     to.splats.resize(splat + which.size());
     to.passSources.resize(to.splats.size() * passFloats);
+    // Shifts where either set has them (zero for the splats of a set without: they stood still).
+    const bool shifted = !to.shifts.empty() || !from.shifts.empty();
+    if (shifted) to.shifts.resize(3 * to.splats.size());
     to.shares.resize(shares);
     to.shareMoments.resize(2 * shares);
     for (const std::size_t i : which) {
@@ -25,6 +28,7 @@ void appendSome(SplatSet& to, const SplatSet& from, const std::vector<std::size_
         std::copy_n(from.shares.data() + s.shareOffset, s.slabCount, to.shares.data() + share);
         std::copy_n(from.shareMoments.data() + 2 * s.shareOffset, 2 * std::size_t(s.slabCount), to.shareMoments.data() + 2 * share);
         std::copy_n(from.passSources.data() + i * passFloats, passFloats, to.passSources.data() + splat * passFloats);
+        if (!from.shifts.empty()) std::copy_n(from.shifts.data() + 3 * i, 3, to.shifts.data() + 3 * splat);
         to.splats[splat] = s;
         to.splats[splat++].shareOffset = share;
         share += s.slabCount;
@@ -65,11 +69,13 @@ SplatSet splitSplatsAt(SplatSet& set, std::int64_t slab)
         if (kept != i) {
             set.splats[kept] = set.splats[i];
             std::copy_n(set.passSources.begin() + std::ptrdiff_t(i * passFloats), passFloats, set.passSources.begin() + std::ptrdiff_t(kept * passFloats));
+            if (!set.shifts.empty()) std::copy_n(set.shifts.begin() + std::ptrdiff_t(3 * i), 3, set.shifts.begin() + std::ptrdiff_t(3 * kept));
         }
         ++kept;
     }
     set.splats.resize(kept);
     set.passSources.resize(kept * passFloats);
+    if (!set.shifts.empty()) set.shifts.resize(3 * kept);
     return behind;
 }
 

@@ -19,7 +19,8 @@ namespace scalar_backend {
 #include "raster/tile_compositor-inl.h"
 
 template <int C>
-void TileCompositor<C>::addRow(const Splat& s, const float* shares, const float* moments, const float* passSources, int y, int x0, int x1, float k)
+void TileCompositor<C>::addRow(const Splat& s, const float* shares, const float* moments, const float* passSources, const float* shift, int y, int x0,
+    int x1, float k)
 {
     const double qa = s.qa, qb = s.qb, qc = s.qc;
     const double dy = double(mY0 + y) + 0.5 - double(s.cy), dx0 = double(mX0 + x0) + 0.5 - double(s.cx);
@@ -53,7 +54,7 @@ void TileCompositor<C>::addRow(const Splat& s, const float* shares, const float*
         for (int i = 0; i < n; ++i) weights[i] = std::max(weights[i] - mOptions.taperEdge, 0.0f);
     }
     // Spread the row into every slab the kernel overlaps: contiguous, vectorisable.
-    forEachPlane(s, shares, moments, passSources, p0, [&](float* plane, float factor) {
+    forEachPlane(s, shares, moments, passSources, shift, p0, [&](float* plane, float factor) {
         for (int i = 0; i < n; ++i) plane[i] += weights[i] * factor;
     });
 }

@@ -90,9 +90,10 @@ struct MapPoints
     Floats a, b, fw;
 };
 
-/// The points base + z dir of the lanes at tile pixel @a p, z = z0 + u thickness.
+/// The points base + z dir - @a shift of the lanes at tile pixel @a p, z = z0 + u thickness
+/// (@a shift: motion blur's mean move in map coordinates, TileCompositor::shiftOf).
 inline MapPoints mapPoints(const LightMap::Lattice& map, const double (*base)[kTilePixels], const double (*dir)[kTilePixels], int p,
-    Floats u, double z0, double thickness)
+    Floats u, double z0, double thickness, const Floats (&shift)[3])
 {
     const DoubleTag dd;
     const hn::Rebind<std::int32_t, DoubleTag> di;
@@ -105,9 +106,10 @@ inline MapPoints mapPoints(const LightMap::Lattice& map, const double (*base)[kT
         const Doubles uh = h == 0 ? hn::PromoteTo(dd, hn::LowerHalf(u)) : hn::PromoteTo(dd, hn::UpperHalf(hn::Half<FloatTag>(), u));
         const Doubles z = hn::MulAdd(uh, hn::Set(dd, thickness), hn::Set(dd, z0));
         const int q = p + h * kHalf;
-        const Doubles x = hn::MulAdd(z, hn::LoadU(dd, &dir[0][q]), hn::LoadU(dd, &base[0][q]));
-        const Doubles y = hn::MulAdd(z, hn::LoadU(dd, &dir[1][q]), hn::LoadU(dd, &base[1][q]));
-        const Doubles w = hn::Min(hn::Max(hn::MulAdd(z, hn::LoadU(dd, &dir[2][q]), hn::LoadU(dd, &base[2][q])), hn::Neg(wLimit)), wLimit);
+        const auto half = [&](const Floats& v) { return h == 0 ? hn::PromoteTo(dd, hn::LowerHalf(v)) : hn::PromoteTo(dd, hn::UpperHalf(hn::Half<FloatTag>(), v)); };
+        const Doubles x = hn::Sub(hn::MulAdd(z, hn::LoadU(dd, &dir[0][q]), hn::LoadU(dd, &base[0][q])), half(shift[0]));
+        const Doubles y = hn::Sub(hn::MulAdd(z, hn::LoadU(dd, &dir[1][q]), hn::LoadU(dd, &base[1][q])), half(shift[1]));
+        const Doubles w = hn::Min(hn::Max(hn::Sub(hn::MulAdd(z, hn::LoadU(dd, &dir[2][q]), hn::LoadU(dd, &base[2][q])), half(shift[2])), hn::Neg(wLimit)), wLimit);
         const Doubles fu = hn::Floor(x), fv = hn::Floor(y), fk = hn::Floor(w);
         i[h] = hn::DemoteTo(di, hn::Min(hn::Max(fu, lo), hn::Set(dd, double(map.nu))));
         j[h] = hn::DemoteTo(di, hn::Min(hn::Max(fv, lo), hn::Set(dd, double(map.nv))));
@@ -191,7 +193,8 @@ inline void logTransmittances(const LightMap::Lattice& map, Floats depth, int ch
 }
 
 template <int C>
-void TileCompositor<C>::addRow(const Splat& s, const float* shares, const float* moments, const float* passSources, int y, int x0, int x1, float)
+void TileCompositor<C>::addRow(const Splat& s, const float* shares, const float* moments, const float* passSources, const float* shift, int y, int x0,
+    int x1, float)
 {
     const FloatTag d;
     // Whole vectors of the row, from the one holding x0: lanes outside x0..x1 weigh 0.
@@ -222,7 +225,7 @@ void TileCompositor<C>::addRow(const Splat& s, const float* shares, const float*
         }
         weights[v] = hn::IfThenElseZero(lanesIn(x, x0, x1), hn::Max(hn::Sub(w, edge), hn::Zero(d)));
     }
-    forEachPlane(s, shares, moments, passSources, y * kTileSize + first, [&](float* plane, float factor) {
+    forEachPlane(s, shares, moments, passSources, shift, y * kTileSize + first, [&](float* plane, float factor) {
         const Floats f = hn::Set(d, factor);
         for (int v = 0; v < vectors; ++v) {
             float* at = plane + v * kLanes;
@@ -308,12 +311,30 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
             source[c] = emitted;
             litSum[c] = colouredSum[c] = zero;
         }
+        // Motion blur: the lanes' mean move (world), 0 where nothing moved (shiftOf).
+        Floats moved[3] = {zero, zero, zero};
+        if (anyLighted && !mShift.empty()) {
+            const std::size_t m = slot(slab) * kShiftPlanes * kTilePixels + std::size_t(p);
+            const Floats weight = hn::LoadU(d, &mShift[m + 3 * kTilePixels]);
+            const auto some = hn::Gt(weight, zero);
+            for (int k = 0; k < 3; ++k) moved[k] = hn::IfThenElseZero(some, hn::Div(hn::LoadU(d, &mShift[m + std::size_t(k) * kTilePixels]), weight));
+        }
         for (std::size_t light = 0; anyLighted && light < mOptions.lights.size(); ++light) {
             const LightMap::Lattice map = mOptions.lights[light].map->lattice();
             const double z = mOptions.slabs.start(slab), thickness = mOptions.slabs.thickness;
             const LightRays& rays = mRays[light];
             Floats log0[3], log1[3];
-            MapPoints q0 = mapPoints(map, rays.base, rays.dir, p, u0, z, thickness), q1 = mapPoints(map, rays.base, rays.dir, p, u1, z, thickness);
+            // The move in the map's coordinates (LightMap::direction, a linear map).
+            Floats shift[3] = {zero, zero, zero};
+            if (!mShift.empty()) {
+                for (int k = 0; k < 3; ++k) {
+                    Vec3d axis(0.0);
+                    axis[k] = 1.0;
+                    const Vec3d column = mOptions.lights[light].map->direction(axis);
+                    for (int i = 0; i < 3; ++i) shift[i] = hn::MulAdd(hn::Set(d, float(column[i])), moved[k], shift[i]);
+                }
+            }
+            MapPoints q0 = mapPoints(map, rays.base, rays.dir, p, u0, z, thickness, shift), q1 = mapPoints(map, rays.base, rays.dir, p, u1, z, thickness, shift);
             offLatticeUnless(map, lightedLanes, q0);
             offLatticeUnless(map, lightedLanes, q1);
             logTransmittances(map, densityDepths(map, q0), C, log0);
@@ -402,6 +423,11 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
         if (!mMoment.empty()) {
             hn::StoreU(zero, d, &mMoment[slot(slab) * kTilePixels + std::size_t(p)]);
             hn::StoreU(zero, d, &mMoment2[slot(slab) * kTilePixels + std::size_t(p)]);
+        }
+        if (!mShift.empty()) {
+            for (std::size_t k = 0; k < std::size_t(kShiftPlanes); ++k) {
+                hn::StoreU(zero, d, &mShift[slot(slab) * kShiftPlanes * kTilePixels + k * kTilePixels + std::size_t(p)]);
+            }
         }
     }
 }

@@ -72,6 +72,11 @@ struct CompositeOptions
     const PointLights* pointLights = nullptr;
     /// Some light lights the splats' scattering weights per slab sample.
     bool lit() const { return !lights.empty() || pointLights; }
+    /// Motion blur: the splats carry their moves (SplatSet::shifts), and each slab sample's
+    /// light is looked up where its material is in the still field, at most @a maxShift (world
+    /// units) from where it is now.
+    bool shifted = false;
+    double maxShift = 0.0;
     const OpticalModel* model = nullptr;
     const Camera* camera = nullptr;
     bool tinted = false; ///< scattering weights differ from optical depths (material colours)

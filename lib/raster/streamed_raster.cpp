@@ -8,7 +8,8 @@ namespace vdb_ewa {
 namespace detail {
 
 StreamedRaster::StreamedRaster(const Camera& camera, const RenderSettings& settings, const PassRequest& passes,
-    const std::vector<LightMap>& lights, bool tinted, bool grey, const SlabGrid& slabs, const MemoryBudget* budget, const PointLights* pointLights)
+    const std::vector<LightMap>& lights, bool tinted, bool grey, const SlabGrid& slabs, const MemoryBudget* budget, const PointLights* pointLights,
+    double maxShift)
     : mCamera(camera), mPasses(passes), mBudget(budget), mTilesX((camera.width() + kTileSize - 1) / kTileSize),
       mTilesY((camera.height() + kTileSize - 1) / kTileSize),
       // Emissive unless nothing in the model emits: the splats are not known yet.
@@ -19,6 +20,8 @@ StreamedRaster::StreamedRaster(const Camera& camera, const RenderSettings& setti
     bool emits = false;
     for (int c = 0; c < 3; ++c) emits = emits || model.emitted(c) != 0.0 || model.ambient(c, 1.0) != 0.0;
     mCompositing->options.emissive = emits;
+    mCompositing->options.shifted = maxShift > 0.0;
+    mCompositing->options.maxShift = maxShift;
     const std::unique_ptr<SlabCompositor> backend = slabCompositorFor(settings, grey ? 1 : 3, mStats);
     mFrame = blankFrame(camera.width(), camera.height(), passes);
     if (passes.depth || passes.deep) mDepthScale = depthScales(camera);

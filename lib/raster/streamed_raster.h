@@ -25,8 +25,11 @@ public:
     /// and source terms will be the same in R, G and B (one channel carried, see
     /// scalarSlabCompositor). @a budget: each window's splat-tile pairs are counted against it.
     /// @a pointLights: the point and spot lights (null: none), which must outlive it.
+    /// @a maxShift: motion blur's largest move (world units, largestTravel; 0: none): the
+    /// splats carry their moves, and the light is looked up where their material came from.
     StreamedRaster(const Camera& camera, const RenderSettings& settings, const PassRequest& passes, const std::vector<LightMap>& lights,
-        bool tinted, bool grey, const SlabGrid& slabs, const MemoryBudget* budget, const PointLights* pointLights = nullptr);
+        bool tinted, bool grey, const SlabGrid& slabs, const MemoryBudget* budget, const PointLights* pointLights = nullptr,
+        double maxShift = 0.0);
     ~StreamedRaster();
     StreamedRaster(const StreamedRaster&) = delete;
     StreamedRaster& operator=(const StreamedRaster&) = delete;

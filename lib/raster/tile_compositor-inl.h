@@ -42,7 +42,7 @@ public:
     struct Ring
     {
         int size = 0;
-        std::vector<float> tau, emission, scatter, passEmission, moment, moment2;
+        std::vector<float> tau, emission, scatter, passEmission, moment, moment2, shift;
         std::vector<Dirty> dirty;
         std::vector<LightRays> rays;
     };
@@ -96,6 +96,7 @@ public:
             mPassEmission = std::move(spare->passEmission);
             mMoment = std::move(spare->moment);
             mMoment2 = std::move(spare->moment2);
+            mShift = std::move(spare->shift);
             mDirty = std::move(spare->dirty);
             mRays = std::move(spare->rays);
             spare->size = 0;
@@ -107,6 +108,7 @@ public:
             mPassEmission = std::move(fresh.mPassEmission);
             mMoment = std::move(fresh.mMoment);
             mMoment2 = std::move(fresh.mMoment2);
+            mShift = std::move(fresh.mShift);
             mDirty = std::move(fresh.mDirty);
         }
         mRingSize = ringSize;
@@ -171,11 +173,12 @@ public:
             spare->passEmission = std::move(mPassEmission);
             spare->moment = std::move(mMoment);
             spare->moment2 = std::move(mMoment2);
+            spare->shift = std::move(mShift);
             spare->dirty = std::move(mDirty);
             spare->rays = std::move(mRays);
             spare->size = mRingSize;
         }
-        for (std::vector<float>* ring : {&mTau, &mEmission, &mScatter, &mPassEmission, &mMoment, &mMoment2}) *ring = {};
+        for (std::vector<float>* ring : {&mTau, &mEmission, &mScatter, &mPassEmission, &mMoment, &mMoment2, &mShift}) *ring = {};
         mDirty = {};
         mRays = {};
         mRaysTraced = false;
@@ -194,11 +197,14 @@ public:
     /// overlaps (forEachPlane); what terminated pixels inside the span receive is never
     /// composited. @a k: exp(-qa), for a backend that steps
     /// along the row. Defined by each backend.
-    void addRow(const Splat& s, const float* shares, const float* moments, const float* passSources, int y, int x0, int x1, float k);
+    void addRow(const Splat& s, const float* shares, const float* moments, const float* passSources, const float* shift, int y, int x0,
+        int x1, float k);
 
     /// @a passSources: the splat's extra source terms (mPassCount x RGB), or null if none.
     /// @a moments: the position moments of each share in its slab (SplatSet::shareMoments).
-    void add(const Splat& s, const float* shares, const float* moments, const float* passSources)
+    /// @a shift: its move from its material's place in the still field (SplatSet::shifts), or
+    /// null (it stood still).
+    void add(const Splat& s, const float* shares, const float* moments, const float* passSources, const float* shift)
     {
         if (!mRaysTraced) traceRays();
         // Slabs in front of this splat's first one can receive nothing more: flush them.
@@ -226,17 +232,18 @@ public:
             const int lxa = std::max({lx0, int(std::ceil(xFirst)) - mX0, mRowFirst[ly]});
             const int lxb = std::min({lx1, int(std::floor(xLast)) - mX0, mRowLast[ly]});
             if (lxa > lxb) continue;
-            addRow(s, shares, moments, passSources, ly, lxa, lxb, kx);
+            addRow(s, shares, moments, passSources, shift, ly, lxa, lxb, kx);
             mSamples += std::uint64_t(lxb - lxa + 1);
         }
     }
 
     /// Every accumulator plane a splat's row feeds and its factor, for @a add(plane, factor):
     /// the row's footprint values x factor are added to plane[p], plane[p + 1], ... (p: the
-    /// tile pixel @a p). Per slab the kernel overlaps: the position moments (lit frames), then
-    /// per channel the optical depth, emission, scattering weight and the passes' sources.
+    /// tile pixel @a p). Per slab the kernel overlaps: the position moments (lit frames) and
+    /// the shift's (moving ones), then per channel the optical depth, emission, scattering
+    /// weight and the passes' sources.
     template <typename Add>
-    void forEachPlane(const Splat& s, const float* shares, const float* moments, const float* passSources, int p, Add&& add)
+    void forEachPlane(const Splat& s, const float* shares, const float* moments, const float* passSources, const float* shift, int p, Add&& add)
     {
         for (int j = 0; j < int(s.slabCount); ++j) {
             const std::size_t base = slot(s.firstSlab + j) * C * kTilePixels + std::size_t(p);
@@ -247,6 +254,13 @@ public:
                 const std::size_t mb = slot(s.firstSlab + j) * kTilePixels + std::size_t(p);
                 add(&mMoment[mb], w * moments[2 * j]);
                 add(&mMoment2[mb], w * moments[2 * j + 1]);
+                if (shift && !mShift.empty() && w > 0.0f) {
+                    // Motion blur: the optical depth's mean move, to look its light up where
+                    // its material is in the still field (shiftOf).
+                    const std::size_t sb = slot(s.firstSlab + j) * kShiftPlanes * kTilePixels + std::size_t(p);
+                    for (int k = 0; k < 3; ++k) add(&mShift[sb + std::size_t(k) * kTilePixels], w * shift[k]);
+                    add(&mShift[sb + 3 * kTilePixels], w);
+                }
             }
             for (int c = 0; c < C; ++c) {
                 add(&mTau[base + std::size_t(c) * kTilePixels], shares[j] * s.tau[c]);
@@ -303,7 +317,7 @@ private:
     {
         const std::pair<std::vector<float>*, std::size_t> planes[] = {{&mTau, C * kTilePixels}, {&mEmission, C * kTilePixels},
             {&mScatter, C * kTilePixels}, {&mPassEmission, std::size_t(mPassCount) * C * kTilePixels}, {&mMoment, kTilePixels},
-            {&mMoment2, kTilePixels}};
+            {&mMoment2, kTilePixels}, {&mShift, kShiftPlanes * kTilePixels}};
         for (const auto& [plane, floats] : planes) {
             if (!plane->empty() && floats > 0) f(*plane, floats);
         }
@@ -319,6 +333,7 @@ private:
           mScatter(mOptions.tinted ? std::size_t(ringSize) * C * kTilePixels : 0, 0.0f),
           mMoment(mOptions.lit() ? std::size_t(ringSize) * kTilePixels : 0, 0.0f),
           mMoment2(mOptions.lit() ? std::size_t(ringSize) * kTilePixels : 0, 0.0f),
+          mShift(mOptions.lit() && mOptions.shifted ? std::size_t(ringSize) * kShiftPlanes * kTilePixels : 0, 0.0f),
           mDirty(std::size_t(ringSize))
     {
     }
@@ -503,8 +518,8 @@ private:
         const double z0 = z + double(u0) * mOptions.slabs.thickness, z1 = z + double(u1) * mOptions.slabs.thickness;
         float d0, d1;
         const LightRays& r = mRays[l];
-        const Vec3d base(r.base[0][p], r.base[1][p], r.base[2][p]), dir(r.dir[0][p], r.dir[1][p], r.dir[2][p]);
         const LightMap& map = *mOptions.lights[l].map;
+        const Vec3d base = Vec3d(r.base[0][p], r.base[1][p], r.base[2][p]) - map.direction(shiftOf(slab, p)), dir(r.dir[0][p], r.dir[1][p], r.dir[2][p]);
         map.densityDepths(base + z0 * dir, base + z1 * dir, d0, d1);
         if (C == 1) {
             const float log0 = map.greyLogTransmittanceOfDepth(d0);
@@ -559,8 +574,33 @@ private:
             Vec3d lo, hi;
             lookupBox(*mOptions.camera, *light.map, mX0 + x0, mY0 + y0, mX0 + x1, mY0 + y1, z + double(u0) * thickness,
                 z + double(u1) * thickness, lo, hi);
+            if (!mShift.empty()) { // where the moved material came from: within maxShift
+                Vec3d pad(0.0);
+                for (int k = 0; k < 3; ++k) {
+                    Vec3d axis(0.0);
+                    axis[k] = mOptions.maxShift;
+                    pad += glm::abs(light.map->direction(axis));
+                }
+                lo -= pad;
+                hi += pad;
+            }
             light.map->ensureMarched(lo, hi);
         }
+    }
+
+    /// Motion blur: the mean move of pixel p's optical depth in @a slab from where its material
+    /// is in the still field (world; 0 without motion): the light is looked up there, as the
+    /// reference carries each point's light along its path (docs/equations.md#motion-blur).
+    /// Weighed by the positive optical depths alone: halo kernels weigh negative, and a mass
+    /// that nearly cancelled would throw the mean anywhere; this one stays among the moves
+    /// (light on demand marches no further than the largest).
+    Vec3d shiftOf(std::int64_t slab, int p) const
+    {
+        if (mShift.empty()) return Vec3d(0.0);
+        const std::size_t m = slot(slab) * kShiftPlanes * kTilePixels + std::size_t(p);
+        const float weight = mShift[m + 3 * kTilePixels];
+        if (!(weight > 0.0f)) return Vec3d(0.0);
+        return Vec3d(mShift[m] / weight, mShift[m + kTilePixels] / weight, mShift[m + 2 * kTilePixels] / weight);
     }
 
     /// Where pixel p's @a mass (> 0) of @a slab lies, as a uniform layer with the mean and
@@ -705,7 +745,7 @@ private:
         const double z = mOptions.slabs.start(slab);
         const double z0 = z + double(u0) * mOptions.slabs.thickness, z1 = z + double(u1) * mOptions.slabs.thickness;
         const LightRays& r = mRays.back(); // world coordinates (traceRays)
-        const Vec3d base(r.base[0][p], r.base[1][p], r.base[2][p]), dir(r.dir[0][p], r.dir[1][p], r.dir[2][p]);
+        const Vec3d base = Vec3d(r.base[0][p], r.base[1][p], r.base[2][p]) - shiftOf(slab, p), dir(r.dir[0][p], r.dir[1][p], r.dir[2][p]);
         mOptions.pointLights->acrossLayer(l, base + z0 * dir, base + z1 * dir, front, logRatio, falloff);
     }
 
@@ -759,6 +799,9 @@ private:
     {
         const std::size_t base = slot(slab) * C * kTilePixels;
         if (!mMoment.empty()) mMoment[slot(slab) * kTilePixels + std::size_t(p)] = mMoment2[slot(slab) * kTilePixels + std::size_t(p)] = 0.0f;
+        if (!mShift.empty()) {
+            for (int k = 0; k < kShiftPlanes; ++k) mShift[slot(slab) * kShiftPlanes * kTilePixels + std::size_t(k) * kTilePixels + std::size_t(p)] = 0.0f;
+        }
         for (int c = 0; c < C; ++c) {
             const std::size_t i = base + c * kTilePixels + std::size_t(p);
             mTau[i] = 0.0f;
@@ -789,6 +832,10 @@ private:
     /// [slot][pixel] optical depth x position in the slab (0 front, 1 back), and x its square
     /// (lit frames only): where the slab's mass lies, for shading.
     std::vector<float> mMoment, mMoment2;
+    /// Motion blur: per slot, the positive optical depth x its move, x, y, z planes (world),
+    /// then the positive optical depth's plane (shiftOf).
+    static constexpr int kShiftPlanes = 4;
+    std::vector<float> mShift;
     std::vector<LightRays> mRays; ///< per light of CompositeOptions::lights, then (point lights) in world coordinates
     bool mRaysTraced = false; ///< traceRays ran
     float mZ[kTilePixels];              ///< Z pass along the ray, +inf until alpha reaches 0.5
@@ -866,7 +913,8 @@ public:
                 for (; done < count && !tile->opaque(); ++done) {
                     const Splat& s = set.splats[order[done]];
                     tile->add(s, set.shares.data() + s.shareOffset, set.shareMoments.data() + 2 * s.shareOffset,
-                        passFloats ? set.passSources.data() + order[done] * passFloats : nullptr);
+                        passFloats ? set.passSources.data() + order[done] * passFloats : nullptr,
+                        set.shifts.empty() ? nullptr : set.shifts.data() + 3 * std::size_t(order[done]));
                 }
                 mSkipped[std::size_t(t)] += count - done;
                 tile->flushUpTo(windowEnd);
@@ -961,7 +1009,8 @@ void TileSweepCompositor<C>::composite(const SplatSet& set, const TileBins& bins
                 }
                 const Splat& s = set.splats[order[done]];
                 tile.add(s, set.shares.data() + s.shareOffset, set.shareMoments.data() + 2 * s.shareOffset,
-                    passFloats ? set.passSources.data() + order[done] * passFloats : nullptr);
+                    passFloats ? set.passSources.data() + order[done] * passFloats : nullptr,
+                    set.shifts.empty() ? nullptr : set.shifts.data() + 3 * std::size_t(order[done]));
             }
             tile.finish(frame, depthScale, deep.empty() ? nullptr : &deep[std::size_t(t)]);
             counters[std::size_t(t)] = {count - done, tile.samples(), tile.composites()};

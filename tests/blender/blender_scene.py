@@ -1,6 +1,6 @@
 """Run inside Blender (blender -b --factory-startup --python blender_scene.py -- PARAMS.json): build
 the test scene from PARAMS (two interpenetrating volume objects loading a .vdb file, each with a
-transform, sharing a Principled Volume, the first moving by its velocity grid under the scene's
+transform and a Principled Volume of its own, the first moving by its velocity grid under the scene's
 motion blur; a camera with depth of field aimed at a point; a sun and a spot light), render it with PARAMS["engine"] and save Blender's own
 render result as a float EXR and as a PNG (Standard view)."""
 import json
@@ -52,27 +52,33 @@ scene.render.fps, scene.render.fps_base = params["fps"], 1.0
 obj = bpy.data.objects.new("asset", moving)
 scene.collection.objects.link(obj)
 obj.matrix_world = mathutils.Matrix(params["object_to_world"])
-material = bpy.data.materials.new("volume")
-material.use_nodes = True
-nodes = material.node_tree.nodes
-for node in list(nodes):
-    if node.type != "OUTPUT_MATERIAL":
-        nodes.remove(node)
-principled = nodes.new("ShaderNodeVolumePrincipled")
-principled.inputs["Density"].default_value = params["density"]
-principled.inputs["Color"].default_value = (*params["color"], 1.0)
-principled.inputs["Absorption Color"].default_value = (*params["absorption_color"], 1.0)
-principled.inputs["Density Attribute"].default_value = params["grid"]
-output = next(n for n in nodes if n.type == "OUTPUT_MATERIAL")
-material.node_tree.links.new(principled.outputs["Volume"], output.inputs["Volume"])
-# A second volume object of the same asset and material, still, interpenetrating the first.
+def principled_volume(name, density, color, absorption_color):
+    """A material of one Principled Volume reading the density grid."""
+    material = bpy.data.materials.new(name)
+    material.use_nodes = True
+    nodes = material.node_tree.nodes
+    for node in list(nodes):
+        if node.type != "OUTPUT_MATERIAL":
+            nodes.remove(node)
+    principled = nodes.new("ShaderNodeVolumePrincipled")
+    principled.inputs["Density"].default_value = density
+    principled.inputs["Color"].default_value = (*color, 1.0)
+    principled.inputs["Absorption Color"].default_value = (*absorption_color, 1.0)
+    principled.inputs["Density Attribute"].default_value = params["grid"]
+    output = next(n for n in nodes if n.type == "OUTPUT_MATERIAL")
+    material.node_tree.links.new(principled.outputs["Volume"], output.inputs["Volume"])
+    return material
+
+
+# A second volume object of the same asset, still, interpenetrating the first, with a material
+# of its own.
 volume = bpy.data.volumes.new("asset")
 volume.filepath = params["asset"]
 second = bpy.data.objects.new("asset.second", volume)
 scene.collection.objects.link(second)
 second.matrix_world = mathutils.Matrix(params["second_object_to_world"])
-volume.materials.append(material)
-moving.materials.append(material)
+volume.materials.append(principled_volume("volume.second", params["second_density"], params["second_color"], params["second_absorption_color"]))
+moving.materials.append(principled_volume("volume", params["density"], params["color"], params["absorption_color"]))
 
 camera_data = bpy.data.cameras.new("camera")
 camera_data.lens = params["focal"]

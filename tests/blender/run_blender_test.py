@@ -1,8 +1,8 @@
 """The Blender add-on in the real client: blender -b builds a scene (a volume object loading a
 .vdb file, moved by a rotation, a non-uniform scale and a translation, with a Principled Volume,
 and motion-blurred by a velocity grid in its file; a camera aimed at a point, with depth of field;
-a sun and a spot light; a second volume object of the same material, still, interpenetrating the
-first), renders it through the vdb_ewa engine in-process, and saves
+a sun and a spot light; a second volume object with a material of its own, still, interpenetrating
+the first), renders it through the vdb_ewa engine in-process, and saves
 Blender's render result. The CLI renders the same scene from options this script derives on its
 own (the grid rewritten with the moved transform by pyopenvdb, --lookat for the camera, the
 material and lights by docs/blender.md's formulas); the two must agree to 60 dB PSNR.
@@ -126,7 +126,8 @@ def main():
     params = dict(engine=args.engine, addon_dir=os.path.abspath(args.addon_dir), asset=os.path.abspath(asset), grid=grid.name,
                   moving_asset=out("moving.vdb"), velocity_scale=1.5, shutter=0.5, fps=24,
                   res=[width, height], object_to_world=object_to_world.tolist(), second_object_to_world=second_to_world.tolist(), density=2.0, color=[0.9, 0.7, 0.5],
-                  absorption_color=[0.3, 0.2, 0.6], focal=35.0, sensor=36.0, clip=[0.01, 1000.0], eye=eye.tolist(),
+                  absorption_color=[0.3, 0.2, 0.6], second_density=1.5, second_color=[0.5, 0.7, 0.9],
+                  second_absorption_color=[0.7, 0.6, 0.3], focal=35.0, sensor=36.0, clip=[0.01, 1000.0], eye=eye.tolist(),
                   target=target.tolist(), sun_strength=4.0, sun_color=[1.0, 0.9, 0.8],
                   sun_direction=(np.array([0.4, -0.3, 0.8]) / np.linalg.norm([0.4, -0.3, 0.8])).tolist(),
                   fstop=0.1, focus_distance=0.8 * float(np.linalg.norm(target - eye)),
@@ -171,16 +172,21 @@ def main():
     second_composite = second_to_world @ file_map @ half_voxel
     second.transform = pyopenvdb.createLinearTransform(second_composite.T.tolist())
     pyopenvdb.write(out("second.vdb"), grids=[second])
-    voxel = abs(np.linalg.det(second_composite[:3, :3])) ** (1.0 / 3.0)
-    color, absorption, density = np.array(params["color"]), np.array(params["absorption_color"]), params["density"]
-    scatter = color * density * voxel
-    absorb = np.maximum(1 - color, 0) * np.maximum(1 - np.sqrt(absorption), 0) * density * voxel
+    def coefficients(prefix, voxel):
+        """docs/blender.md's Principled Volume formulas, per voxel length: (scatter, absorb)."""
+        color, absorption, density = np.array(params[prefix + "color"]), np.array(params[prefix + "absorption_color"]), params[prefix + "density"]
+        return color * density * voxel, np.maximum(1 - color, 0) * np.maximum(1 - np.sqrt(absorption), 0) * density * voxel
+
+    # Each object its own material: the second's is the input's, the first's the added volume's.
+    scatter, absorb = coefficients("second_", abs(np.linalg.det(second_composite[:3, :3])) ** (1.0 / 3.0))
+    moved_scatter, moved_absorb = coefficients("", abs(np.linalg.det(composite[:3, :3])) ** (1.0 / 3.0))
     light = list(params["sun_direction"]) + list(np.array(params["sun_color"]) * params["sun_strength"] / (4 * math.pi))
     join = lambda v: ",".join("%.17g" % x for x in v)
     # The spot: Cycles' intensity power / 4 pi, scattered isotropically (1 / 4 pi), aimed at the target.
     spot = (list(params["spot_position"]) + list(target) + [params["spot_angle"], params["spot_blend"]]
             + list(np.array(params["spot_color"]) * params["spot_power"] / (16 * math.pi * math.pi)))
-    cli = [args.cli, out("second.vdb"), out("cli.exr"), "--name", grid.name, "--add-volume", out("moved.vdb") + ":" + grid.name, "--res", args.res, "--translate", join(eye),
+    cli = [args.cli, out("second.vdb"), out("cli.exr"), "--name", grid.name, "--add-volume", out("moved.vdb") + ":" + grid.name,
+           "--add-volume-material", "absorb=%s scatter=%s" % (join(moved_absorb), join(moved_scatter)), "--res", args.res, "--translate", join(eye),
            "--lookat", join(target), "--up", "0,0,1", "--focal", "35", "--aperture", "36", "--near", "0.01", "--far", "1000",
            "--fstop", "%.17g" % params["fstop"], "--focus-distance", "%.17g" % params["focus_distance"],
            "--velocity-grid", "velocity", "--velocity-unit", "second", "--velocity-scale", "%.17g" % params["velocity_scale"],

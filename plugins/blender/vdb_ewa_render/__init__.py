@@ -134,19 +134,23 @@ def volume_options(vdb_ewa, volume):
     return grid, options
 
 
+BLACKBODY_OPTIONS = ("temperature_scale", "blackbody_intensity")
+
+
 def mergeable(volumes):
-    """Volume objects that one field can hold: the same material per world unit, no colour or
-    temperature grid (the sum keeps only the first volume's), and the moving ones' velocities in
-    the same unit and scale (the sum moves with their velocities weighted by their densities)."""
-    first = volumes[0].options
+    """Volume objects that one field can hold, each with its own material (Grid.with_added_volume's
+    absorb and scatter, its colour and temperature grids attached to it): the moving ones'
+    velocities in the same unit and scale (the sum moves with their velocities weighted by their
+    densities), and the blackbody options of those with a temperature grid the same per voxel
+    length (the frame has one Temperature and Blackbody Intensity)."""
     motions = {(m["velocity_unit"], m["velocity_scale"]) for m in (v.motion for v in volumes) if m}
-    return len(motions) <= 1 and all(v.options == first and "color_grid" not in v.options and "temperature" not in v.options
-                                     for v in volumes)
+    return len(motions) <= 1
 
 
 class MergedVolumes:
-    """Volume objects of one material as one field (Grid.with_added_volume): one front-to-back
-    sweep, so they hide and shadow each other where they interpenetrate."""
+    """Volume objects in one field (Grid.with_added_volume), each with its own material where it
+    differs from the first's: one front-to-back sweep, so they hide and shadow each other where
+    they interpenetrate."""
 
     def __init__(self, volumes):
         self.volumes = volumes
@@ -155,12 +159,31 @@ class MergedVolumes:
         self.object_to_world = "each its own"
 
     def render_input(self, vdb_ewa):
-        """The summed grid on the finest volume's voxels, and the material per its voxel length."""
+        """The summed grid on the finest volume's voxels, and the first volume's material per its
+        voxel length; the others' materials go with their grids. None where two blackbody
+        volumes' options differ per voxel length (they cannot share the frame's): each is then
+        rendered alone and composited."""
         inputs = sorted((volume_options(vdb_ewa, v) for v in self.volumes), key=lambda gm: gm[0].voxel_length)
         grid, material = inputs[0]
-        for other, other_material in inputs[1:]:
-            grid = grid.with_added_volume(other)  # with its velocities (volume_options attached them)
-            material = {**other_material, **material}  # a moving volume's velocity unit and scale
+        material = dict(material)
+        for other, own in inputs[1:]:
+            for key in ("velocity_unit", "velocity_scale"):  # a moving volume's, where the first stands still
+                if key in own:
+                    material.setdefault(key, own[key])
+            if "temperature" in own:
+                blackbody = {k: own[k] for k in BLACKBODY_OPTIONS}
+                if "temperature" in material and any(abs(material[k] - v) > 1e-9 * abs(v) for k, v in blackbody.items()):
+                    return None
+                material.update(blackbody)
+            shared = all(own[k] == material[k] for k in ("absorb", "scatter")) and "color" not in own and "temperature" not in own
+            if shared:
+                grid = grid.with_added_volume(other)  # with its velocities (volume_options attached them)
+                continue
+            if "color" in own:
+                other = other.with_color_grid(own["color"])
+            if "temperature" in own:
+                other = other.with_temperature_grid(own["temperature"])
+            grid = grid.with_added_volume(other, absorb=own["absorb"], scatter=own["scatter"], emission=0.0)
         return grid, material
 
 
@@ -208,11 +231,18 @@ class VdbEwaRenderEngine(bpy.types.RenderEngine):
             self.report({'ERROR'}, "vdb_ewa: %s" % e)
             return
         image = np.zeros((height, width, 4), np.float32)
+        merged = None
         if len(volumes) > 1 and mergeable(volumes):
-            volumes = [MergedVolumes(volumes)]
-        elif len(volumes) > 1:
-            warnings.append("volumes of different materials (or with colour or temperature grids) are composited one over the "
-                            "other: wrong where they interpenetrate")
+            try:
+                merged = MergedVolumes(volumes).render_input(vdb_ewa)
+            except vdb_ewa.Error as e:
+                self.report({'ERROR'}, "vdb_ewa: %s" % e)
+                return
+            if merged is not None:
+                volumes = [MergedVolumes(volumes)]
+        if len(volumes) > 1:
+            warnings.append("volumes moving in different velocity units or scales, or glowing with different Temperature or "
+                            "Blackbody Intensity per voxel, are composited one over the other: wrong where they interpenetrate")
         for index, volume in enumerate(volumes):
             self.update_stats("vdb_ewa", "volume %s (%d of %d)" % (volume.name, index + 1, len(volumes)))
 
@@ -221,7 +251,7 @@ class VdbEwaRenderEngine(bpy.types.RenderEngine):
                 return self.cancel_requested()
 
             try:
-                grid, material = volume.render_input(vdb_ewa) if isinstance(volume, MergedVolumes) else volume_options(vdb_ewa, volume)
+                grid, material = merged if isinstance(volume, MergedVolumes) else volume_options(vdb_ewa, volume)
                 call = {**options, **material, **extra}  # the panel's Options override the scene's
                 if os.environ.get("VDB_EWA_VERBOSE"):
                     print("vdb_ewa: volume %s: %s moved by %s: %s" % (volume.name, volume.path, volume.object_to_world, call))
