@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <sstream>
+#include <tuple>
 #include <utility>
 
 namespace vdb_ewa {
@@ -56,6 +57,42 @@ void addToAverage(Frame& average, Frame&& sub, int s, int n)
     for (const auto& [to, from] : {std::pair{&average.transmittance, &sub.transmittance}, {&average.shadow, &sub.shadow}, {&average.emission, &sub.emission}})
         for (std::size_t i = 0; i < to->size(); ++i) (*to)[i] += w * (*from)[i];
     for (std::size_t i = 0; i < average.depth.size(); ++i) average.depth[i] = std::min(average.depth[i], sub.depth[i]);
+}
+
+void addPartStats(RenderStats& stats, RenderStats&& part, bool first)
+{
+    const RenderStats total = stats;
+    stats = std::move(part);
+    if (first) return;
+    stats.kernelSeconds += total.kernelSeconds;
+    stats.shadowSeconds += total.shadowSeconds;
+    stats.projectSeconds += total.projectSeconds;
+    stats.rasterSeconds += total.rasterSeconds;
+    for (auto [sum, add] : {std::pair{&stats.kernels, total.kernels}, {&stats.splats, total.splats}, {&stats.splatTilePairs, total.splatTilePairs},
+             {&stats.splatTilePairsSkipped, total.splatTilePairsSkipped}, {&stats.footprintSamples, total.footprintSamples},
+             {&stats.slabComposites, total.slabComposites}, {&stats.motionSubKernels, total.motionSubKernels},
+             {&stats.bricksExpanded, total.bricksExpanded}, {&stats.bricksHidden, total.bricksHidden}, {&stats.windows, total.windows},
+             {&stats.lightRaysMarched, total.lightRaysMarched}, {&stats.kernelsCulled, total.kernelsCulled}})
+        *sum += add;
+}
+
+Frame assembleChannels(Frame (&channels)[3])
+{
+    Frame frame = std::move(channels[0]);
+    const std::size_t pixels = frame.beauty.rgba.size() / 4;
+    for (std::size_t i = 0; i < pixels; ++i) {
+        frame.beauty.rgba[4 * i + 1] = channels[1].beauty.rgba[4 * i + 1];
+        frame.beauty.rgba[4 * i + 2] = channels[2].beauty.rgba[4 * i + 2];
+        frame.beauty.rgba[4 * i + 3] = (frame.beauty.rgba[4 * i + 3] + channels[1].beauty.rgba[4 * i + 3] + channels[2].beauty.rgba[4 * i + 3]) / 3.0f;
+        for (const auto& [plane, g, b] : {std::tuple{&frame.transmittance, &channels[1].transmittance, &channels[2].transmittance},
+                 {&frame.shadow, &channels[1].shadow, &channels[2].shadow}, {&frame.emission, &channels[1].emission, &channels[2].emission}}) {
+            if (plane->empty()) continue;
+            (*plane)[3 * i + 1] = (*g)[3 * i + 1];
+            (*plane)[3 * i + 2] = (*b)[3 * i + 2];
+        }
+        if (!frame.depth.empty()) frame.depth[i] = std::min({frame.depth[i], channels[1].depth[i], channels[2].depth[i]});
+    }
+    return frame;
 }
 
 void addRasterStats(const RasterStats& raster, RenderStats& stats)

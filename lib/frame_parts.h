@@ -47,6 +47,16 @@ std::string countLine(std::uint64_t n, const std::string& what);
 /// the grid @a moving over the shutter, the lens samples through a @a lens; one for a @a deep image.
 int subFrameCount(const RenderSettings& settings, bool moving, bool lens, bool deep);
 
+/// A part of a frame's render (a sub-frame, a channel) added to @a stats: the counts and times
+/// add up; the warnings and the rest are the part's (@a first: it replaces them).
+void addPartStats(RenderStats& stats, RenderStats&& part, bool first);
+
+/// The frame of media whose extinctions differ in hue, rendered once per channel with every
+/// medium grey at that channel's coefficients (detail::mixMaterials' channel): channel c of
+/// the colour, the transmittance and the passes from @a channels[c]; alpha, 1 - the mean of
+/// the channels' transmittances, the mean of their alphas; Z the nearest.
+Frame assembleChannels(Frame (&channels)[3]);
+
 /// Sub-frame @a s of @a n's settings: one sample each, and (@a moving) the shutter's part
 /// [open + s d, open + (s + 1) d], d = (close - open) / n.
 RenderSettings subFrameSettings(const RenderSettings& settings, bool moving, int s, int n);

@@ -200,20 +200,7 @@ void Renderer::renderSubFrames(const GridSource::Impl& g, const Camera& camera, 
         Renderer(part).renderFogVolume(g, lens ? camera.throughLensPart(s, n) : camera, passes, sub, subStats, progress);
         detail::addToAverage(frame, std::move(sub), s, n);
         // Counts and times add up over the sub-frames; the warnings are each sub-frame's alike.
-        const RenderStats total = stats;
-        stats = subStats;
-        if (s > 0) {
-            stats.kernelSeconds += total.kernelSeconds;
-            stats.shadowSeconds += total.shadowSeconds;
-            stats.projectSeconds += total.projectSeconds;
-            stats.rasterSeconds += total.rasterSeconds;
-            for (auto [sum, add] : {std::pair{&stats.kernels, total.kernels}, {&stats.splats, total.splats}, {&stats.splatTilePairs, total.splatTilePairs},
-                     {&stats.splatTilePairsSkipped, total.splatTilePairsSkipped}, {&stats.footprintSamples, total.footprintSamples},
-                     {&stats.slabComposites, total.slabComposites}, {&stats.motionSubKernels, total.motionSubKernels},
-                     {&stats.bricksExpanded, total.bricksExpanded}, {&stats.bricksHidden, total.bricksHidden}, {&stats.windows, total.windows},
-                     {&stats.lightRaysMarched, total.lightRaysMarched}, {&stats.kernelsCulled, total.kernelsCulled}})
-                *sum += add;
-        }
+        detail::addPartStats(stats, std::move(subStats), s == 0);
     }
     if (deepLens) stats.warnings.push_back(deepLensWarning);
 }
@@ -380,8 +367,24 @@ Frame Renderer::renderFrame(const GridSource& grid, const Camera& camera, const 
             return;
         }
         // Volumes with optical models of their own: mixed into one for this render's medium.
-        const detail::MixedFrame mixed = detail::mixMaterials(g, mSettings);
-        Renderer(mixed.settings).renderGrid(*mixed.grid, camera, passes, frame, stats, progress);
+        detail::MixedFrame mixed = detail::mixMaterials(g, mSettings);
+        if (mixed.proportional || passes.deep) { // a deep image has no channels to assemble: grey extinctions (warned)
+            Renderer(mixed.settings).renderGrid(*mixed.grid, camera, passes, frame, stats, progress);
+        } else {
+            // Extinctions of different hues: once per channel, every medium grey at its
+            // coefficients (exact), the channels assembled.
+            mixed.warnings.clear();
+            Frame channels[3];
+            for (int c = 0; c < 3; ++c) {
+                const detail::MixedFrame grey = detail::mixMaterials(g, mSettings, c);
+                RenderStats part;
+                Renderer(grey.settings).renderGrid(*grey.grid, camera, passes, channels[c], part, progress);
+                detail::addPartStats(stats, std::move(part), c == 0);
+            }
+            frame = detail::assembleChannels(channels);
+            stats.warnings.push_back("volumes whose extinctions differ in hue (--add-volume-material): rendered once per channel, R, G "
+                                     "and B, each medium grey at that channel's coefficients: exact, 3x the time");
+        }
         stats.warnings.insert(stats.warnings.begin(), mixed.warnings.begin(), mixed.warnings.end());
     };
     if (mSettings.threads > 0) {

@@ -73,9 +73,10 @@ public:
     /// extinctions and scattered and emitted light add, each weighed by its own density
     /// (docs/equations.md#volumes-with-optical-models-of-their-own). @a medium's colours are
     /// taken in the input space, as the colour grid's (RenderSettings::inputToWorking). Light
-    /// maps march one extinction colour: a volume whose extinction is not in proportion to this
-    /// grid's (another hue) is taken as grey at its mean, its scattered light kept (the render
-    /// warns). @throw InputError as withAddedVolume; ValueError for a negative or non-finite
+    /// maps march one extinction colour: where a volume's extinction is not in proportion to
+    /// this grid's (another hue), the frame is rendered once per channel, every medium grey at
+    /// that channel's coefficients (exact, 3x the time; a deep image takes the other hue grey at
+    /// its mean; the render says which). @throw InputError as withAddedVolume; ValueError for a negative or non-finite
     /// coefficient.
     GridSource withAddedVolume(const GridSource& other, const Medium& medium) const;
 

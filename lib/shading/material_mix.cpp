@@ -98,7 +98,7 @@ openvdb::Vec3SGrid::Ptr ratioGrid(const openvdb::FloatGrid& topology, const Make
 
 } // namespace
 
-MixedFrame mixMaterials(const GridSource::Impl& grid, const RenderSettings& settings)
+MixedFrame mixMaterials(const GridSource::Impl& grid, const RenderSettings& settings, int channel)
 {
     MixedFrame out;
     out.settings = settings;
@@ -112,8 +112,14 @@ MixedFrame mixMaterials(const GridSource::Impl& grid, const RenderSettings& sett
         working.emission = workingColor(settings.inputToWorking, m.medium.emission);
         parts.push_back({m.density, working, 1.0, Vec3d(0.0), m.volume.get()});
     }
+    if (channel >= 0) { // every medium grey at one channel's coefficients: the mix exact in that channel
+        for (Part& p : parts) {
+            for (Vec3d* v : {&p.medium.absorb, &p.medium.scatter, &p.medium.emission}) *v = Vec3d((*v)[channel]);
+        }
+    }
+    const Medium& own = parts[0].medium;
     // The reference extinction: the grid's own, or the first part's that has one.
-    Vec3d reference = settings.medium.extinction();
+    Vec3d reference = own.extinction();
     for (const Part& p : parts) {
         if (mean(reference) > 0.0) break;
         reference = p.medium.extinction();
@@ -129,11 +135,12 @@ MixedFrame mixMaterials(const GridSource::Impl& grid, const RenderSettings& sett
             proportional = proportional && std::abs(extinction[c] - scaled) <= 1e-6 * std::max(extinction[c], scaled);
         }
         if (!proportional) {
+            out.proportional = false;
             std::ostringstream w;
             w << "the volume " << (p.volume->path.empty() ? std::string("(host grid)") : p.volume->path) << " ('" << p.volume->name
               << "'): its extinction (" << extinction.x << "," << extinction.y << "," << extinction.z
-              << ") is not in proportion to the input's: its optical depth and shadows take it grey, at its mean (light maps march one "
-                 "extinction colour); its scattered light is kept";
+              << ") is not in proportion to the input's: a deep image, which cannot be rendered channel by channel, takes it grey, "
+                 "at its mean (light maps march one extinction colour); its scattered light is kept";
             out.warnings.push_back(w.str());
         }
     }

@@ -22,6 +22,10 @@ struct MixedFrame
     std::shared_ptr<const GridSource::Impl> grid;
     RenderSettings settings;
     std::vector<std::string> warnings;
+    /// Every medium's extinction is in proportion to the grid's: the mix is exact. Else the
+    /// frame is rendered once per channel (@a channel of mixMaterials), or, where it cannot be
+    /// (a deep image), with the others grey at their means (warned).
+    bool proportional = true;
 };
 
 /// Mix @a grid's volumes (GridSource::Impl::addedMaterials; @a settings' medium is the grid's
@@ -33,7 +37,9 @@ struct MixedFrame
 /// (constant emission x density, emission grids, blackbody of temperature grids at each
 /// voxel). The settings' medium then has albedo 1 (absorb 0, scatter = the grid's
 /// extinction), and colours are in the working space (inputToWorking the identity).
-MixedFrame mixMaterials(const GridSource::Impl& grid, const RenderSettings& settings);
+/// @a channel 0, 1 or 2: every medium grey at that channel's coefficients, so that the mix is
+/// exact in that channel of the image (MixedFrame::proportional); -1: as they are.
+MixedFrame mixMaterials(const GridSource::Impl& grid, const RenderSettings& settings, int channel = -1);
 
 } // namespace detail
 } // namespace vdb_ewa
