@@ -367,13 +367,13 @@ Frame Renderer::renderFrame(const GridSource& grid, const Camera& camera, const 
             return;
         }
         // Volumes with optical models of their own: mixed into one for this render's medium.
-        detail::MixedFrame mixed = detail::mixMaterials(g, mSettings);
-        if (mixed.proportional || passes.deep) { // a deep image has no channels to assemble: grey extinctions (warned)
+        if (detail::extinctionsInProportion(g, mSettings) || passes.deep) { // a deep image has no channels to assemble: grey (warned)
+            const detail::MixedFrame mixed = detail::mixMaterials(g, mSettings);
             Renderer(mixed.settings).renderGrid(*mixed.grid, camera, passes, frame, stats, progress);
+            stats.warnings.insert(stats.warnings.begin(), mixed.warnings.begin(), mixed.warnings.end());
         } else {
             // Extinctions of different hues: once per channel, every medium grey at its
             // coefficients (exact), the channels assembled.
-            mixed.warnings.clear();
             Frame channels[3];
             for (int c = 0; c < 3; ++c) {
                 const detail::MixedFrame grey = detail::mixMaterials(g, mSettings, c);
@@ -385,7 +385,6 @@ Frame Renderer::renderFrame(const GridSource& grid, const Camera& camera, const 
             stats.warnings.push_back("volumes whose extinctions differ in hue (--add-volume-material): rendered once per channel, R, G "
                                      "and B, each medium grey at that channel's coefficients: exact, 3x the time");
         }
-        stats.warnings.insert(stats.warnings.begin(), mixed.warnings.begin(), mixed.warnings.end());
     };
     if (mSettings.threads > 0) {
         tbb::task_arena arena(mSettings.threads);

@@ -212,11 +212,9 @@ Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSet
         [](const Splat& s) { return s.emission[0] != 0.0f || s.emission[1] != 0.0f || s.emission[2] != 0.0f; });
     FrameCompositing compositing(camera, settings, passes, lights, tinted, emissive, set.slabs, pointLights);
     CompositeOptions& options = compositing.options;
-    // Motion blur: the light looked up where each sample's material came from.
+    // Motion blur: the light looked up where each sample's material came from (the whole
+    // frame's maps are marched whole: no lookup box to pad, maxShift unused).
     options.shifted = !set.shifts.empty();
-    for (std::size_t i = 0; i < set.shifts.size(); i += 3) {
-        options.maxShift = std::max(options.maxShift, double(glm::length(glm::vec3(set.shifts[i], set.shifts[i + 1], set.shifts[i + 2]))));
-    }
     const std::vector<float> depthScale = (passes.depth || passes.deep || surface) ? depthScales(camera) : std::vector<float>{};
     // The surface's slab coordinate per pixel: its camera depth along the pixel's ray.
     std::vector<float> surfaceAt;

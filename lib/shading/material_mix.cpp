@@ -62,10 +62,7 @@ typename GridT::Ptr onTopology(const openvdb::FloatGrid& like, const openvdb::Fl
 openvdb::FloatGrid::ConstPtr onVoxelsOf(const openvdb::FloatGrid::ConstPtr& grid, const openvdb::FloatGrid& base)
 {
     if (grid->transform() == base.transform()) return grid;
-    openvdb::FloatGrid::Ptr out = openvdb::FloatGrid::create(0.0f);
-    out->setTransform(base.transform().copy());
-    openvdb::tools::resampleToMatch<openvdb::tools::BoxSampler>(*grid, *out);
-    return out;
+    return resampledOnto(*grid, base.transform());
 }
 
 /// A colour grid on @a topology's voxels and the shell a voxel around them (which trilinear
@@ -96,14 +93,22 @@ openvdb::Vec3SGrid::Ptr ratioGrid(const openvdb::FloatGrid& topology, const Make
     return out;
 }
 
-} // namespace
-
-MixedFrame mixMaterials(const GridSource::Impl& grid, const RenderSettings& settings, int channel)
+/// The volumes' media as the mix weighs them: the parts (the grid's own densities with the
+/// render's medium, then each added volume's, in the working space; @a channel >= 0: every
+/// medium grey at that channel's coefficients), the reference extinction (the grid's own, or
+/// the first part's that has one), each part's k and albedo, and a line for each part whose
+/// extinction is not in proportion to the reference.
+struct Media
 {
-    MixedFrame out;
-    out.settings = settings;
-    // The parts: the grid's own densities with the render's medium, then each added volume.
     std::vector<Part> parts;
+    Vec3d reference{0.0};
+    std::vector<std::string> notInProportion;
+};
+
+Media mediaOf(const GridSource::Impl& grid, const RenderSettings& settings, int channel)
+{
+    Media out;
+    std::vector<Part>& parts = out.parts;
     parts.push_back({grid.ownDensity, settings.medium, 1.0, Vec3d(0.0), &grid});
     for (const GridSource::Impl::AddedMaterial& m : grid.addedMaterials) {
         Medium working = m.medium;
@@ -117,15 +122,13 @@ MixedFrame mixMaterials(const GridSource::Impl& grid, const RenderSettings& sett
             for (Vec3d* v : {&p.medium.absorb, &p.medium.scatter, &p.medium.emission}) *v = Vec3d((*v)[channel]);
         }
     }
-    const Medium& own = parts[0].medium;
-    // The reference extinction: the grid's own, or the first part's that has one.
-    Vec3d reference = own.extinction();
+    Vec3d& reference = out.reference;
+    reference = parts[0].medium.extinction();
     for (const Part& p : parts) {
         if (mean(reference) > 0.0) break;
         reference = p.medium.extinction();
     }
-    for (std::size_t j = 0; j < parts.size(); ++j) {
-        Part& p = parts[j];
+    for (Part& p : parts) {
         const Vec3d extinction = p.medium.extinction();
         p.k = mean(reference) > 0.0 ? mean(extinction) / mean(reference) : 1.0;
         bool proportional = true;
@@ -135,15 +138,32 @@ MixedFrame mixMaterials(const GridSource::Impl& grid, const RenderSettings& sett
             proportional = proportional && std::abs(extinction[c] - scaled) <= 1e-6 * std::max(extinction[c], scaled);
         }
         if (!proportional) {
-            out.proportional = false;
             std::ostringstream w;
             w << "the volume " << (p.volume->path.empty() ? std::string("(host grid)") : p.volume->path) << " ('" << p.volume->name
               << "'): its extinction (" << extinction.x << "," << extinction.y << "," << extinction.z
               << ") is not in proportion to the input's: a deep image, which cannot be rendered channel by channel, takes it grey, "
                  "at its mean (light maps march one extinction colour); its scattered light is kept";
-            out.warnings.push_back(w.str());
+            out.notInProportion.push_back(w.str());
         }
     }
+    return out;
+}
+
+} // namespace
+
+bool extinctionsInProportion(const GridSource::Impl& grid, const RenderSettings& settings)
+{
+    return mediaOf(grid, settings, -1).notInProportion.empty();
+}
+
+MixedFrame mixMaterials(const GridSource::Impl& grid, const RenderSettings& settings, int channel)
+{
+    MixedFrame out;
+    out.settings = settings;
+    Media media = mediaOf(grid, settings, channel);
+    const std::vector<Part>& parts = media.parts;
+    const Vec3d reference = media.reference;
+    out.warnings = std::move(media.notInProportion);
 
     // The density: sum_j k_j rho_j on every part's voxels.
     openvdb::FloatGrid::Ptr density = grid.ownDensity->deepCopy();

@@ -22,11 +22,13 @@ struct MixedFrame
     std::shared_ptr<const GridSource::Impl> grid;
     RenderSettings settings;
     std::vector<std::string> warnings;
-    /// Every medium's extinction is in proportion to the grid's: the mix is exact. Else the
-    /// frame is rendered once per channel (@a channel of mixMaterials), or, where it cannot be
-    /// (a deep image), with the others grey at their means (warned).
-    bool proportional = true;
 };
+
+/// Every medium's extinction is in proportion to the grid's (grey media, tinted albedos, one
+/// hue in different strengths): one mix is exact. Else the frame is rendered once per channel
+/// (@a channel of mixMaterials), or, where it cannot be (a deep image), with the others grey
+/// at their means (mixMaterials warns).
+bool extinctionsInProportion(const GridSource::Impl& grid, const RenderSettings& settings);
 
 /// Mix @a grid's volumes (GridSource::Impl::addedMaterials; @a settings' medium is the grid's
 /// own) into one volume whose density is the extinction-weighted sum sum_j k_j rho_j

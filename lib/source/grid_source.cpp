@@ -32,6 +32,14 @@ Mat3d indexToWorldJacobian(const openvdb::math::Transform& xform, const openvdb:
     return a;
 }
 
+openvdb::FloatGrid::Ptr resampledOnto(const openvdb::FloatGrid& grid, const openvdb::math::Transform& voxels)
+{
+    openvdb::FloatGrid::Ptr out = openvdb::FloatGrid::create(0.0f);
+    out->setTransform(voxels.copy());
+    openvdb::tools::resampleToMatch<openvdb::tools::BoxSampler>(grid, *out);
+    return out;
+}
+
 } // namespace detail
 
 namespace {
@@ -299,10 +307,7 @@ GridSource attachEmitter(const GridSource::Impl& impl, const openvdb::GridBase::
     if (emitter->grid->transform() != impl.grid->transform()) {
         // Another voxel size or placement: resampled trilinearly onto the density's voxels, so
         // that every integrator reads both in one index space.
-        openvdb::FloatGrid::Ptr resampled = openvdb::FloatGrid::create(0.0f);
-        resampled->setTransform(impl.grid->transform().copy());
-        openvdb::tools::resampleToMatch<openvdb::tools::BoxSampler>(*emitter->grid, *resampled);
-        emitter->grid = resampled;
+        emitter->grid = detail::resampledOnto(*emitter->grid, impl.grid->transform());
     }
     emitter->name = base->getName();
     emitter->path = impl.path;
@@ -488,9 +493,7 @@ std::shared_ptr<GridSource::Impl> summedVolumes(const GridSource::Impl& base, co
     if (other.field->transform() == base.grid->transform()) {
         added = other.field->deepCopy();
     } else {
-        added = openvdb::FloatGrid::create(0.0f);
-        added->setTransform(base.grid->transform().copy());
-        openvdb::tools::resampleToMatch<openvdb::tools::BoxSampler>(*other.field, *added);
+        added = detail::resampledOnto(*other.field, base.grid->transform());
     }
     added->tree().voxelizeActiveTiles();
     const float scale = float(base.voxelLength / other.voxelLength);

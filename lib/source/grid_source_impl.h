@@ -80,6 +80,11 @@ struct VDB_EWA_LOCAL GridSource::Impl
 
 namespace detail {
 
+/// @a grid resampled trilinearly (OpenVDB's BoxSampler) onto the voxels of @a voxels: a grid of
+/// another voxel size or placement read in this one's index space (emission grids, added
+/// volumes).
+openvdb::FloatGrid::Ptr resampledOnto(const openvdb::FloatGrid& grid, const openvdb::math::Transform& voxels);
+
 /// Jacobian of the index-to-world map at an index position (columns: world image of the
 /// index axes).
 Mat3d indexToWorldJacobian(const openvdb::math::Transform& xform, const openvdb::Vec3d& pIndex);
