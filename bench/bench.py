@@ -547,7 +547,21 @@ o = np.array(density.transform.indexToWorld((0.0, 0.0, 0.0)))
 A = np.array([np.array(density.transform.indexToWorld(e)) - o for e in ((1.0, 0, 0), (0, 1.0, 0), (0, 0, 1.0))])
 w = ijk @ A + o  # the map is affine
 vel = np.stack([-{spin} * (w[:, 2] - cw[2]), np.full(len(w), {rise}), {spin} * (w[:, 0] - cw[0])], axis=-1).astype(np.float32)
-v.copyFromArray(vel.reshape(shape + (3,)), ijk=tuple(a - pad for a in lo), tolerance=(0.0, 0.0, 0.0))
+# Only on the density's active voxels dilated by pad (a cube of 2 pad + 1 a side): elsewhere
+# the background (0), inactive, as a sparse simulation's velocity field.
+active = np.zeros(shape, dtype=bool)
+for item in density.iterOnValues():
+    a0 = np.array(item['min']) - np.array(lo) + pad
+    a1 = np.array(item['max']) - np.array(lo) + pad + 1
+    active[a0[0]:a1[0], a0[1]:a1[1], a0[2]:a1[2]] = True
+grown = np.zeros_like(active)
+for dx in range(-pad, pad + 1):
+    for dy in range(-pad, pad + 1):
+        for dz in range(-pad, pad + 1):
+            grown |= np.roll(active, (dx, dy, dz), axis=(0, 1, 2))
+vel = vel.reshape(shape + (3,))
+vel[~grown] = 0.0
+v.copyFromArray(vel, ijk=tuple(a - pad for a in lo), tolerance=(0.0, 0.0, 0.0))
 vdb.write({path!r}, grids=[density, v])
 """
     subprocess.run([sys.executable, "-c", script], check=True)

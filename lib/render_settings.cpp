@@ -87,6 +87,7 @@ void RenderSettings::validate() const
     if (!(std::abs(motionBlur.shutterOpen) <= 1e3 && std::abs(motionBlur.shutterClose) <= 1e3)) fail("--shutter times must be finite and within 1000 frames of the frame");
     if (!(motionBlur.shutterClose >= motionBlur.shutterOpen)) fail("--shutter: the close time must not come before the open time");
     if (!(motionBlur.samples >= 1 && motionBlur.samples <= 1024)) fail("--motion-samples must be in [1, 1024]");
+    if (!(motionBlur.layers >= 1 && motionBlur.layers <= kMaxShutterLayers)) fail("--motion-layers must be in [1, " + std::to_string(kMaxShutterLayers) + "]");
     if (!(motionBlur.splitSigmas >= 0.5 && motionBlur.splitSigmas <= 64.0)) fail("--motion-split must be in [0.5, 64] standard deviations");
     if (!(lensSamples >= 1 && lensSamples <= 1024)) fail("--lens-samples must be in [1, 1024]");
     if (!(splat.kernelSigma >= 0.1 && splat.kernelSigma <= 4.0)) fail("--kernel-sigma must be in [0.1, 4] voxels");
@@ -123,6 +124,7 @@ RenderSettings RenderSettings::preset(Quality quality)
         s.splat.taper = true;
         s.splat.refineEmission = 1;
         s.motionBlur.samples = 1;
+        s.motionBlur.layers = 1;
         s.motionBlur.splitSigmas = 4.0;
         s.lensSamples = 1;
         break;
@@ -137,6 +139,7 @@ RenderSettings RenderSettings::preset(Quality quality)
         s.splat.lodPixels = 0.0;
         s.splat.refineEmission = 4;
         s.motionBlur.samples = 4;
+        s.motionBlur.layers = 1;
         s.motionBlur.splitSigmas = 2.0;
         s.motionBlur.lightFollows = true;
         s.lensSamples = 8;

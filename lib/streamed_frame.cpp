@@ -126,7 +126,8 @@ void Renderer::renderStreamedFogVolume(const GridSource::Impl& g, const Camera& 
     for (const auto& view : views) {
         view->raster = std::make_unique<detail::StreamedRaster>(view->camera, view->settings, passes, lights, g.color != nullptr,
             detail::greyFrame(mSettings, g), slabs, &budget, &pointLights,
-            view->settings.motionBlur.lightFollows ? detail::largestTravel(g, view->settings) : 0.0);
+            view->settings.motionBlur.lightFollows ? detail::largestTravel(g, view->settings) : 0.0,
+            movesOverTheShutter(g) ? view->settings.motionBlur.layers : 1);
     }
     stats.rasterSeconds += timer.lap();
     const double alpha = mSettings.splat.prefilter ? detail::quasiInterpolationAlpha(mSettings.splat.kernelSigma) : 0.0;

@@ -150,6 +150,7 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
            shutter: OptionValue = None,
            motion_samples: Optional[int] = None,
            motion_split: Optional[Number] = None,
+           motion_layers: Optional[int] = None,
            motion_light: OptionValue = None,
            lens_samples: Optional[int] = None,
            blur_samples: Optional[int] = None,
@@ -341,12 +342,16 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
     motion_samples (--motion-samples): motion blur: sub-frames over the shutter, each blurred over its
         part of it, averaged; widened kernels blur optical depth where a camera averages images, so
         opaque edges need more to converge (docs/equations.md#motion-blur); about N times the time;
-        range [1, 1024] (default: 2; draft 1, high 4, final 8)
+        range [1, 1024] (default: 1; draft 1, high 4, final 8)
     motion_split (--motion-split): motion blur: a kernel whose path over its sub-frame is longer on the
         screen than this many of its standard deviations is split into sub-kernels of at most that
         length; smaller keeps the blur's box shape closer (a single kernel's blur within 1.2 % of its
         peak at 2, 4.6 % at 3, 11 % at 4) at the cost of more kernels; in [0.5, 64] (default: 3; draft
         4, high and final 2)
+    motion_layers (--motion-layers): motion blur: transmittances each pixel keeps over each sub-frame,
+        one per equal part of its shutter; a split kernel's pieces darken only their parts, so an opaque
+        edge moving across a pixel covers it part of the shutter, as sub-frames would, in one sweep
+        (docs/equations.md#shutter-layers); 1: off; range [1, 8] (default: 2; draft 1, high and final 1)
     motion_light (--motion-light): motion blur: follow (each slab sample lit where its material was in
         the still field, as the reference carries each point's light along its path) or still (lit by
         the still field's light where the material is now: the shutter's mid-time shadows, about 1.2x

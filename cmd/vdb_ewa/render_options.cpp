@@ -218,12 +218,17 @@ void RenderOptions::add(CLI::App* app)
     mApp->add_option("--motion-samples", mMotionSamples,
         "motion blur: sub-frames over the shutter, each blurred over its part of it, averaged; widened kernels blur optical "
         "depth where a camera averages images, so opaque edges need more to converge (docs/equations.md#motion-blur); "
-        "about N times the time; range [1, 1024] (default: 2; draft 1, high 4, final 8)");
+        "about N times the time; range [1, 1024] (default: " + std::to_string(mb.samples) + "; draft 1, high 4, final 8)");
     mApp->add_option("--motion-split", mMotionSplit,
         "motion blur: a kernel whose path over its sub-frame is longer on the screen than this many of its standard "
         "deviations is split into sub-kernels of at most that length; smaller keeps the blur's box shape closer (a single "
         "kernel's blur within 1.2 % of its peak at 2, 4.6 % at 3, 11 % at 4) at the cost of more kernels; in [0.5, 64] "
         "(default: " + fmt(mb.splitSigmas) + "; draft 4, high and final 2)");
+    mApp->add_option("--motion-layers", mMotionLayers,
+        "motion blur: transmittances each pixel keeps over each sub-frame, one per equal part of its shutter; a split "
+        "kernel's pieces darken only their parts, so an opaque edge moving across a pixel covers it part of the shutter, "
+        "as sub-frames would, in one sweep (docs/equations.md#shutter-layers); 1: off; range [1, " +
+            std::to_string(kMaxShutterLayers) + "] (default: " + std::to_string(mb.layers) + "; draft 1, high and final 1)");
     mApp->add_option("--motion-light", mMotionLight,
         "motion blur: follow (each slab sample lit where its material was in the still field, as the reference carries "
         "each point's light along its path) or still (lit by the still field's light where the material is now: the "
@@ -404,6 +409,7 @@ void RenderOptions::resolve(std::optional<int> frame, CameraSettings& cam, Rende
     if (mBlurSamples) rs.blurSamples = *mBlurSamples;
     if (mMotionSamples) rs.motionBlur.samples = *mMotionSamples;
     if (mMotionSplit) rs.motionBlur.splitSigmas = *mMotionSplit;
+    if (mMotionLayers) rs.motionBlur.layers = *mMotionLayers;
     if (!mMotionLight.empty()) rs.motionBlur.lightFollows = parseChoice("motion-light", mMotionLight, kMotionLights);
     if (mLensSamples) rs.lensSamples = *mLensSamples;
     const GrantedSettings granted = grantedExecution();
@@ -593,6 +599,7 @@ std::vector<Attributes> RenderOptions::resolvedOptions(const GridSource& grid, c
         model.emplace_back("shutter", fmt(rs.motionBlur.shutterOpen) + "," + fmt(rs.motionBlur.shutterClose));
         model.emplace_back("motion-samples", std::to_string(rs.motionBlur.samples));
         model.emplace_back("motion-split", fmt(rs.motionBlur.splitSigmas));
+        model.emplace_back("motion-layers", std::to_string(rs.motionBlur.layers));
         model.emplace_back("motion-light", choiceName(rs.motionBlur.lightFollows, kMotionLights));
     }
     Attributes method{{"method", choiceName(rs.method, kMethods)}};
@@ -626,7 +633,7 @@ void RenderOptions::ignoredOptionWarnings(std::vector<std::string>& warnings, bo
         {"--emission-grid", {"--emission-color", "--emission-intensity"}},
         {"--temperature", {"--temperature-scale", "--temperature-offset", "--blackbody-intensity"}},
         {"--environment", {"--environment-lights", "--environment-intensity"}},
-        {"--velocity-grid", {"--velocity-scale", "--velocity-unit", "--fps", "--shutter", "--motion-samples", "--motion-split", "--motion-light"}},
+        {"--velocity-grid", {"--velocity-scale", "--velocity-unit", "--fps", "--shutter", "--motion-samples", "--motion-split", "--motion-layers", "--motion-light"}},
         {"--fstop", {"--focus-distance", "--lens-samples"}}};
     if (given("--point-light-radius") && !given("--point-light") && !given("--spot-light")) {
         warnings.push_back("--point-light-radius changes nothing without --point-light or --spot-light");

@@ -127,7 +127,7 @@ private:
     // Motion blur and depth of field.
     std::string mVelocityGrid, mVelocityUnit, mShutter, mMotionLight;
     std::optional<double> mVelocityScale, mFps, mFstop, mFocusDistance;
-    std::optional<int> mBlurSamples, mMotionSamples, mLensSamples;
+    std::optional<int> mBlurSamples, mMotionSamples, mMotionLayers, mLensSamples;
     std::optional<double> mMotionSplit;
     OutputOptions mOutputOptions;
 };

@@ -117,6 +117,8 @@ struct GridEmission
 /// Most directional lights a render takes (RenderSettings::lights), and most point and spot
 /// lights (RenderSettings::pointLights): each has a light map.
 constexpr std::size_t kMaxLights = 64;
+/// Most shutter layers (MotionBlur::layers) a pixel keeps.
+constexpr int kMaxShutterLayers = 8;
 
 /// Most worker threads a render takes (RenderSettings::threads): past the largest machines, and
 /// a 2^31-thread arena fails in the thread library with no word of the option.
@@ -208,8 +210,9 @@ struct MotionBlur
     /// widened by their paths blur optical depth; a camera averages images: an opaque edge
     /// moving over twice its width stays opaque where the shutter's average is half. More
     /// sub-frames converge to the shutter's average, at their cost in time
-    /// (docs/equations.md#motion-blur). 1: one frame; presets: draft 1, default 2, high 4, final 8.
-    int samples = 2;
+    /// (docs/equations.md#motion-blur); shutter layers (below) get most of the way in one sweep.
+    /// 1: one frame; presets: draft and default 1, high 4, final 8.
+    int samples = 1;
     /// A kernel whose path over its sub-frame is longer on the screen than this many of its
     /// standard deviations along it (the low-pass filter's included) is split into sub-kernels
     /// of at most that length: a Gaussian convolved with a box is then one Gaussian of the
@@ -223,6 +226,14 @@ struct MotionBlur
     /// the reference (docs/equations.md#motion-blur). Presets: draft and default false, high
     /// and final true.
     bool lightFollows = false;
+    /// Shutter layers: within each sub-frame, every pixel keeps this many transmittances, one
+    /// per equal part of the sub-frame's shutter, and a sub-kernel adds its optical depth to
+    /// the parts its piece of the path covers (kernels whose paths are not split: to all). So an
+    /// opaque edge that moves across a pixel covers it for part of the shutter instead of all of
+    /// it, as sub-frames would, at the cost of one sweep; a slab's colour is shared by its
+    /// layers (docs/equations.md#shutter-layers). 1: off. Presets: draft 1, default 2, high
+    /// and final 1 (their sub-frames converge).
+    int layers = 2;
 
     /// Seconds (VelocityUnit::Second) or frames a velocity is multiplied by to move a point over
     /// the time from the frame's to @a frames frames later, scale included.

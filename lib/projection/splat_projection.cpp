@@ -191,6 +191,8 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels, c
                 extents[i] = extent;
 
                 setFootprint(sp, fp, params.cutoffRadius);
+                sp.layerFirst = kernels.motion.empty() ? 0 : kernels.motion[i].layerFirst;
+                sp.layerCount = kernels.motion.empty() ? 0 : kernels.motion[i].layerCount;
                 // Weight w_k = density x voxel volume / voxel length (Eq. 8 with extinction
                 // per voxel length), times the footprint peak (Eq. 32, 33): the peak optical
                 // depth in voxel lengths of unit density.

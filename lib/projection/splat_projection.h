@@ -31,7 +31,11 @@ struct Splat
     std::int64_t firstSlab;    ///< first slab it overlaps
     std::uint64_t shareOffset; ///< index of its first slab share in SplatSet::shares
     std::uint32_t slabCount;   ///< number of slabs it overlaps
+    /// Motion blur's shutter layers it darkens (KernelMotion::layerFirst, layerCount; 0 of
+    /// them: all).
+    std::uint16_t layerFirst, layerCount;
 };
+static_assert(sizeof(Splat) == 104, "Splat: the shutter layers fill the padding after slabCount");
 
 /// The layout of the passes beside the beauty that have source terms of their own: the shadow
 /// pass first, then the emission pass, each only if asked for. SplatSet::passSources holds a

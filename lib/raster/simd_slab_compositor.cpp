@@ -244,12 +244,24 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
     for (int first = x0 & ~(kLanes - 1); first <= x1; first += kLanes) {
         const int p = y * kTileSize + first;
         // 1. Per channel 1 - exp(-tau), the slab's mass and |T|^2 behind the whole slab.
+        // With shutter layers, each layer's own (layerAbsorbed) and their mean transmittance.
         alignas(64) float absorbed[C][kLanes], mass[kLanes], t2After[kLanes];
+        alignas(64) float layerAbsorbed[kMaxShutterLayers][C][kLanes];
+        const int layers = mLayerT.empty() ? 0 : mLayers;
         Floats m = zero, t2 = zero;
         for (int c = 0; c < 3; ++c) m = hn::Add(m, hn::LoadU(d, &mTau[base + std::size_t(channel(c)) * kTilePixels + std::size_t(p)]));
         for (int c = 0; c < C; ++c) {
             const Floats a = absorbedOf(hn::LoadU(d, &mTau[base + std::size_t(c) * kTilePixels + std::size_t(p)]));
-            const Floats t = hn::Mul(hn::LoadU(d, &mT[c * kTilePixels + p]), hn::Sub(one, a));
+            Floats t = hn::Mul(hn::LoadU(d, &mT[c * kTilePixels + p]), hn::Sub(one, a));
+            if (layers) {
+                t = zero;
+                for (int k = 0; k < layers; ++k) {
+                    const Floats ak = absorbedOf(hn::LoadU(d, &mLayerTau[layerIndex(slab, k, c) + std::size_t(p)]));
+                    hn::Store(ak, d, layerAbsorbed[k][c]);
+                    t = hn::MulAdd(hn::LoadU(d, &mLayerT[layerT(k, c) + std::size_t(p)]), hn::Sub(one, ak), t);
+                }
+                t = hn::Div(t, hn::Set(d, float(layers)));
+            }
             t2 = hn::MulAdd(t, t, t2);
             hn::Store(a, d, absorbed[c]);
         }
@@ -389,8 +401,27 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
             float* colour = &mC[c * kTilePixels + p];
             float* transmittance = &mT[c * kTilePixels + p];
             const Floats t = hn::LoadU(d, transmittance);
-            hn::StoreU(hn::IfThenElse(update, hn::MulAdd(t, source[c], hn::LoadU(d, colour)), hn::LoadU(d, colour)), d, colour);
-            const Floats tNew = hn::IfThenElse(update, hn::Mul(t, hn::Sub(one, a)), t);
+            Floats seenThrough = t, tNew = hn::IfThenElse(update, hn::Mul(t, hn::Sub(one, a)), t);
+            if (layers) {
+                // Motion blur's shutter layers (compositeLayers): the colour seen through each
+                // layer by its own absorption, each layer's transmittance by its own depth.
+                const auto thick = hn::And(chosen, hn::Gt(tau[c], zero));
+                Floats seen = zero, left = zero;
+                for (int k = 0; k < layers; ++k) {
+                    float* tk = &mLayerT[layerT(k, c) + std::size_t(p)];
+                    const Floats ak = hn::Load(d, layerAbsorbed[k][c]);
+                    const Floats before = hn::LoadU(d, tk);
+                    seen = hn::MulAdd(before, ak, seen);
+                    const Floats after = hn::IfThenElse(thick, hn::Mul(before, hn::Sub(one, ak)), before);
+                    hn::StoreU(after, d, tk);
+                    left = hn::Add(left, after);
+                }
+                const Floats count = hn::Set(d, float(layers));
+                const auto absorbing = hn::And(thick, hn::Gt(a, zero));
+                seenThrough = hn::IfThenElse(absorbing, hn::Div(seen, hn::Mul(count, hn::IfThenElse(absorbing, a, one))), t);
+                tNew = hn::IfThenElse(thick, hn::Div(left, count), t);
+            }
+            hn::StoreU(hn::IfThenElse(update, hn::MulAdd(seenThrough, source[c], hn::LoadU(d, colour)), hn::LoadU(d, colour)), d, colour);
             hn::StoreU(tNew, d, transmittance);
             t2Now = hn::MulAdd(tNew, tNew, t2Now);
         }
@@ -419,6 +450,7 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
             if (!mEmission.empty()) hn::StoreU(zero, d, &mEmission[i]);
             if (!mScatter.empty()) hn::StoreU(zero, d, &mScatter[i]);
             for (int k = 0; k < mPassCount; ++k) hn::StoreU(zero, d, &mPassEmission[passIndex(slab, k, c) + std::size_t(p)]);
+            for (int k = 0; k < (mLayerTau.empty() ? 0 : mLayers); ++k) hn::StoreU(zero, d, &mLayerTau[layerIndex(slab, k, c) + std::size_t(p)]);
         }
         if (!mMoment.empty()) {
             hn::StoreU(zero, d, &mMoment[slot(slab) * kTilePixels + std::size_t(p)]);

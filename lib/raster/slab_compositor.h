@@ -77,6 +77,10 @@ struct CompositeOptions
     /// units) from where it is now.
     bool shifted = false;
     double maxShift = 0.0;
+    /// Motion blur's shutter layers (MotionBlur::layers): each pixel keeps this many
+    /// transmittances, and a splat's optical depth darkens the layers it covers
+    /// (Splat::layerFirst, layerCount); the slab's colour is shared by them. 1: off.
+    int layers = 1;
     const OpticalModel* model = nullptr;
     const Camera* camera = nullptr;
     bool tinted = false; ///< scattering weights differ from optical depths (material colours)

@@ -9,7 +9,7 @@ namespace detail {
 
 StreamedRaster::StreamedRaster(const Camera& camera, const RenderSettings& settings, const PassRequest& passes,
     const std::vector<LightMap>& lights, bool tinted, bool grey, const SlabGrid& slabs, const MemoryBudget* budget, const PointLights* pointLights,
-    double maxShift)
+    double maxShift, int layers)
     : mCamera(camera), mPasses(passes), mBudget(budget), mTilesX((camera.width() + kTileSize - 1) / kTileSize),
       mTilesY((camera.height() + kTileSize - 1) / kTileSize),
       // Emissive unless nothing in the model emits: the splats are not known yet.
@@ -22,6 +22,7 @@ StreamedRaster::StreamedRaster(const Camera& camera, const RenderSettings& setti
     mCompositing->options.emissive = emits;
     mCompositing->options.shifted = maxShift > 0.0;
     mCompositing->options.maxShift = maxShift;
+    mCompositing->options.layers = passes.deep ? 1 : layers;
     const std::unique_ptr<SlabCompositor> backend = slabCompositorFor(settings, grey ? 1 : 3, mStats);
     mFrame = blankFrame(camera.width(), camera.height(), passes);
     if (passes.depth || passes.deep) mDepthScale = depthScales(camera);

@@ -27,9 +27,11 @@ public:
     /// @a pointLights: the point and spot lights (null: none), which must outlive it.
     /// @a maxShift: motion blur's largest move (world units, largestTravel; 0: none): the
     /// splats carry their moves, and the light is looked up where their material came from.
+    /// @a layers: motion blur's shutter layers (CompositeOptions::layers; 1 where nothing moves
+    /// or deep samples are asked for).
     StreamedRaster(const Camera& camera, const RenderSettings& settings, const PassRequest& passes, const std::vector<LightMap>& lights,
         bool tinted, bool grey, const SlabGrid& slabs, const MemoryBudget* budget, const PointLights* pointLights = nullptr,
-        double maxShift = 0.0);
+        double maxShift = 0.0, int layers = 1);
     ~StreamedRaster();
     StreamedRaster(const StreamedRaster&) = delete;
     StreamedRaster& operator=(const StreamedRaster&) = delete;

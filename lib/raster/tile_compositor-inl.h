@@ -42,7 +42,7 @@ public:
     struct Ring
     {
         int size = 0;
-        std::vector<float> tau, emission, scatter, passEmission, moment, moment2, shift;
+        std::vector<float> tau, emission, scatter, passEmission, moment, moment2, shift, layerTau;
         std::vector<Dirty> dirty;
         std::vector<LightRays> rays;
     };
@@ -51,7 +51,7 @@ public:
     /// splats to come (0: none yet; ensureRing allocates them).
     TileCompositor(int x0, int y0, int w, int h, int ringSize, const CompositeOptions& options)
         : mX0(x0), mY0(y0), mW(w), mH(h), mCutoff(options.cutoff), mExp(options.exp),
-          mTable(options.table), mOptions(options), mPassCount(options.layout.count),
+          mTable(options.table), mOptions(options), mPassCount(options.layout.count), mLayers(std::max(options.layers, 1)),
           mPassC(std::size_t(mPassCount) * C * kTilePixels, 0.0f)
     {
         ensureRing(ringSize);
@@ -97,6 +97,7 @@ public:
             mMoment = std::move(spare->moment);
             mMoment2 = std::move(spare->moment2);
             mShift = std::move(spare->shift);
+            mLayerTau = std::move(spare->layerTau);
             mDirty = std::move(spare->dirty);
             mRays = std::move(spare->rays);
             spare->size = 0;
@@ -109,6 +110,7 @@ public:
             mMoment = std::move(fresh.mMoment);
             mMoment2 = std::move(fresh.mMoment2);
             mShift = std::move(fresh.mShift);
+            mLayerTau = std::move(fresh.mLayerTau);
             mDirty = std::move(fresh.mDirty);
         }
         mRingSize = ringSize;
@@ -174,11 +176,12 @@ public:
             spare->moment = std::move(mMoment);
             spare->moment2 = std::move(mMoment2);
             spare->shift = std::move(mShift);
+            spare->layerTau = std::move(mLayerTau);
             spare->dirty = std::move(mDirty);
             spare->rays = std::move(mRays);
             spare->size = mRingSize;
         }
-        for (std::vector<float>* ring : {&mTau, &mEmission, &mScatter, &mPassEmission, &mMoment, &mMoment2, &mShift}) *ring = {};
+        for (std::vector<float>* ring : {&mTau, &mEmission, &mScatter, &mPassEmission, &mMoment, &mMoment2, &mShift, &mLayerTau}) *ring = {};
         mDirty = {};
         mRays = {};
         mRaysTraced = false;
@@ -209,6 +212,7 @@ public:
         if (!mRaysTraced) traceRays();
         // Slabs in front of this splat's first one can receive nothing more: flush them.
         flushBefore(s.firstSlab);
+        if (s.layerCount != 0 && !mLayerTau.empty() && mLayerT.empty()) splitLayers();
         const int lx0 = std::max(s.x0 - mX0, 0), lx1 = std::min(s.x1 - mX0, mW - 1);
         const int ly0 = std::max(s.y0 - mY0, 0), ly1 = std::min(s.y1 - mY0, mH - 1);
         if (lx0 > lx1 || ly0 > ly1) return;
@@ -242,8 +246,10 @@ public:
     /// tile pixel @a p). Per slab the kernel overlaps: the position moments (lit frames) and
     /// the shift's (moving ones), then per channel the optical depth, emission, scattering
     /// weight and the passes' sources.
+    /// Always inlined into a backend's addRow (the shutter layers' branch would tip the
+    /// compiler's budget, and the row's adds would become calls).
     template <typename Add>
-    void forEachPlane(const Splat& s, const float* shares, const float* moments, const float* passSources, const float* shift, int p, Add&& add)
+    [[gnu::always_inline]] inline void forEachPlane(const Splat& s, const float* shares, const float* moments, const float* passSources, const float* shift, int p, Add&& add)
     {
         for (int j = 0; j < int(s.slabCount); ++j) {
             const std::size_t base = slot(s.firstSlab + j) * C * kTilePixels + std::size_t(p);
@@ -263,7 +269,15 @@ public:
                 }
             }
             for (int c = 0; c < C; ++c) {
-                add(&mTau[base + std::size_t(c) * kTilePixels], shares[j] * s.tau[c]);
+                if (s.layerCount == 0 || mLayerTau.empty()) {
+                    add(&mTau[base + std::size_t(c) * kTilePixels], shares[j] * s.tau[c]);
+                } else {
+                    // Motion blur's shutter layers: the piece's optical depth over its part of
+                    // the shutter, the layers' mean its share (foldLayers).
+                    const int first = std::min(int(s.layerFirst), mLayers - 1), last = std::min(first + int(s.layerCount), mLayers);
+                    const float each = shares[j] * s.tau[c] * float(mLayers) / float(last - first);
+                    for (int k = first; k < last; ++k) add(&mLayerTau[layerIndex(s.firstSlab + j, k, c) + std::size_t(p)], each);
+                }
                 if (!mEmission.empty()) add(&mEmission[base + std::size_t(c) * kTilePixels], shares[j] * s.emission[c]);
                 if (!mScatter.empty()) add(&mScatter[base + std::size_t(c) * kTilePixels], shares[j] * s.scatter[c]);
                 for (int k = 0; k < mPassCount; ++k)
@@ -317,7 +331,7 @@ private:
     {
         const std::pair<std::vector<float>*, std::size_t> planes[] = {{&mTau, C * kTilePixels}, {&mEmission, C * kTilePixels},
             {&mScatter, C * kTilePixels}, {&mPassEmission, std::size_t(mPassCount) * C * kTilePixels}, {&mMoment, kTilePixels},
-            {&mMoment2, kTilePixels}, {&mShift, kShiftPlanes * kTilePixels}};
+            {&mMoment2, kTilePixels}, {&mShift, kShiftPlanes * kTilePixels}, {&mLayerTau, std::size_t(mLayers) * C * kTilePixels}};
         for (const auto& [plane, floats] : planes) {
             if (!plane->empty() && floats > 0) f(*plane, floats);
         }
@@ -326,7 +340,7 @@ private:
     /// An empty ring of @a ringSize slots for @a other's options (ensureRing).
     TileCompositor(const TileCompositor& other, int ringSize)
         : mX0(other.mX0), mY0(other.mY0), mW(other.mW), mH(other.mH), mMask(ringSize - 1), mCutoff(other.mCutoff),
-          mExp(other.mExp), mTable(other.mTable), mOptions(other.mOptions), mPassCount(other.mPassCount),
+          mExp(other.mExp), mTable(other.mTable), mOptions(other.mOptions), mPassCount(other.mPassCount), mLayers(other.mLayers),
           mTau(std::size_t(ringSize) * C * kTilePixels, 0.0f),
           mEmission(mOptions.emissive ? std::size_t(ringSize) * C * kTilePixels : 0, 0.0f),
           mPassEmission(std::size_t(ringSize) * std::size_t(mPassCount) * C * kTilePixels, 0.0f),
@@ -334,6 +348,7 @@ private:
           mMoment(mOptions.lit() ? std::size_t(ringSize) * kTilePixels : 0, 0.0f),
           mMoment2(mOptions.lit() ? std::size_t(ringSize) * kTilePixels : 0, 0.0f),
           mShift(mOptions.lit() && mOptions.shifted ? std::size_t(ringSize) * kShiftPlanes * kTilePixels : 0, 0.0f),
+          mLayerTau(mLayers > 1 ? std::size_t(ringSize) * std::size_t(mLayers) * C * kTilePixels : 0, 0.0f),
           mDirty(std::size_t(ringSize))
     {
     }
@@ -345,6 +360,80 @@ private:
     std::size_t passIndex(std::int64_t slab, int k, int c) const
     {
         return ((slot(slab) * std::size_t(mPassCount) + std::size_t(k)) * C + std::size_t(c)) * kTilePixels;
+    }
+    /// Start of shutter layer k, channel c of a slab in mLayerTau.
+    std::size_t layerIndex(std::int64_t slab, int k, int c) const
+    {
+        return ((slot(slab) * std::size_t(mLayers) + std::size_t(k)) * C + std::size_t(c)) * kTilePixels;
+    }
+    /// Start of shutter layer k, channel c in mLayerT.
+    static std::size_t layerT(int k, int c) { return (std::size_t(k) * C + std::size_t(c)) * kTilePixels; }
+
+    /// Motion blur's shutter layers, at the tile's first splat that covers only some of them:
+    /// every layer starts from the transmittance so far (until then they were all equal; a
+    /// tile without such a splat composites as without layers, bit for bit).
+    void splitLayers()
+    {
+        mLayerT.resize(std::size_t(mLayers) * C * kTilePixels);
+        for (int k = 0; k < mLayers; ++k) std::copy_n(mT, C * kTilePixels, mLayerT.begin() + std::ptrdiff_t(layerT(k, 0)));
+    }
+
+    /// Motion blur's shutter layers, before @a slab is lit and composited in its dirty box
+    /// @a d: the splats that covered every layer were summed in mTau, the others in their
+    /// layers' planes; each layer's plane becomes that layer's optical depth (the sum plus its
+    /// own), and mTau the layers' mean, which lights the slab (docs/equations.md#shutter-layers).
+    void foldLayers(std::int64_t slab, const Dirty& d)
+    {
+        const float share = 1.0f / float(mLayers);
+        for (int y = d.y0; y <= d.y1; ++y)
+            for (int c = 0; c < C; ++c) {
+                float* all = &mTau[slot(slab) * C * kTilePixels + std::size_t(c) * kTilePixels + std::size_t(y * kTileSize)];
+                float sum[kTileSize] = {};
+                for (int k = 0; k < mLayers; ++k) {
+                    float* own = &mLayerTau[layerIndex(slab, k, c) + std::size_t(y * kTileSize)];
+                    for (int x = d.x0; x <= d.x1; ++x) {
+                        sum[x] += own[x];
+                        own[x] += all[x];
+                    }
+                }
+                for (int x = d.x0; x <= d.x1; ++x) all[x] += share * sum[x];
+            }
+    }
+
+    /// The layers' mean transmittance behind @a slab at pixel p, channel c (as compositeLayers
+    /// leaves it).
+    float layersAfter(std::int64_t slab, int p, int c) const
+    {
+        float left = 0.0f;
+        for (int k = 0; k < mLayers; ++k) {
+            left += mLayerT[layerT(k, c) + std::size_t(p)] * (1.0f - slabAbsorbed(mLayerTau[layerIndex(slab, k, c) + std::size_t(p)]));
+        }
+        return left / float(mLayers);
+    }
+
+    /// compositeSlab with motion blur's shutter layers, for channel c of pixel p: the slab's
+    /// colour (its source per unit of the layers' mean absorption @a absorbed) seen through each
+    /// layer's transmittance by that layer's absorption, each layer's transmittance updated with
+    /// its own optical depth, mT their mean (docs/equations.md#shutter-layers).
+    void compositeLayers(std::int64_t slab, int p, int c, float tau, float absorbed, float emission, float scattered)
+    {
+        float& colour = mC[c * kTilePixels + p];
+        float& t = mT[c * kTilePixels + p];
+        if (!(tau > 0.0f)) {
+            if (emission > 0.0f) colour += t * emission;
+            return;
+        }
+        float seen = 0.0f, left = 0.0f;
+        for (int k = 0; k < mLayers; ++k) {
+            float& tk = mLayerT[layerT(k, c) + std::size_t(p)];
+            const float a = slabAbsorbed(mLayerTau[layerIndex(slab, k, c) + std::size_t(p)]);
+            seen += tk * a;
+            tk *= 1.0f - a;
+            left += tk;
+        }
+        const float emitted = emission == 0.0f ? 0.0f : (tau > 1e-7f ? emission / tau * absorbed : emission);
+        colour += (emitted + scattered) * (absorbed > 0.0f ? seen / (float(mLayers) * absorbed) : t);
+        t = left / float(mLayers);
     }
 
     void markDirty(std::int64_t slab, int x0, int y0, int x1, int y1)
@@ -446,6 +535,7 @@ private:
             tBefore[c] = t;
             mC[c * kTilePixels + p] += t * rgba[c];
             t *= 1.0f - rgba[3];
+            for (int k = 0; k < (mLayerT.empty() ? 0 : mLayers); ++k) mLayerT[layerT(k, c) + std::size_t(p)] *= 1.0f - rgba[3];
             t2 += t * t;
         }
         const PassRequest& passes = mOptions.passes;
@@ -470,40 +560,69 @@ private:
 
     /// The fraction of the slab at @a base in front of where pixel p's |T_rgb|^2 falls to the
     /// cutoff (the slab's optical depth taken as uniform across it); 1 if it does not.
-    float terminationFraction(std::size_t base, int p) const
+    float terminationFraction(std::int64_t slab, std::size_t base, int p) const
     {
         // |T(u)|^2 = sum_c T_c^2 exp(-2 u tau_c): its logarithm falls with u and is convex (a
         // log-sum-exp of lines), so Newton's method on ln|T(u)|^2 - ln cutoff from u = 0 climbs
         // to the crossing from below without overshooting, quadratically; one exact step when
-        // the channels are equal (C == 1: a line).
-        double t2[C], tau[C];
+        // the channels are equal (C == 1: a line, without shutter layers).
+        // With shutter layers T_c(u) is the layers' mean: its square is the sum over pairs of
+        // layers k, l of T_kc T_lc / L^2 exp(-u (tau_kc + tau_lc)), a log-sum-exp of lines too;
+        // with one channel, the mean's square (ln of it: 2 ln of a log-sum-exp, as convex),
+        // L terms instead of L^2. Terms w exp(-u beta); as composited, a slab's optical depth
+        // counts from 0 (halo kernels weigh negative).
+        const int layers = mLayerT.empty() ? 1 : mLayers;
+        const bool meanSquared = layers > 1 && C == 1;
+        double w[C * kMaxShutterLayers * kMaxShutterLayers], beta[C * kMaxShutterLayers * kMaxShutterLayers];
+        int terms = 0;
         for (int c = 0; c < C; ++c) {
-            const double t = mT[c * kTilePixels + p];
-            t2[c] = t * t;
-            // As composited: a slab's optical depth counts from 0 (halo kernels weigh negative).
-            tau[c] = std::max(double(mTau[base + std::size_t(c) * kTilePixels + std::size_t(p)]), 0.0);
+            if (meanSquared) {
+                for (int k = 0; k < layers; ++k) {
+                    w[terms] = double(mLayerT[layerT(k, c) + std::size_t(p)]) / double(layers);
+                    beta[terms++] = std::max(double(mLayerTau[layerIndex(slab, k, c) + std::size_t(p)]), 0.0);
+                }
+                continue;
+            }
+            if (layers == 1) {
+                const double t = mT[c * kTilePixels + p];
+                w[terms] = t * t;
+                beta[terms++] = 2.0 * std::max(double(mTau[base + std::size_t(c) * kTilePixels + std::size_t(p)]), 0.0);
+                continue;
+            }
+            for (int k = 0; k < layers; ++k)
+                for (int l = 0; l < layers; ++l) {
+                    w[terms] = double(mLayerT[layerT(k, c) + std::size_t(p)]) * double(mLayerT[layerT(l, c) + std::size_t(p)]) / double(layers * layers);
+                    beta[terms++] = std::max(double(mLayerTau[layerIndex(slab, k, c) + std::size_t(p)]), 0.0) +
+                                    std::max(double(mLayerTau[layerIndex(slab, l, c) + std::size_t(p)]), 0.0);
+                }
         }
         const auto t2At = [&](double u, double* slope) {
             double f = 0.0, df = 0.0;
-            for (int c = 0; c < C; ++c) {
-                const double e = t2[c] * std::exp(-2.0 * u * tau[c]);
+            for (int i = 0; i < terms; ++i) {
+                const double e = w[i] * std::exp(-u * beta[i]);
                 f += e;
-                df -= 2.0 * tau[c] * e;
+                df -= beta[i] * e;
+            }
+            if (meanSquared) { // f: the mean transmittance
+                if (slope) *slope = 3.0 * 2.0 * f * df;
+                return 3.0 * f * f;
             }
             // C == 1: the three equal channels, scaled after the sum as e + e + e == 3 e.
             if (slope) *slope = df * double(3 / C);
             return f * double(3 / C);
         };
         const double logCutoff = std::log(double(mCutoff));
-        if (!(t2At(1.0, nullptr) < double(mCutoff)) || !(t2At(0.0, nullptr) >= double(mCutoff))) return 1.0f;
+        // (Shutter layers: their caller found the back below the cutoff, layersAfter.)
+        if ((layers == 1 && !(t2At(1.0, nullptr) < double(mCutoff))) || !(t2At(0.0, nullptr) >= double(mCutoff))) return 1.0f;
         double u = 0.0;
         for (int n = 0; n < 32; ++n) {
             double slope;
             const double f = t2At(u, &slope);
             const double step = (std::log(f) - logCutoff) * f / -slope;
-            if (!(step > 1e-9)) break;
+            // Shutter layers: to 1e-4 of the slab (their sums of exponentials take a few steps).
+            if (!(step > (layers > 1 ? 1e-4 : 1e-9))) break;
             u += step;
-            if (C == 1) break;
+            if (C == 1 && layers == 1) break;
         }
         return float(std::min(u, 1.0));
     }
@@ -538,6 +657,7 @@ private:
     void flush(std::int64_t slab)
     {
         Dirty& d = mDirty[slot(slab)];
+        if (!mLayerT.empty()) foldLayers(slab, d);
         if (!mOptions.lights.empty()) ensureLight(slab, d);
         for (int ly = d.y0; ly <= d.y1; ++ly) flushRow(slab, ly, d.x0, d.x1);
         d.on = false;
@@ -653,10 +773,10 @@ private:
         // The exact crossing (in double) only where the slab's back is below the cutoff.
         float t2After = 0.0f;
         for (int c = 0; c < C; ++c) {
-            const float t = mT[c * kTilePixels + p] * (1.0f - absorbed[c]);
+            const float t = mLayerT.empty() ? mT[c * kTilePixels + p] * (1.0f - absorbed[c]) : layersAfter(slab, p, c);
             t2After += t * t;
         }
-        const float u = mass > 0.0f && t2After * float(3 / C) < mCutoff ? terminationFraction(base, p) : 1.0f;
+        const float u = mass > 0.0f && t2After * float(3 / C) < mCutoff ? terminationFraction(slab, base, p) : 1.0f;
         if (u < 1.0f) {
             for (int c = 0; c < C; ++c) {
                 const std::size_t i = base + c * kTilePixels + std::size_t(p);
@@ -671,13 +791,15 @@ private:
                 lit[c] *= kept;
                 lighted[c] *= kept;
                 for (int k = 0; k < mPassCount; ++k) mPassEmission[passIndex(slab, k, c) + std::size_t(p)] *= u;
+                for (int k = 0; k < (mLayerTau.empty() ? 0 : mLayers); ++k) mLayerTau[layerIndex(slab, k, c) + std::size_t(p)] *= u;
             }
         }
         float t2 = 0.0f; // |T|^2 over R, G, B
         for (int c = 0; c < C; ++c) {
             const std::size_t i = base + c * kTilePixels + std::size_t(p);
             float& t = mT[c * kTilePixels + p];
-            compositeSlab(mTau[i], absorbed[c], emission[c], lighted[c], mC[c * kTilePixels + p], t);
+            if (mLayerT.empty()) compositeSlab(mTau[i], absorbed[c], emission[c], lighted[c], mC[c * kTilePixels + p], t);
+            else compositeLayers(slab, p, c, mTau[i], absorbed[c], emission[c], lighted[c]);
             t2 += t * t;
         }
         if (passes) flushPasses(slab, p, meanBefore, emission, lit, lighted);
@@ -808,6 +930,7 @@ private:
             if (!mEmission.empty()) mEmission[i] = 0.0f;
             if (!mScatter.empty()) mScatter[i] = 0.0f;
             for (int k = 0; k < mPassCount; ++k) mPassEmission[passIndex(slab, k, c) + std::size_t(p)] = 0.0f;
+            for (int k = 0; k < (mLayerTau.empty() ? 0 : mLayers); ++k) mLayerTau[layerIndex(slab, k, c) + std::size_t(p)] = 0.0f;
         }
     }
 
@@ -825,9 +948,13 @@ private:
     const ExpTable* mTable;
     const CompositeOptions& mOptions;
     int mPassCount;
+    int mLayers; ///< motion blur's shutter layers (CompositeOptions::layers)
     std::vector<float> mTau, mEmission; ///< [slot][channel][pixel]; mEmission empty unless emissive
     std::vector<float> mPassEmission;   ///< [slot][pass][channel][pixel]
     std::vector<float> mPassC;          ///< [pass][channel][pixel]
+    /// [layer][channel][pixel] each shutter layer's transmittance, mT their mean; empty until
+    /// the tile's first splat that covers only some layers (splitLayers).
+    std::vector<float> mLayerT;
     std::vector<float> mScatter;        ///< [slot][channel][pixel] scattering weights (tinted only)
     /// [slot][pixel] optical depth x position in the slab (0 front, 1 back), and x its square
     /// (lit frames only): where the slab's mass lies, for shading.
@@ -836,6 +963,9 @@ private:
     /// then the positive optical depth's plane (shiftOf).
     static constexpr int kShiftPlanes = 4;
     std::vector<float> mShift;
+    /// Motion blur's shutter layers (layers > 1 only): per slot, layer and channel, the optical
+    /// depth of the splats that cover only some layers, then each layer's own (foldLayers).
+    std::vector<float> mLayerTau;
     std::vector<LightRays> mRays; ///< per light of CompositeOptions::lights, then (point lights) in world coordinates
     bool mRaysTraced = false; ///< traceRays ran
     float mZ[kTilePixels];              ///< Z pass along the ray, +inf until alpha reaches 0.5

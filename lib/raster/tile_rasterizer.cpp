@@ -215,6 +215,10 @@ Frame rasterizeSplats(const SplatSet& set, const Camera& camera, const RenderSet
     // Motion blur: the light looked up where each sample's material came from (the whole
     // frame's maps are marched whole: no lookup box to pad, maxShift unused).
     options.shifted = !set.shifts.empty();
+    // Motion blur's shutter layers, where some splat covers only some of them (a deep image
+    // keeps one: its samples are the slabs' own).
+    const bool layered = std::any_of(set.splats.begin(), set.splats.end(), [](const Splat& s) { return s.layerCount != 0; });
+    options.layers = layered && !passes.deep ? settings.motionBlur.layers : 1;
     const std::vector<float> depthScale = (passes.depth || passes.deep || surface) ? depthScales(camera) : std::vector<float>{};
     // The surface's slab coordinate per pixel: its camera depth along the pixel's ray.
     std::vector<float> surfaceAt;

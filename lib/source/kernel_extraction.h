@@ -60,6 +60,9 @@ struct KernelMotion
 {
     float shift[3];
     float path[3];
+    /// The shutter layers (MotionBlur::layers) its piece of the shutter covers: the first and
+    /// how many; 0 of them: all (the path was not split, or layers are off).
+    std::uint16_t layerFirst = 0, layerCount = 0;
 };
 
 struct KernelSet

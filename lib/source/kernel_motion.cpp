@@ -25,8 +25,20 @@ Vec3d worldVelocity(const GridSource::Impl& grid, const openvdb::Vec3s& v)
 } // namespace
 
 VelocitySampler::VelocitySampler(const GridSource::Impl& grid)
-    : mGrid(grid), mAccessor(grid.velocity->getConstAccessor()), mStaggered(grid.velocity->getGridClass() == openvdb::GRID_STAGGERED)
+    : mGrid(grid), mAccessor(grid.velocity->getConstAccessor()), mStaggered(grid.velocity->getGridClass() == openvdb::GRID_STAGGERED),
+      mOnLattice(!mStaggered && grid.velocity->transform() == grid.grid->transform())
 {
+}
+
+Vec3d VelocitySampler::atIndex(const Vec3d& pIndex)
+{
+    // A velocity grid on the density's lattice, at a voxel centre: the voxel's own vector,
+    // what the trilinear sample there weighs 1 (no transform, one lookup instead of eight).
+    if (mOnLattice) {
+        const openvdb::Coord ijk(int(std::lround(pIndex.x)), int(std::lround(pIndex.y)), int(std::lround(pIndex.z)));
+        if (Vec3d(ijk.x(), ijk.y(), ijk.z()) == pIndex) return worldVelocity(mGrid, mAccessor.getValue(ijk));
+    }
+    return at(mGrid.indexToWorld(pIndex));
 }
 
 Vec3d VelocitySampler::at(const Vec3d& pWorld)
@@ -71,7 +83,7 @@ std::vector<Vec3d> kernelVelocities(const GridSource::Impl& grid, const KernelSe
     std::vector<Vec3d> out(kernels.kernels.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.size(), 4096), [&](const tbb::blocked_range<std::size_t>& range) {
         VelocitySampler velocity(grid);
-        for (std::size_t i = range.begin(); i < range.end(); ++i) out[i] = velocity.at(grid.indexToWorld(kernels.kernels[i].pIndex));
+        for (std::size_t i = range.begin(); i < range.end(); ++i) out[i] = velocity.atIndex(kernels.kernels[i].pIndex);
     });
     return out;
 }
@@ -133,6 +145,16 @@ MotionStats moveKernels(const GridSource::Impl& grid, const RenderSettings& sett
             if (!(pieces >= 1.0)) pieces = 1.0; // also NaN (a degenerate transform)
             t.longPath = pieces > double(kMaxSubKernels);
             t.pieces = int(std::clamp(pieces, 1.0, double(kMaxSubKernels)));
+            // Shutter layers: each piece's time within one layer, or spread evenly over the
+            // layers it covers (a divisor of their number), so each layer holds its exact share.
+            const int layers = blur.layers;
+            if (layers > 1 && t.pieces > 1) {
+                if (t.pieces < layers) {
+                    while (layers % t.pieces) ++t.pieces;
+                } else {
+                    t.pieces = std::min((t.pieces + layers - 1) / layers * layers, kMaxSubKernels / layers * layers);
+                }
+            }
         }
     });
     std::vector<std::size_t> first(n + 1, 0);
@@ -155,6 +177,7 @@ MotionStats moveKernels(const GridSource::Impl& grid, const RenderSettings& sett
         for (std::size_t i = range.begin(); i < range.end(); ++i) {
             const Travel& t = travel[i];
             const int m = t.pieces;
+            const int layers = blur.layers;
             for (int j = 0; j < m; ++j) {
                 // Sub-path j of m: its centre (j + 1/2)/m along the path, a share 1/m of the weight.
                 Kernel k = kernels.kernels[i];
@@ -163,6 +186,13 @@ MotionStats moveKernels(const GridSource::Impl& grid, const RenderSettings& sett
                 const std::size_t at = first[i] + std::size_t(j);
                 split[at] = k;
                 motion[at] = KernelMotion{{float(shift.x), float(shift.y), float(shift.z)}, {float(path.x), float(path.y), float(path.z)}};
+                // Its time, [j, j + 1] / m of the shutter, covers layers floor(j L / m) to
+                // ceil((j + 1) L / m) - 1 of L (docs/equations.md#shutter-layers).
+                const int first = j * layers / m, last = ((j + 1) * layers + m - 1) / m - 1;
+                if (last - first + 1 < layers) {
+                    motion[at].layerFirst = std::uint16_t(first);
+                    motion[at].layerCount = std::uint16_t(last - first + 1);
+                }
                 if (!colors.empty()) splitColors[at] = colors[i];
             }
         }
@@ -185,10 +215,25 @@ double largestTravel(const GridSource::Impl& grid, const RenderSettings& setting
     if (!grid.velocity) return 0.0;
     const MotionBlur& blur = settings.motionBlur;
     const double reach = std::max(std::abs(blur.displacementPerVelocity(blur.shutterOpen)), std::abs(blur.displacementPerVelocity(blur.shutterClose)));
-    // The largest stored vector (tiles, voxels and the background) bounds the trilinear samples.
-    double most = 0.0;
-    for (auto it = grid.velocity->cbeginValueAll(); it; ++it) most = std::max(most, glm::length(worldVelocity(grid, *it)));
-    most = std::max(most, glm::length(worldVelocity(grid, grid.velocity->background())));
+    // The largest stored vector (tiles, voxels and the background) bounds the trilinear samples:
+    // the tiles and the background here, the leaves' voxels in parallel.
+    const auto longest = [&](const openvdb::Vec3s& v) { return glm::length(worldVelocity(grid, v)); };
+    double most = longest(grid.velocity->background());
+    auto tiles = grid.velocity->tree().cbeginValueAll();
+    tiles.setMaxDepth(tiles.getLeafDepth() - 1);
+    for (; tiles; ++tiles) most = std::max(most, longest(*tiles));
+    std::vector<const openvdb::Vec3SGrid::TreeType::LeafNodeType*> leaves;
+    leaves.reserve(grid.velocity->tree().leafCount());
+    for (auto leaf = grid.velocity->tree().cbeginLeaf(); leaf; ++leaf) leaves.push_back(leaf.getLeaf());
+    most = tbb::parallel_reduce(tbb::blocked_range<std::size_t>(0, leaves.size(), 16), most,
+        [&](const tbb::blocked_range<std::size_t>& range, double m) {
+            for (std::size_t i = range.begin(); i < range.end(); ++i) {
+                const openvdb::Vec3s* values = leaves[i]->buffer().data();
+                for (openvdb::Index v = 0; v < leaves[i]->size(); ++v) m = std::max(m, longest(values[v]));
+            }
+            return m;
+        },
+        [](double a, double b) { return std::max(a, b); });
     return std::min(most * reach, kMaxTravelVoxels * grid.voxelLength);
 }
 

@@ -33,11 +33,15 @@ class VelocitySampler
 public:
     explicit VelocitySampler(const GridSource::Impl& grid);
     Vec3d at(const Vec3d& pWorld);
+    /// at() the density grid's index point @a pIndex (a voxel's own vector where the velocity
+    /// grid shares the density's lattice and @a pIndex is a voxel centre).
+    Vec3d atIndex(const Vec3d& pIndex);
 
 private:
     const GridSource::Impl& mGrid;
     openvdb::Vec3SGrid::ConstAccessor mAccessor;
     bool mStaggered;
+    bool mOnLattice; ///< not staggered, and the density's transform
 };
 
 /// What moveKernels counted.
