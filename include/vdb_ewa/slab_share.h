@@ -55,6 +55,14 @@ VDB_EWA_API int slabShares(const SlabGrid& slabs, double mu, double sd, double t
 /// The fraction of light a slab of optical depth @a tau absorbs, 1 - exp(-tau) (0 for tau <= 0).
 inline float slabAbsorbed(float tau) { return tau > 0.0f ? -std::expm1(-tau) : 0.0f; }
 
+/// A homogeneous slab's own emitted light from its extinction-weighted emission @a emission:
+/// (E / tau)(1 - exp(-tau)), E itself where tau is too small to divide by. @a absorbed:
+/// slabAbsorbed(tau).
+inline float slabEmitted(float tau, float absorbed, float emission)
+{
+    return emission == 0.0f ? 0.0f : (tau > 1e-7f ? emission / tau * absorbed : emission);
+}
+
 /// Exact front-to-back update of one homogeneous slab for one colour channel: optical depth
 /// @a tau, extinction-weighted emission @a emission (= sum of colour x optical depth), and
 /// @a scattered, a source already integrated across the slab (the scattering weight x the
@@ -67,8 +75,7 @@ inline void compositeSlab(float tau, float absorbed, float emission, float scatt
         if (emission > 0.0f) colour += transmittance * emission;
         return;
     }
-    const float emitted = emission == 0.0f ? 0.0f : (tau > 1e-7f ? emission / tau * absorbed : emission);
-    colour += transmittance * (emitted + scattered);
+    colour += transmittance * (slabEmitted(tau, absorbed, emission) + scattered);
     transmittance *= 1.0f - absorbed;
 }
 

@@ -431,8 +431,7 @@ private:
             tk *= 1.0f - a;
             left += tk;
         }
-        const float emitted = emission == 0.0f ? 0.0f : (tau > 1e-7f ? emission / tau * absorbed : emission);
-        colour += (emitted + scattered) * (absorbed > 0.0f ? seen / (float(mLayers) * absorbed) : t);
+        colour += (slabEmitted(tau, absorbed, emission) + scattered) * (absorbed > 0.0f ? seen / (float(mLayers) * absorbed) : t);
         t = left / float(mLayers);
     }
 
