@@ -60,6 +60,11 @@
                                                          one field and against compositing them over
                                                          each other; the cloud with the input's medium
                                                          and with its own (--add-volume-material)
+  bench/bench.py scale [--res 240x135] [--px 0.1,0.3,1,3] [--scenes all] [--repeat 3]
+                                                         issue 52: the presets where voxels span a tenth
+                                                         of a pixel to 3 pixels, thin and thick, against
+                                                         the reference integrator supersampled; time
+                                                         against vdb_render's defaults in the same run
   bench/bench.py output [--scene smoke] [--res 1920x1080] [--repeat 3]
                                                          issue 4's output stage: EXR pixel types,
                                                          compressions, passes and deep files, with
@@ -704,6 +709,83 @@ vdb.write({cloud!r}, grids=[g])
                   f"{diff(out_with, ref)[1]:.1f} | {max(overs):.1f} (the better order) |", flush=True)
 
 
+# Scale: each scene seen so that its voxels span a given number of pixels, from the README
+# camera's direction: (label, file, voxel size, target, direction towards the eye).
+SCALE_SCENES = [
+    ("cloud (grids/)", f"{ROOT}/grids/cloud.vdb", 0.04, (0.0, 0.0, 0.0), (1.5, 0.8, 4.5)),
+    ("smoke", f"{ASSETS}/smoke.vdb", 0.4762, (-7.381, 40.48, 0.4762), (0.0, 0.0, 1.0)),
+    ("pyro", f"{ASSETS}/pyro.vdb", 0.075, (0.225, 2.175, -0.225), (0.0, 0.0, 1.0)),
+    ("pig", f"{ASSETS}/pig.vdb", 0.005, (0.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
+]
+SCALE_MEDIA = [("vdb_render's model", ["--scatter", "0.5", "--absorb", "0.05"]),
+               ("thick, physical shadows", ["--scatter", "2", "--gain", "0"])]
+SCALE_SETTINGS = [("default --supersample 1", ["--supersample", "1"]), ("draft", ["--quality", "draft"]),
+                  ("default", []), ("high", ["--quality", "high"]), ("final", ["--quality", "final"])]
+
+
+def scale_metrics(out, ref):
+    """(PSNR over RGB, peak 1; brightness: sum of RGB over the reference's; alpha IoU at 0.05)
+    over the reference's footprint: its pixels of alpha above 1e-3 and 2 more around, so that
+    the empty frame around a small volume does not dilute the figures."""
+    import numpy as np
+    import OpenImageIO as oiio
+
+    def read(path):  # ImageInput, not ImageBuf: the image cache would hand back the last o.exr
+        image = oiio.ImageInput.open(path)
+        spec = image.spec()
+        pixels = np.asarray(image.read_image(format="float")).reshape(spec.height, spec.width, spec.nchannels)
+        image.close()
+        return np.stack([pixels[..., list(spec.channelnames).index(c)] for c in "RGBA"], axis=-1)
+
+    a, b = read(out), read(ref)
+    ys, xs = np.nonzero(b[..., 3] > 1e-3)
+    if len(ys):
+        sl = np.s_[max(ys.min() - 2, 0):ys.max() + 3, max(xs.min() - 2, 0):xs.max() + 3]
+        a, b = a[sl], b[sl]
+    mse = float(((a[..., :3] - b[..., :3]) ** 2).mean())
+    psnr = 10 * np.log10(1.0 / mse) if mse > 0 else float("inf")
+    bright = float(a[..., :3].sum() / max(b[..., :3].sum(), 1e-30))
+    ma, mb = a[..., 3] > 0.05, b[..., 3] > 0.05
+    return psnr, bright, float((ma & mb).sum() / max((ma | mb).sum(), 1)), a.shape[1], a.shape[0]
+
+
+def cmd_scale(args):
+    """Issue 52: every preset where voxels look small, against the reference integrator
+    supersampled (--pixel-samples: 16 rays a pixel, 64 where a voxel spans under half a pixel;
+    --step 0.25, --shadowstep 0.375, vdb_render's converged model), on the sample cloud and the
+    shared assets, seen from the README camera's direction at the distance where a voxel spans
+    PX pixels; two media: vdb_render's model, and a thick one with physical shadows. Time of
+    each setting against vdb_render's defaults on the same camera, in the same run."""
+    w, h = (int(x) for x in args.res.split("x"))
+    focal = w * 50.0 / 41.2136  # pixels: vdb_render's default 50 mm lens on a 41.2136 mm film back
+    tmp = tempfile.mkdtemp(prefix="vdb_ewa_scale_")
+    print(f"# {args.res}: median of {args.repeat} runs a setting, {os.cpu_count()} cores; reference: --method raymarch "
+          "--step 0.25 --shadowstep 0.375 --pixel-samples 16 (64 below half a pixel a voxel); figures over the reference's footprint")
+    print("| scene | medium | voxel (px) | setting | PSNR (dB) | brightness | alpha IoU | time / vdb_render defaults |")
+    print("|---|---|---|---|---|---|---|---|")
+    wanted = None if args.scenes == "all" else args.scenes.split(",")
+    for label, path, voxel, target, direction in SCALE_SCENES:
+        if (wanted and label.split()[0] not in wanted) or not os.path.exists(path):
+            continue
+        n = sum(d * d for d in direction) ** 0.5
+        for px in (float(p) for p in args.px.split(",")):
+            dist = voxel * focal / px
+            eye = ",".join(f"{t + d / n * dist:.6g}" for t, d in zip(target, direction))
+            camera = ["-res", args.res, "-translate", eye, "-lookat", ",".join(f"{t:.6g}" for t in target)]
+            for medium, model in SCALE_MEDIA:
+                ref = os.path.join(tmp, "ref.exr")
+                run([*EWA_RENDER, path, ref, *camera, *model, "--method", "raymarch", "--step", "0.25", "--shadowstep", "0.375",
+                     "--pixel-samples", "64" if px < 0.5 else "16"])
+                peer = timed(["vdb_render", path, os.path.join(tmp, "peer.exr"), *camera,
+                              *(a.replace("--", "-") for a in model)], args.repeat)
+                for name, extra in SCALE_SETTINGS:
+                    out = os.path.join(tmp, "o.exr")
+                    t = timed([*EWA_RENDER, path, out, *camera, *model, *extra], args.repeat)
+                    psnr, bright, iou, cw, ch = scale_metrics(out, ref)
+                    print(f"| {label} | {medium} | {px:g} | {name} | {psnr:.1f} | {100 * (bright - 1):+.1f} % | {iou:.3f} | "
+                          f"{t / peer:.2f} |", flush=True)
+
+
 def cmd_python(args):
     label, path, camera = next(s for s in SCENES if s[0] == args.scene)
     pythonpath = os.environ.get("VDB_EWA_PYTHONPATH", os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(EWA))), "python"))
@@ -1190,6 +1272,11 @@ def main():
     sb.add_argument("--scenes", default="all", help="comma-separated: smoke,pyro,pig,brain_mri,cloud,cloud1M")
     sb.add_argument("--extra", default="", help="more vdb_ewa options for every frame")
     sb.add_argument("--keep", default="", help="folder that keeps the frames")
+    ssc = sub.add_parser("scale")
+    ssc.add_argument("--res", default="240x135")
+    ssc.add_argument("--px", default="0.1,0.3,1,3", help="pixels a voxel spans")
+    ssc.add_argument("--scenes", default="all", help="comma-separated: cloud,smoke,pyro,pig")
+    ssc.add_argument("--repeat", type=int, default=3)
     sa = sub.add_parser("analytic")
     sa.add_argument("--res", default="320x180")
     sp2 = sub.add_parser("plot")
@@ -1200,7 +1287,7 @@ def main():
     {"speed": cmd_speed, "sigma": cmd_sigma, "tradeoff": cmd_tradeoff, "targets": cmd_targets,
      "output": cmd_output, "surfaces": cmd_surfaces, "holes": cmd_holes, "plot": cmd_plot, "ladder": cmd_ladder,
      "analytic": cmd_analytic, "roofline": cmd_roofline, "scaling": cmd_scaling,
-     "stability": cmd_stability, "python": cmd_python, "cull": cmd_cull, "blur": cmd_blur, "lights": cmd_lights, "volumes": cmd_volumes}[a.cmd](a)
+     "stability": cmd_stability, "python": cmd_python, "cull": cmd_cull, "blur": cmd_blur, "lights": cmd_lights, "volumes": cmd_volumes, "scale": cmd_scale}[a.cmd](a)
 
 
 if __name__ == "__main__":

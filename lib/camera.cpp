@@ -206,6 +206,21 @@ Camera Camera::throughLensPart(int part, int parts) const
     return sub;
 }
 
+Camera Camera::window(int x0, int y0, int width, int height, int factor) const
+{
+    if (factor < 1 || width < 1 || height < 1 || x0 < 0 || y0 < 0 || x0 + width > mSettings.width || y0 + height > mSettings.height) {
+        throw ValueError("Camera::window: " + std::to_string(width) + "x" + std::to_string(height) + " pixels at (" + std::to_string(x0) + ", " +
+                         std::to_string(y0) + ") x " + std::to_string(factor) + " does not fit a " + std::to_string(mSettings.width) + "x" +
+                         std::to_string(mSettings.height) + " image");
+    }
+    Camera sub = *this;
+    sub.mSettings.width = width * factor;
+    sub.mSettings.height = height * factor;
+    sub.mFocalPixels = mFocalPixels * factor;
+    sub.mPrincipalPoint = (mPrincipalPoint - Vec2d(x0, y0)) * double(factor);
+    return sub;
+}
+
 Vec2d Camera::rasterFromCamera(const Vec3d& t) const
 {
     if (mSettings.projection == Projection::Perspective) {

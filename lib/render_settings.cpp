@@ -82,6 +82,9 @@ void RenderSettings::validate() const
     if (!(shadow.resolution >= 0.25 && shadow.resolution <= 16.0)) fail("--shadow-res must be in [0.25, 16] voxels");
     if (!(step >= 1e-3) || !std::isfinite(step)) fail("--step must be >= 0.001 voxels");
     if (!(blurSamples >= 1 && blurSamples <= 4096)) fail("--blur-samples must be in [1, 4096]");
+    if (!(pixelSamples >= 1 && pixelSamples <= 4096)) fail("--pixel-samples must be in [1, 4096]");
+    if (!(splat.supersample >= 1 && splat.supersample <= kMaxSupersample)) fail("--supersample must be in [1, " + std::to_string(kMaxSupersample) + "]");
+    if (!(splat.supersampleSpan >= 0.5 && splat.supersampleSpan <= 16.0)) fail("--supersample-span must be in [0.5, 16] pixels");
     if (!(std::abs(motionBlur.velocityScale) <= 1e6)) fail("--velocity-scale must be finite and within 1e6");
     if (!(motionBlur.fps >= 1e-3 && motionBlur.fps <= 1e6)) fail("--fps must be in [0.001, 1e6] frames per second");
     if (!(std::abs(motionBlur.shutterOpen) <= 1e3 && std::abs(motionBlur.shutterClose) <= 1e3)) fail("--shutter times must be finite and within 1000 frames of the frame");
@@ -127,6 +130,8 @@ RenderSettings RenderSettings::preset(Quality quality)
         s.motionBlur.layers = 1;
         s.motionBlur.splitSigmas = 4.0;
         s.lensSamples = 1;
+        s.splat.supersample = 16;
+        s.splat.supersampleSpan = 1.0;
         break;
     case Quality::Default:
         break;

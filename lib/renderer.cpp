@@ -12,6 +12,7 @@
 #include "source/source.h"
 #include "support/memory_budget.h"
 #include "support/progress.h"
+#include "supersampling.h"
 
 #include <tbb/task_arena.h>
 
@@ -328,7 +329,40 @@ void Renderer::renderGrid(const GridSource::Impl& g, const Camera& camera, const
         frame = detail::rayMarchReference(g, camera, mSettings, passes, stats, &progress);
     } else if (mSettings.method == Method::RayMarchGaussian) {
         frame = detail::rayMarchGaussianSum(g, camera, mSettings, passes, stats, &progress);
-    } else if ((movesOverTheShutter(g) && mSettings.motionBlur.samples > 1) || (camera.lensRadius() > 0.0 && mSettings.lensSamples > 1)) {
+    } else {
+        // Where the voxels look small, the pixels they cover are composited in sub-pixels and
+        // box-filtered back (docs/equations.md#sub-pixel-samples).
+        std::vector<std::string> warnings;
+        const detail::Supersampling s = detail::chooseSupersampling(g, camera, mSettings, passes, budgetFor(g, mSettings), warnings);
+        if (s.factor > 1) {
+            Frame sub;
+            renderSplatted(g, camera.window(s.x0, s.y0, s.width, s.height, s.factor), passes, sub, stats, progress);
+            frame = detail::boxFiltered(sub, s, camera.width(), camera.height(), passes);
+            if (s.blend > 0.0) {
+                // Near the span, 2 x 2 sub-pixels fade into one sample a pixel: no jump as the camera moves.
+                Frame one;
+                RenderStats oneStats;
+                renderSplatted(g, camera, passes, one, oneStats, progress);
+                detail::mixFrames(frame, one, s.blend);
+                detail::addPartStats(stats, std::move(oneStats), false);
+            }
+            stats.supersampleWindow[0] = s.x0;
+            stats.supersampleWindow[1] = s.y0;
+            stats.supersampleWindow[2] = s.width;
+            stats.supersampleWindow[3] = s.height;
+        } else {
+            renderSplatted(g, camera, passes, frame, stats, progress);
+        }
+        stats.supersample = s.factor;
+        stats.voxelPixels = s.voxelPixels;
+        stats.warnings.insert(stats.warnings.end(), warnings.begin(), warnings.end());
+    }
+}
+
+void Renderer::renderSplatted(const GridSource::Impl& g, const Camera& camera, const PassRequest& passes, Frame& frame, RenderStats& stats,
+    detail::Progress& progress) const
+{
+    if ((movesOverTheShutter(g) && mSettings.motionBlur.samples > 1) || (camera.lensRadius() > 0.0 && mSettings.lensSamples > 1)) {
         renderSubFrames(g, camera, passes, frame, stats, progress);
     } else {
         renderFogVolume(g, camera, passes, frame, stats, progress);

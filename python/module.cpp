@@ -132,6 +132,8 @@ py::dict statsOf(const RenderStats& s)
     d["splats_in_flight"] = s.splatsInFlight;
     d["light_rays"] = s.lightRays;
     d["light_rays_marched"] = s.lightRaysMarched;
+    d["supersample"] = s.supersample;
+    d["voxel_pixels"] = s.voxelPixels;
     d["peak_resident_bytes"] = s.peakResidentBytes;
     d["raster_backend"] = s.rasterBackend;
     return d;

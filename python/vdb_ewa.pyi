@@ -128,6 +128,8 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
            refine_emission: Optional[int] = None,
            lod: Optional[Number] = None,
            lod_error: Optional[Number] = None,
+           supersample: Optional[int] = None,
+           supersample_span: Optional[Number] = None,
            iso: Optional[Number] = None,
            iso_opacity: Optional[Number] = None,
            isovalue: Optional[Number] = None,
@@ -154,6 +156,7 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
            motion_light: OptionValue = None,
            lens_samples: Optional[int] = None,
            blur_samples: Optional[int] = None,
+           pixel_samples: Optional[int] = None,
            samples: Optional[int] = None,
            threads: Optional[int] = None,
            cpus: Optional[int] = None,
@@ -286,6 +289,16 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
     lod_error (--lod-error): level of detail, fog volumes: a block wider than a pixel merges only where
         its values are smooth: the transmittance through any depth of it differs by at most this much
         between its columns; range [0, 1], 1 = by screen size alone (default: 0.05, draft 0.25)
+    supersample (--supersample): fog volumes: where the voxels look smaller than --supersample-span
+        pixels, the pixels the volume covers are composited in S x S sub-pixels and averaged (a box
+        filter, as a camera averages a pixel; one footprint a pixel wide averages optical depth instead,
+        which renders small volumes too opaque and too bright: docs/equations.md#sub-pixel-samples), S =
+        ceil(span / the median voxel's pixels) up to this; at most 16 images' sub-pixels (and half of
+        --max-memory); up to S^2 times the compositing where it acts; range [1, 64], 1 = off (default:
+        32; draft 16)
+    supersample_span (--supersample-span): fog volumes: sub-pixels a voxel should span, in [0.5, 16];
+        larger converges further to a camera's average where voxels are small, at more sub-pixels; at 2
+        images have converged as far as sub-pixels take them (default: 2; draft 1)
     iso (--iso): fog volumes: also render the iso-surface density = VALUE with flattened surface
         kernels, lit by --light and composited with the volume; finite, nan: off (default: off)
     iso_opacity (--iso-opacity): opacity of the --iso surface, 0..1 (default: 1)
@@ -365,6 +378,10 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
         draft 1, high 8, final 16)
     blur_samples (--blur-samples): --method raymarch with motion blur or depth of field: rays per pixel,
         each at its own shutter time and lens point, averaged; range [1, 4096] (default: 16)
+    pixel_samples (--pixel-samples): --method raymarch: rays per pixel, spread over the pixel's square
+        (Halton points, rotated per pixel) and averaged: a box filter as a camera's pixel, the anti-
+        aliased reference; with motion blur or depth of field the larger of it and --blur-samples, each
+        ray also at its own time and lens point; range [1, 4096] (default: 1, the pixel's centre ray)
     samples (--samples): level sets: vdb_render's rays per pixel; accepted for compatibility, the EWA
         filter anti-aliases without extra samples (default: 1)
     threads (--threads): worker threads, 0 = the CPUs the farm task or container was granted

@@ -760,7 +760,8 @@ TEST_F(Cli, VerbosePrintsThePresetResolvedWithOverrides)
     const std::string out = mDir.file("out.exr");
     const CliRun draft = runCli(mDir, "render " + mGrid + " " + out + " --res 32x32 -translate 0,0,5 --quality draft -v");
     ASSERT_EQ(draft.code, 0) << draft.err;
-    for (const char* value : {"--cutoff-radius 2 ", "--slab 4 ", "--shadow-res 2", "--tile-spacing 8 ", "--lod 10 ", "--lod-error 0.25 ", "--taper on ", "--prefilter on "}) {
+    for (const char* value : {"--cutoff-radius 2 ", "--slab 4 ", "--shadow-res 2", "--tile-spacing 8 ", "--lod 10 ", "--lod-error 0.25 ", "--taper on ", "--prefilter on ",
+             "--supersample 16 ", "--supersample-span 1 "}) {
         EXPECT_NE(draft.out.find(value), std::string::npos) << value << " in\n" << draft.out;
     }
     const CliRun over = runCli(mDir, "render " + mGrid + " " + out + " --res 32x32 -translate 0,0,5 --quality draft --lod 0 --prefilter off -v");
@@ -791,6 +792,12 @@ TEST_F(Cli, ArgumentAndOutputErrors)
     expectFailure("render " + mGrid + " " + out + " --aa bilinear", 2, "--aa");
     expectFailure("render " + mGrid + " " + out + " --lod -1", 2, "--lod");
     expectFailure("render " + mGrid + " " + out + " --lod-error 1.5", 2, "--lod-error");
+    expectFailure("render " + mGrid + " " + out + " --supersample 0", 2, "--supersample must be in [1, 64]");
+    expectFailure("render " + mGrid + " " + out + " --supersample 65", 2, "--supersample must be in [1, 64]");
+    expectFailure("render " + mGrid + " " + out + " --supersample-span nan", 2, "--supersample-span must be in [0.5, 16]");
+    expectFailure("render " + mGrid + " " + out + " --supersample-span 0.1", 2, "--supersample-span must be in [0.5, 16]");
+    expectFailure("render " + mGrid + " " + out + " --method raymarch --pixel-samples 0", 2, "--pixel-samples must be in [1, 4096]");
+    expectFailure("render " + mGrid + " " + out + " --method raymarch --pixel-samples 1e9", 2, "--pixel-samples");
     expectFailure("render " + mGrid + " " + out + " --taper maybe", 2, "--taper");
     expectFailure("render " + mGrid + " " + out + " --quality fast", 2, "--quality");
     expectFailure("render " + mGrid + " " + out + " --shader phong", 2, "--shader");
@@ -862,7 +869,7 @@ TEST_F(Cli, HelpDocumentsEveryOptionWithItsDefault)
              "--quality", "--exp", "--renormalize", "--taper", "--prefilter", "--precision", "--tile-spacing", "--refine", "--refine-emission", "--shadow-res", "--method",
              "--lod", "--lod-error", "--threads", "--max-memory", "--verbose", "--emission", "--ocio-config", "--working-space", "--output-space",
              "--preview", "--display", "--view", "--input-space", "--camera-file", "--exr-type", "--compression", "--aov", "--deep", "--isovalue",
-             "--shader", "--samples", "--color", "--iso", "--iso-opacity"}) {
+             "--shader", "--samples", "--color", "--iso", "--iso-opacity", "--supersample", "--supersample-span", "--pixel-samples"}) {
         EXPECT_NE(r.out.find(opt), std::string::npos) << opt;
     }
     EXPECT_NE(r.out.find("default: 1920x1080"), std::string::npos);
@@ -933,7 +940,8 @@ TEST_F(Cli, WritesPreviewAndDeepFiles)
     EXPECT_GT(alphaSum(readExr(out)), 10.0);
     const CliRun d = runCli(mDir, "render " + mGrid + " " + deep + args + "--deep --exr-type float");
     ASSERT_EQ(d.code, 0) << d.err;
-    ASSERT_EQ(runCli(mDir, "render " + mGrid + " " + out + args + "--exr-type float").code, 0);
+    // A deep image is composited at one sample a pixel (docs/equations.md#sub-pixel-samples).
+    ASSERT_EQ(runCli(mDir, "render " + mGrid + " " + out + args + "--exr-type float --supersample 1").code, 0);
     // OpenEXR's InputFile flattens deep files itself (CompositeDeepScanLine): an independent flatten.
     const Image flat = readExr(out), flattened = readExr(deep);
     ASSERT_EQ(flat.rgba.size(), flattened.rgba.size());

@@ -71,6 +71,7 @@ Frame renderAll(const Scene& scene, bool deep = false)
     p.deep = deep;
     RenderSettings s;
     s.medium.emission = Vec3d(0.1, 0.05, 0.0);
+    s.splat.supersample = 1; // a deep image is composited at one sample a pixel: the flat one too, to compare
     return Renderer(s).renderFrame(scene.cloud, scene.camera, p);
 }
 

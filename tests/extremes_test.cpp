@@ -394,6 +394,10 @@ TEST(Extremes, SlabsFollowWhatThePixelsResolveFarAway)
     const GridSource grid = gridSourceFromOpenVDB(tiles);
     const Camera far(lookAtCamera(Vec3d(8256.0, 8256.0, 60000.0), Vec3d(8256.0), 64, 48), grid.worldCentre());
     RenderSettings thick; // --lod 2
+    // The frame's own pixels: sub-pixels (--supersample, 32 x 32 here) would make the slabs
+    // follow them, 32 times thinner, and show the tiles' true coverage (an alpha sum of 0.88,
+    // where filtering their optical depth a pixel wide spreads them over 28).
+    thick.splat.supersample = 1;
     RenderSettings thin = thick;
     thin.splat.lodPixels = 0.0; // slabs of --slab 2 voxels (tiles do not merge either way)
     // The nearest active value: the tiles' far corner at z = 16,511 (padded half a voxel).
@@ -431,6 +435,7 @@ TEST(Extremes, MemoryBudgetCountsKernelsAfterTheLevelOfDetailMergesThem)
     const Camera far(lookAtCamera(Vec3d(3.0, 1.6, 9.0), Vec3d(0.0), 160, 90), cloud.worldCentre());
     RenderSettings merged;
     merged.maxMemory = 64.0 * 1024 * 1024;
+    merged.splat.supersample = 1; // merged at the frame's pixels, not sub-pixels the voxels span
     RenderStats stats;
     const Image image = Renderer(merged).render(cloud, far, &stats);
     EXPECT_EQ(stats.activeVoxels, 320200u);

@@ -47,6 +47,9 @@ openvdb::FloatGrid::Ptr blob(int s, float rho, double h)
 RenderSettings lodSettings(double pixels, double error = 1.0)
 {
     RenderSettings s;
+    // Level of detail where voxels are smaller than a pixel: the frame's own pixels, not the
+    // sub-pixels (--supersample) that would make the voxels span 2 of them.
+    s.splat.supersample = 1;
     s.splat.lodPixels = pixels;
     s.splat.lodError = error;
     return s;
@@ -233,6 +236,7 @@ TEST(LevelOfDetail, OpticalDepthIntegralIsKept)
     auto grid = blob(6, 1.0f, 1.0);
     RenderSettings s = absorberSettings(1e-4);
     s.splat.lodPixels = 0.0;
+    s.splat.supersample = 1; // merging at the frame's pixels (sub-pixels would make voxels span 2)
     const CameraSettings cam = perspectiveDownZ(400.0, 256); // a voxel is 0.32 pixels
     RenderStats plain, merged;
     const Image a = renderGrid(grid, cam, s, &plain);
@@ -252,6 +256,7 @@ TEST(LevelOfDetail, UniformMediumIsUnchanged)
     auto grid = makeBoxGrid(openvdb::Coord(-32, -32, 0), openvdb::Coord(31, 31, 15), float(rho), 1.0);
     RenderSettings s = absorberSettings(sigma);
     s.splat.lodPixels = 4.0;
+    s.splat.supersample = 1; // merging at the frame's pixels (sub-pixels would make voxels span 2)
     RenderStats stats;
     const Image img = renderGrid(grid, orthoDownZ(-0.5, -0.5, 100.0, 16.0, 8), s, &stats); // 0.5 pixels a voxel
     EXPECT_EQ(stats.voxelsMerged, stats.activeVoxels);
@@ -266,6 +271,7 @@ TEST(LevelOfDetail, SubPixelVoxelsMergeWithASmallError)
     auto grid = blob(12, 0.5f, 1.0);
     RenderSettings s;
     s.splat.lodPixels = 0.0;
+    s.splat.supersample = 1; // merging at the frame's pixels (sub-pixels would make voxels span 2)
     const CameraSettings cam = perspectiveDownZ(600.0, 256); // a voxel ~ 0.22 pixels
     RenderStats plain, merged;
     const Image a = renderGrid(grid, cam, s, &plain);

@@ -181,10 +181,17 @@ TEST(Passes, PassesLeaveTheBeautyBitIdentical)
         s.lights[0].color = light;
         const Image plain = Renderer(s).render(cloud, camera);
         PassRequest all = allFlatPasses();
-        all.deep = true;
         const Frame f = Renderer(s).renderFrame(cloud, camera, all);
         ASSERT_EQ(plain.rgba.size(), f.beauty.rgba.size());
         EXPECT_EQ(std::memcmp(plain.rgba.data(), f.beauty.rgba.data(), plain.rgba.size() * sizeof(float)), 0);
+        // A deep image is composited at one sample a pixel (its samples have no average of
+        // sub-pixels: docs/equations.md#sub-pixel-samples): --supersample 1's beauty.
+        RenderSettings one = s;
+        one.splat.supersample = 1;
+        const Image plainOne = Renderer(one).render(cloud, camera);
+        all.deep = true;
+        const Frame d = Renderer(s).renderFrame(cloud, camera, all);
+        EXPECT_EQ(std::memcmp(plainOne.rgba.data(), d.beauty.rgba.data(), plainOne.rgba.size() * sizeof(float)), 0);
     }
 }
 

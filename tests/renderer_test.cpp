@@ -40,9 +40,11 @@ TEST(Renderer, UniformSlabTransmittanceIsExpMinusTau)
         for (double h : {1e-3, 0.1, 1e3}) {
             const Image img = renderGrid(slab(depth, float(rho), h), orthoDownZ(-0.5 * h, -0.5 * h, 100 * h, 16 * h, 24), s);
             const double expected = 1.0 - std::exp(-sigma * rho * depth);
-            // The splatter's low-pass filter smooths the reconstruction's lattice ripple (1 % in
-            // 2D at sigma 0.55); the reference samples exact rays and sees it.
-            const double tolerance = method == Method::Splat ? 0.005 : 0.015;
+            // 1.5 pixels a voxel: composited in 2 x 2 sub-pixels (--supersample), where the
+            // kernel lattice's ripple (2.9 % in a line integral at sigma 0.5) is averaged over
+            // 1.5 voxels, not smoothed away by a pixel-wide low-pass filter as before (0.5 %):
+            // 0.7 % (docs/numerics.md). The reference's tolerance is its own.
+            const double tolerance = method == Method::Splat ? 0.01 : 0.015;
             for (std::size_t i = 3; i < img.rgba.size(); i += 4) {
                 ASSERT_NEAR(img.rgba[i], expected, tolerance * expected) << "voxel size " << h << " method " << int(method);
             }
@@ -67,7 +69,7 @@ TEST(Renderer, UniformSlabTransmittanceFollowsObliquePerspectiveRays)
             camera.worldRay(i + 0.5, j + 0.5, o, d);
             const double path = depth / std::abs(d.z); // voxel lengths through the slab
             const double expected = 1.0 - std::exp(-sigma * rho * path);
-            ASSERT_NEAR(img.pixel(i, j)[3], expected, 0.005 * expected) << i << "," << j;
+            ASSERT_NEAR(img.pixel(i, j)[3], expected, 0.01 * expected) << i << "," << j; // the ripple, as above
         }
 }
 
@@ -86,7 +88,7 @@ TEST(Renderer, UniformSlabSingleScatteringMatchesTheClosedForm)
         for (int j = 0; j < 16; ++j)
             for (int i = 0; i < 16; ++i) {
                 ASSERT_NEAR(img.pixel(i, j)[0], expected, 0.02 * expected) << i << "," << j << " method " << int(method);
-                ASSERT_NEAR(img.pixel(i, j)[3], 1.0 - std::exp(-tau), 0.005);
+                ASSERT_NEAR(img.pixel(i, j)[3], 1.0 - std::exp(-tau), 0.008); // the lattice's ripple in 2 x 2 sub-pixels
             }
     }
 }
@@ -223,7 +225,7 @@ TEST(Renderer, ColorGridTintsTheScatteredLightPerVoxel)
                     const double expected = c[k] * scattered + (k == 1 ? emitted : 0.0);
                     ASSERT_NEAR(p[k], expected, 0.02 * scattered) << i << "," << j << " channel " << k << " method " << int(method);
                 }
-                ASSERT_NEAR(p[3], 1.0 - std::exp(-tau), 0.005);
+                ASSERT_NEAR(p[3], 1.0 - std::exp(-tau), 0.008); // the lattice's ripple in 2 x 2 sub-pixels
             }
     }
 }

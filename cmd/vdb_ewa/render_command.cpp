@@ -349,6 +349,11 @@ private:
                 << s.splatsInFlight << " splats in flight at most";
             if (s.lightRays > 0) out << "; light on demand: " << s.lightRaysMarched << " of " << s.lightRays << " light-map rays marched";
         }
+        if (s.supersample > 1) {
+            out << "; composited at " << s.supersample << "x" << s.supersample << " sub-pixels a pixel over " << s.supersampleWindow[2] << "x"
+                << s.supersampleWindow[3] << " pixels from (" << s.supersampleWindow[0] << ", " << s.supersampleWindow[1]
+                << ") by --supersample (the median voxel spans " << s.voxelPixels << " pixels)";
+        }
         out << "\n"
                   << std::fixed << std::setprecision(3) << "vdb_ewa: timings (s): load " << loadSeconds << ", kernels "
                   << s.kernelSeconds << ", shadows " << s.shadowSeconds << ", project " << s.projectSeconds

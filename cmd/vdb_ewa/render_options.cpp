@@ -150,6 +150,16 @@ void RenderOptions::add(CLI::App* app)
     mApp->add_option("--refine-emission", mRefineEmission, "emission and temperature grids where their light does not go as the density (light over density changes several-fold between neighbouring voxels) in optically thick density: the light sampled every 1/n voxel, n up to N as the voxels span n pixels or more (2 at least); --refine refines the emitters too; range [1, 4], 1 = off (default: " + std::to_string(rs.splat.refineEmission) + "; draft 1, high and final 4)");
     mApp->add_option("--lod", mLod, "level of detail, pixels in [0, 64]: fog volumes: blocks of 2, 4 or 8 voxels a side become one kernel where the block projects to at most this many pixels, each voxel shared between two block sizes continuously with distance (no popping); level sets: one surface kernel a 2^3 or 4^3 block of voxels (for each sheet through it) where the block projects to at most a quarter as many; 0 = off (default: " + fmt(rs.splat.lodPixels) + ")");
     mApp->add_option("--lod-error", mLodError, "level of detail, fog volumes: a block wider than a pixel merges only where its values are smooth: the transmittance through any depth of it differs by at most this much between its columns; range [0, 1], 1 = by screen size alone (default: " + fmt(rs.splat.lodError) + ", draft 0.25)");
+    mApp->add_option("--supersample", mSupersample,
+        "fog volumes: where the voxels look smaller than --supersample-span pixels, the pixels the volume covers are composited "
+        "in S x S sub-pixels and averaged (a box filter, as a camera averages a pixel; one footprint a pixel wide averages optical "
+        "depth instead, which renders small volumes too opaque and too bright: docs/equations.md#sub-pixel-samples), S = "
+        "ceil(span / the median voxel's pixels) up to this; at most 16 images' sub-pixels (and half of --max-memory); up to S^2 "
+        "times the compositing where it acts; range [1, " + std::to_string(kMaxSupersample) + "], 1 = off (default: " +
+        std::to_string(rs.splat.supersample) + "; draft 16)");
+    mApp->add_option("--supersample-span", mSupersampleSpan,
+        "fog volumes: sub-pixels a voxel should span, in [0.5, 16]; larger converges further to a camera's average where voxels "
+        "are small, at more sub-pixels; at 2 images have converged as far as sub-pixels take them (default: " + fmt(rs.splat.supersampleSpan) + "; draft 1)");
     // Fog volumes with an iso-surface.
     mApp->add_option("--iso", mIso,
         "fog volumes: also render the iso-surface density = VALUE with flattened surface kernels, lit by "
@@ -242,6 +252,10 @@ void RenderOptions::add(CLI::App* app)
     mApp->add_option("--blur-samples", mBlurSamples,
         "--method raymarch with motion blur or depth of field: rays per pixel, each at its own shutter time and lens point, "
         "averaged; range [1, 4096] (default: " + std::to_string(RenderSettings().blurSamples) + ")");
+    mApp->add_option("--pixel-samples", mPixelSamples,
+        "--method raymarch: rays per pixel, spread over the pixel's square (Halton points, rotated per pixel) and averaged: "
+        "a box filter as a camera's pixel, the anti-aliased reference; with motion blur or depth of field the larger of it and "
+        "--blur-samples, each ray also at its own time and lens point; range [1, 4096] (default: 1, the pixel's centre ray)");
     mApp->add_option("--samples", mSamples,
         "level sets: vdb_render's rays per pixel; accepted for compatibility, the EWA filter anti-aliases "
         "without extra samples (default: 1)");
@@ -390,6 +404,8 @@ void RenderOptions::resolve(std::optional<int> frame, CameraSettings& cam, Rende
     if (mSlab) rs.splat.slab = *mSlab;
     if (mLod) rs.splat.lodPixels = *mLod;
     if (mLodError) rs.splat.lodError = *mLodError;
+    if (mSupersample) rs.splat.supersample = *mSupersample;
+    if (mSupersampleSpan) rs.splat.supersampleSpan = *mSupersampleSpan;
     if (mIsovalue) rs.surface.isovalue = *mIsovalue;
     if (mIso) rs.surface.iso = *mIso;
     if (mIsoOpacity) rs.surface.isoOpacity = *mIsoOpacity;
@@ -407,6 +423,7 @@ void RenderOptions::resolve(std::optional<int> frame, CameraSettings& cam, Rende
         rs.motionBlur.shutterClose = v[1];
     }
     if (mBlurSamples) rs.blurSamples = *mBlurSamples;
+    if (mPixelSamples) rs.pixelSamples = *mPixelSamples;
     if (mMotionSamples) rs.motionBlur.samples = *mMotionSamples;
     if (mMotionSplit) rs.motionBlur.splitSigmas = *mMotionSplit;
     if (mMotionLayers) rs.motionBlur.layers = *mMotionLayers;
@@ -522,6 +539,11 @@ Attributes RenderOptions::statsAttributes(const RenderStats& s)
                                   {"splats-in-flight", n(s.splatsInFlight)}});
     }
     if (s.lightRays > 0) out.insert(out.end(), {{"light-rays", n(s.lightRays)}, {"light-rays-marched", n(s.lightRaysMarched)}});
+    if (s.supersample > 1) {
+        out.insert(out.end(), {{"supersampled", std::to_string(s.supersample)},
+                                  {"supersampled-window", std::to_string(s.supersampleWindow[0]) + "," + std::to_string(s.supersampleWindow[1]) + "," +
+                                                              std::to_string(s.supersampleWindow[2]) + "," + std::to_string(s.supersampleWindow[3])}});
+    }
     if (s.movingKernels > 0) out.insert(out.end(), {{"kernels-moving", n(s.movingKernels)}, {"motion-sub-kernels", n(s.motionSubKernels)}});
     // Not deterministic (the process's, and the allocator's): left out where files are compared.
     out.emplace_back("peak-memory-mb", fmt(std::round(double(s.peakResidentBytes) / 1e5) / 10.0));
@@ -605,6 +627,7 @@ std::vector<Attributes> RenderOptions::resolvedOptions(const GridSource& grid, c
     Attributes method{{"method", choiceName(rs.method, kMethods)}};
     if (rs.method != Method::Splat) method.emplace_back("step", fmt(rs.step));
     if (rs.method != Method::Splat && (grid.hasVelocityGrid() || c.fstop > 0.0)) method.emplace_back("blur-samples", std::to_string(rs.blurSamples));
+    if (rs.method != Method::Splat) method.emplace_back("pixel-samples", std::to_string(rs.pixelSamples));
     if (rs.method == Method::Splat && c.fstop > 0.0 && !grid.isLevelSet()) method.emplace_back("lens-samples", std::to_string(rs.lensSamples));
     if (!grid.isLevelSet() && !std::isnan(rs.surface.iso)) {
         method.emplace_back("iso", fmt(rs.surface.iso));
@@ -621,6 +644,7 @@ std::vector<Attributes> RenderOptions::resolvedOptions(const GridSource& grid, c
              {"renormalize", choiceName(rs.splat.renormalize, kOnOff)}, {"taper", choiceName(rs.splat.taper, kOnOff)}, {"exp", choiceName(rs.splat.expEvaluation, kExpEvaluations)},
              {"precision", choiceName(rs.splat.doublePrecision, kPrecisions)}, {"slab", fmt(rs.splat.slab)},
              {"tile-spacing", std::to_string(rs.splat.tileKernelSpacing)}, {"refine", std::to_string(rs.splat.refine)}, {"refine-emission", std::to_string(rs.splat.refineEmission)}, {"lod", fmt(rs.splat.lodPixels)}, {"lod-error", fmt(rs.splat.lodError)},
+             {"supersample", std::to_string(rs.splat.supersample)}, {"supersample-span", fmt(rs.splat.supersampleSpan)},
              {"threads", std::to_string(rs.threads)}, {"simd", choiceName(rs.simd, kOnOff)}, {"cull", choiceName(rs.cull, kOnOff)}})
         method.emplace_back(k, v);
     return {cameraGroup, model, method, mOutputOptions.resolved()};

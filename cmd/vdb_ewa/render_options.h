@@ -118,7 +118,7 @@ private:
     mutable std::size_t mEnvironmentLightCount = 0; ///< the last lights of the settings come from --environment
     mutable std::optional<std::vector<Light>> mEnvironmentFill; ///< --environment's lights, once read
     std::optional<double> mEmissionIntensity, mKelvinScale, mKelvinOffset, mBlackbodyIntensity;
-    std::optional<double> mFov, mFocal, mAperture, mFrame, mNear, mFar, mGain, mCutoff, mShadowStep, mStep, mLod, mLodError;
+    std::optional<double> mFov, mFocal, mAperture, mFrame, mNear, mFar, mGain, mCutoff, mShadowStep, mStep, mLod, mLodError, mSupersampleSpan;
     std::optional<double> mKernelSigma, mSurfaceSigma, mLowpass, mCutoffRadius, mSlab;
     int mThreads = 0;
     std::string mSimd;
@@ -127,7 +127,7 @@ private:
     // Motion blur and depth of field.
     std::string mVelocityGrid, mVelocityUnit, mShutter, mMotionLight;
     std::optional<double> mVelocityScale, mFps, mFstop, mFocusDistance;
-    std::optional<int> mBlurSamples, mMotionSamples, mMotionLayers, mLensSamples;
+    std::optional<int> mBlurSamples, mPixelSamples, mMotionSamples, mMotionLayers, mLensSamples, mSupersample;
     std::optional<double> mMotionSplit;
     OutputOptions mOutputOptions;
 };

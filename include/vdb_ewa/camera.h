@@ -111,6 +111,14 @@ public:
     /// as parts grow. A pinhole, or @a parts 1: this camera.
     Camera throughLensPart(int part, int parts) const;
 
+    /// Supersampling (docs/equations.md#sub-pixel-samples): the window of @a width x @a height
+    /// pixels from pixel (@a x0, @a y0) of this camera's image, each pixel cut into @a factor x
+    /// @a factor sub-pixels: a camera of (width x factor) x (height x factor) pixels seeing
+    /// exactly that window (focal length in pixels and principal point scaled, the eye and the
+    /// lens unchanged). Sub-pixel (i, j) lies in pixel (x0 + i / factor, y0 + j / factor).
+    /// @throw ValueError if the window is empty, leaves the image, or factor < 1.
+    Camera window(int x0, int y0, int width, int height, int factor) const;
+
     /// World point -> camera space t.
     Vec3d cameraFromWorldPoint(const Vec3d& pWorld) const
     {

@@ -49,6 +49,9 @@ struct RenderStats
     std::uint64_t footprintSamples = 0; ///< fog volumes: footprint weights evaluated (pixels inside a cut-off)
     std::uint64_t slabComposites = 0;   ///< fog volumes: (pixel, slab) samples composited
     bool streamed = false;            ///< fog volumes: the streamed frame ran (RenderSettings::cull)
+    int supersample = 1;              ///< fog volumes: sub-pixels a pixel side the frame was composited at (SplatOptions::supersample)
+    int supersampleWindow[4] = {0, 0, 0, 0}; ///< fog volumes, supersampled: the pixels x0, y0, width, height composited so
+    double voxelPixels = 0;           ///< fog volumes: the active voxels' median screen size, pixels (0: not measured)
     std::uint64_t bricks = 0;         ///< streamed frame: leaf nodes and active tiles of the grid
     std::uint64_t bricksOutside = 0;  ///< streamed frame: bricks no splat of which reaches the image
     std::uint64_t bricksHidden = 0;   ///< streamed frame: bricks behind opaque screen tiles, never expanded
@@ -108,6 +111,10 @@ private:
     VDB_EWA_LOCAL void renderStreamedFogVolume(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes, Frame& frame,
         RenderStats& stats, detail::Progress& progress) const;
     VDB_EWA_LOCAL void renderFogVolume(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes, Frame& frame,
+        RenderStats& stats, detail::Progress& progress) const;
+    /// Fog volumes by splatting, at the sub-pixel samples the voxels' screen size asks for
+    /// (SplatOptions::supersample): sub-frames or one frame.
+    VDB_EWA_LOCAL void renderSplatted(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes, Frame& frame,
         RenderStats& stats, detail::Progress& progress) const;
     /// Fog volumes in sub-frames (MotionBlur::samples, RenderSettings::lensSamples): each over
     /// its part of the shutter and through its part of the lens, averaged.

@@ -267,6 +267,31 @@ BlurSample blurSample(int x, int y, int i, int n)
     return b;
 }
 
+/// The radical inverse of @a i in base @a b: the Halton sequence's coordinate.
+double radicalInverse(std::uint32_t i, std::uint32_t b)
+{
+    double inverse = 0.0, digit = 1.0 / double(b);
+    for (; i > 0; i /= b, digit /= double(b)) inverse += double(i % b) * digit;
+    return inverse;
+}
+
+/// Ray @a i of @a n's place in pixel (@a x, @a y), in [0, 1)^2: the Halton points of bases 2
+/// and 3 (well spread for any n, unlike the R2 points blurSample gives the lens), rotated by a
+/// hash of the pixel (Cranley-Patterson: no pattern shared between pixels; the same for any
+/// thread count).
+Vec2d pixelSample(int x, int y, int i)
+{
+    std::uint64_t h = std::uint64_t(std::uint32_t(x)) * 0xD6E8FEB86659FD93ull ^ std::uint64_t(std::uint32_t(y)) * 0x9E3779B97F4A7C15ull ^ 0x5851F42D4C957F2Dull;
+    const auto next = [&h] {
+        h ^= h >> 31;
+        h *= 0xBF58476D1CE4E5B9ull;
+        h ^= h >> 29;
+        return double(h >> 11) * 0x1.0p-53;
+    };
+    const double r0 = next(), r1 = next();
+    return Vec2d(std::fmod(radicalInverse(std::uint32_t(i), 2) + r0, 1.0), std::fmod(radicalInverse(std::uint32_t(i), 3) + r1, 1.0));
+}
+
 void checkMarchable(const GridSource::Impl& grid, const PassRequest& passes, const char* method)
 {
     if (std::string(method) != "raymarch" && (grid.emission || grid.temperature)) {
@@ -297,7 +322,10 @@ Frame marchRays(const GridSource::Impl& grid, const Camera& camera, const Render
     Frame frame = blankFrame(width, height, passes);
     const Vec3d forward = glm::transpose(camera.cameraFromWorld())[2];
     const bool blurred = (grid.velocity && settings.motionBlur.shutterClose > settings.motionBlur.shutterOpen) || camera.lensRadius() > 0.0;
-    const int samples = blurred ? settings.blurSamples : 1;
+    // Rays per pixel: spread over the pixel's square (settings.pixelSamples), and each at its
+    // own shutter time and lens point where the frame is blurred.
+    const bool spread = settings.pixelSamples > 1;
+    const int samples = std::max(blurred ? settings.blurSamples : 1, settings.pixelSamples);
 
     setUnits(progress, std::uint64_t(height));
     tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
@@ -316,13 +344,14 @@ Frame marchRays(const GridSource::Impl& grid, const Camera& camera, const Render
                     // seen within 16 rays' time, not a row's (nor a pixel's, with --blur-samples).
                     if (progress && ++rays % 16 == 0) progress->check();
                     Vec3d origin, dir;
-                    if (samples == 1) {
-                        camera.worldRay(x + 0.5, y + 0.5, origin, dir);
+                    const Vec2d at = spread ? Vec2d(x, y) + pixelSample(x, y, sample) : Vec2d(x + 0.5, y + 0.5);
+                    if (!blurred || samples == 1) {
+                        camera.worldRay(at.x, at.y, origin, dir);
                     } else {
                         const BlurSample b = blurSample(x, y, sample, samples);
                         sampler.setTime(settings.motionBlur.displacementPerVelocity(
                             settings.motionBlur.shutterOpen + b.shutter * (settings.motionBlur.shutterClose - settings.motionBlur.shutterOpen)));
-                        camera.lensRay(x + 0.5, y + 0.5, b.lensX, b.lensY, origin, dir);
+                        camera.lensRay(at.x, at.y, b.lensX, b.lensY, origin, dir);
                     }
                     float T[3] = {1.0f, 1.0f, 1.0f}, C[3] = {0.0f, 0.0f, 0.0f};
                     float zRay = std::numeric_limits<float>::infinity();
