@@ -275,7 +275,7 @@ double radicalInverse(std::uint32_t i, std::uint32_t b)
     return inverse;
 }
 
-/// Ray @a i of @a n's place in pixel (@a x, @a y), in [0, 1)^2: the Halton points of bases 2
+/// Ray @a i's place in pixel (@a x, @a y), in [0, 1)^2: the Halton points of bases 2
 /// and 3 (well spread for any n, unlike the R2 points blurSample gives the lens), rotated by a
 /// hash of the pixel (Cranley-Patterson: no pattern shared between pixels; the same for any
 /// thread count).
