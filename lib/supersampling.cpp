@@ -54,14 +54,17 @@ double medianVoxelPixels(const GridSource::Impl& grid, const Camera& camera, con
     tbb::parallel_for(std::size_t(0), leaves.size(), [&](std::size_t i) {
         sizes[i] = {lod.voxelPixels(leaves[i]->origin(), int(openvdb::FloatTree::LeafNodeType::DIM)), double(leaves[i]->onVoxelCount())};
     });
-    // Active tiles are active voxels too (a pruned uniform region is often of leaf nodes' size).
+    // Tiles of a leaf node's size (a uniform block pruned from voxels) count as its voxels.
+    // Larger tiles do not: uniform inside, they are no finer detail than their faces, and
+    // 4096^3 root tiles seen from afar asked for 28 x 28 sub-pixels, whose slabs (they follow
+    // the sub-pixels) cut every tile kernel into 28 times as many shares: 24 GB.
+    constexpr int kLeafDim = int(openvdb::FloatTree::LeafNodeType::DIM);
     auto it = grid.field->tree().cbeginValueOn();
     it.setMaxDepth(openvdb::FloatTree::ValueOnCIter::LEAF_DEPTH - 1); // tiles only, no voxel
     for (; it; ++it) {
         openvdb::CoordBBox box;
         it.getBoundingBox(box);
-        const double dim = double(box.dim().x());
-        sizes.emplace_back(lod.voxelPixels(box.min(), box.dim().x()), dim * dim * dim);
+        if (box.dim().x() == kLeafDim) sizes.emplace_back(lod.voxelPixels(box.min(), kLeafDim), double(kLeafDim * kLeafDim * kLeafDim));
     }
     if (sizes.empty()) return kInf;
     std::sort(sizes.begin(), sizes.end());

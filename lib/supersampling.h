@@ -47,8 +47,9 @@ inline constexpr double kBlendShare = 0.25;
 double supersampledPixelBudget(int width, int height);
 
 /// The median over the active voxels of their screen size in pixels (LevelOfDetail::voxelPixels
-/// of each leaf node and active tile, weighted by its active voxels; +inf where there are none,
-/// or where the median node reaches the near plane).
+/// of each leaf node and each active tile of a leaf node's size, weighted by its active voxels;
+/// larger tiles are left out; +inf where there are none, or where the median node reaches the
+/// near plane).
 double medianVoxelPixels(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings);
 
 /// The pixels of @a camera's image that the volume's splats can reach: its active box (and its

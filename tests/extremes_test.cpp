@@ -394,9 +394,8 @@ TEST(Extremes, SlabsFollowWhatThePixelsResolveFarAway)
     const GridSource grid = gridSourceFromOpenVDB(tiles);
     const Camera far(lookAtCamera(Vec3d(8256.0, 8256.0, 60000.0), Vec3d(8256.0), 64, 48), grid.worldCentre());
     RenderSettings thick; // --lod 2
-    // The frame's own pixels: sub-pixels (--supersample, 32 x 32 here) would make the slabs
-    // follow them, 32 times thinner, and show the tiles' true coverage (an alpha sum of 0.88,
-    // where filtering their optical depth a pixel wide spreads them over 28).
+    // The frame's own pixels (tiles larger than a leaf ask for no sub-pixels; were they forced,
+    // the slabs would follow the sub-pixels).
     thick.splat.supersample = 1;
     RenderSettings thin = thick;
     thin.splat.lodPixels = 0.0; // slabs of --slab 2 voxels (tiles do not merge either way)

@@ -297,3 +297,26 @@ TEST(Supersampling, TheSubPixelsFadeOutWithoutAJump)
     const CameraSettings fadeStart = orthoDownZ(6.0, 6.0, 100.0, 16.0 * 4.0 / 3.0 * (1.0 + 1e-4), 32);
     EXPECT_GT(maxAbsDiff(renderGrid(grid, fadeStart, s), renderGrid(grid, fadeStart, one)), 0.02);
 }
+
+// Tiles of a leaf node's size are voxels pruned into a uniform block: they count in the median
+// voxel. Larger tiles do not (uniform inside): 512 root tiles of 4096^3 seen from afar once
+// asked for 28 x 28 sub-pixels, whose slabs cut every tile kernel into 28 times the shares.
+TEST(Supersampling, LeafSizedTilesCountAsVoxelsLargerTilesDoNot)
+{
+    RenderSettings s;
+    for (const int edge : {64, 4096}) {
+        auto grid = openvdb::FloatGrid::create(0.0f);
+        grid->setGridClass(openvdb::GRID_FOG_VOLUME);
+        grid->fill(openvdb::CoordBBox(openvdb::Coord(0), openvdb::Coord(edge - 1)), 0.5f, true); // tiles, as large as fit
+        const GridSource source = gridSourceFromOpenVDB(grid);
+        ASSERT_EQ(source.impl().activeVoxels, 0u);
+        // A voxel is a quarter of a pixel (orthographic: frame 4 x 64 units over 64 pixels).
+        const Camera camera(orthoDownZ(edge / 2.0, edge / 2.0, 1e5, 4.0 * 64.0, 64), source.worldCentre());
+        const double px = detail::medianVoxelPixels(source.impl(), camera, s);
+        if (edge == 64) {
+            EXPECT_NEAR(px, 0.25, 1e-9);
+        } else {
+            EXPECT_TRUE(std::isinf(px)) << px;
+        }
+    }
+}
