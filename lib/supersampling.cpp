@@ -139,7 +139,6 @@ Supersampling chooseSupersampling(const GridSource::Impl& grid, const Camera& ca
     one.voxelPixels = px;
     if (!(px > 0.0) || px >= settings.splat.supersampleSpan) return one; // also +inf
     const int wanted = int(std::min(double(settings.splat.supersample), std::ceil(settings.splat.supersampleSpan / px)));
-    one.wanted = wanted;
     if (wanted <= 1) return one;
     if (passes.deep) {
         std::ostringstream w;
@@ -151,7 +150,6 @@ Supersampling chooseSupersampling(const GridSource::Impl& grid, const Camera& ca
     }
     Supersampling s = reachedWindow(grid, camera, settings);
     s.voxelPixels = px;
-    s.wanted = wanted;
     if (s.width == 0) return one; // nothing in view
     const double pixels = double(s.width) * double(s.height);
     const double most = std::min(supersampledPixelBudget(camera.width(), camera.height()), budget.itemsWithin(0.5, kBytesPerPixel));
@@ -163,10 +161,7 @@ Supersampling chooseSupersampling(const GridSource::Impl& grid, const Camera& ca
           << "the volume's voxels span " << px << " pixels, so its edges and fine detail render more opaque than a camera's average";
         warnings.push_back(w.str());
     }
-    if (s.factor == 1) {
-        one.wanted = wanted;
-        return one;
-    }
+    if (s.factor == 1) return one;
     const double fadeFrom = (1.0 - kBlendShare) * settings.splat.supersampleSpan;
     if (s.factor == 2 && px > fadeFrom) s.blend = std::min(1.0, (px - fadeFrom) / (kBlendShare * settings.splat.supersampleSpan));
     return s;

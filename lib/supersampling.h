@@ -29,8 +29,6 @@ struct Supersampling
     int x0 = 0, y0 = 0, width = 0, height = 0;
     /// The active voxels' median screen size in pixels (+inf: unmeasured, e.g. no leaf nodes).
     double voxelPixels = 0;
-    /// The factor the voxels asked for, before the sub-pixel budget or a deep image lowered it.
-    int wanted = 1;
     /// Where the voxels span between 3/4 of supersampleSpan and all of it, the frame at one
     /// sample a pixel is rendered too and mixed in with this weight, rising from 0 to 1 across
     /// that range: going from 2 x 2 sub-pixels to one sample a pixel changed pyro's image by up

@@ -173,7 +173,8 @@ struct SplatOptions
     double lodError = 0.05;     ///< level of detail: a block spanning more than a pixel merges only where
                                 ///< the transmittance through any depth of it differs by at most this much
                                 ///< between its columns (values smooth enough), in [0, 1]; 1 = by screen
-                                ///< size alone    /// Sub-pixel samples (docs/equations.md#sub-pixel-samples): where the voxels look smaller
+                                ///< size alone
+    /// Sub-pixel samples (docs/equations.md#sub-pixel-samples): where the voxels look smaller
     /// than supersampleSpan pixels, the fog volume's frame is composited at S x S sub-pixels a
     /// pixel over the pixels it covers and box-filtered down, S = ceil(supersampleSpan / voxel
     /// pixels) (the active voxels' median) up to this: a camera averages transmittance over the
