@@ -25,6 +25,9 @@
   bench/bench.py roofline [--res 1920x1080] [--quality draft,default] [--build DIR]
                                                          issue 17: the rasteriser's achieved rate against
                                                          the peak of its inner loop (bench/roofline)
+  bench/bench.py tiles                                   issue 52, in time: files of active tiles seen from
+                                                         afar (time, memory) and a cube of tiles against
+                                                         the reference
   bench/bench.py scaling [--res 1920x1080] [--millions 0.1,0.3,1,3,10,30,100] [--peer-max 3]
                                                          issue 17: time and peak memory against active
                                                          voxels, on the sample cloud made finer
@@ -786,6 +789,60 @@ def cmd_scale(args):
                           f"{t / peer:.2f} |", flush=True)
 
 
+def tile_grid(path, last, value, voxel=1.0):
+    """A fog grid of active tiles filling [0, last]^3 (pyopenvdb makes the largest tiles that fit)."""
+    import pyopenvdb as vdb
+    g = vdb.FloatGrid()
+    g.name = "density"
+    g.gridClass = vdb.GridClass.FOG_VOLUME
+    g.transform = vdb.createLinearTransform(voxelSize=voxel)
+    g.fill((0, 0, 0), (last, last, last), value, True)
+    vdb.write(path, grids=[g])
+
+
+def cmd_tiles(args):
+    """Issue 52, in time: files of active tiles seen from afar at 160x90 (512 root tiles of
+    4096^3 voxels from 90,000 units, also of value 1e30; 16^3 internal tiles of 128^3 from
+    12,000), time and peak memory of each preset; then a cube of 2^3 tiles of 128^3 voxels
+    (density 0.05, 0.01 units a voxel, optical depth 20 across) from 20, 80 and 300 units at
+    480x270 against the reference integrator (16 rays a pixel), and against the lattice seen
+    large (--lod 1e-3: --tile-spacing at every distance, no sub-pixels for tiles)."""
+    tmp = tempfile.mkdtemp(prefix="vdb_ewa_tiles_")
+    print(f"# {os.cpu_count()} cores; one run each")
+    print("| file | camera | setting | time (s) | peak (MB) | kernels | sub-pixels |")
+    print("|---|---|---|---|---|---|---|")
+    hostile = [("512 root tiles of 4096^3, 0.5", 32767, 0.5, 90000.0), ("512 root tiles of 4096^3, 1e30", 32767, 1e30, 90000.0),
+               ("16^3 tiles of 128^3, 0.5", 2047, 0.5, 12000.0)]
+    for label, last, value, dist in hostile:
+        path = os.path.join(tmp, "tiles.vdb")
+        tile_grid(path, last, value)
+        c = (last + 1) / 2.0
+        camera = ["-res", "160x90", "-translate", f"{c:g},{c:g},{last + 1 + dist:g}", "-lookat", f"{c:g},{c:g},{c:g}"]
+        dt, peak, _, _ = timed_peak(["vdb_render", path, os.path.join(tmp, "peer.exr"), *camera])
+        print(f"| {label} | {dist:g} units | vdb_render defaults | {dt:.2f} | {peak:.0f} | - | - |", flush=True)
+        for name, extra in (("default", []), ("draft", ["--quality", "draft"]), ("final", ["--quality", "final"])):
+            dt, peak, out, code = timed_peak([*EWA_RENDER, path, os.path.join(tmp, "o.exr"), *camera, *extra, "-v"])
+            kernels = re.search(r"; (\d+) kernels", out)
+            sub = re.search(r"composited at (\d+)x\d+ sub-pixels", out)
+            print(f"| {label} | {dist:g} units | {name} | {dt:.2f} | {peak:.0f} | {kernels.group(1) if kernels else '-'} | "
+                  f"{sub.group(1) if sub else 1} |", flush=True)
+    path = os.path.join(tmp, "cube.vdb")
+    tile_grid(path, 255, 0.05, 0.01)
+    print()
+    print("| cube of 2^3 tiles | setting | PSNR (dB) | brightness | alpha IoU | time / vdb_render defaults |")
+    print("|---|---|---|---|---|---|")
+    for dist in (20, 80, 300):
+        camera = ["-res", "480x270", "-translate", f"1.28,1.28,{1.28 + dist:g}", "-lookat", "1.28,1.28,1.28"]
+        ref = os.path.join(tmp, "ref.exr")
+        run([*EWA_RENDER, path, ref, *camera, "--method", "raymarch", "--pixel-samples", "16"])
+        peer = timed(["vdb_render", path, os.path.join(tmp, "peer.exr"), *camera], 1)
+        for name, extra in (("lattice seen large (--lod 1e-3)", ["--lod", "1e-3"]), ("default", []), ("final", ["--quality", "final"])):
+            out = os.path.join(tmp, "o.exr")
+            t = timed([*EWA_RENDER, path, out, *camera, *extra], 1)
+            psnr, bright, iou, _, _ = scale_metrics(out, ref)
+            print(f"| {dist} units | {name} | {psnr:.1f} | {100 * (bright - 1):+.1f} % | {iou:.3f} | {t / peer:.2f} |", flush=True)
+
+
 def cmd_python(args):
     label, path, camera = next(s for s in SCENES if s[0] == args.scene)
     pythonpath = os.environ.get("VDB_EWA_PYTHONPATH", os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(EWA))), "python"))
@@ -1277,6 +1334,7 @@ def main():
     ssc.add_argument("--px", default="0.1,0.3,1,3", help="pixels a voxel spans")
     ssc.add_argument("--scenes", default="all", help="comma-separated: cloud,smoke,pyro,pig")
     ssc.add_argument("--repeat", type=int, default=3)
+    sub.add_parser("tiles")
     sa = sub.add_parser("analytic")
     sa.add_argument("--res", default="320x180")
     sp2 = sub.add_parser("plot")
@@ -1287,7 +1345,7 @@ def main():
     {"speed": cmd_speed, "sigma": cmd_sigma, "tradeoff": cmd_tradeoff, "targets": cmd_targets,
      "output": cmd_output, "surfaces": cmd_surfaces, "holes": cmd_holes, "plot": cmd_plot, "ladder": cmd_ladder,
      "analytic": cmd_analytic, "roofline": cmd_roofline, "scaling": cmd_scaling,
-     "stability": cmd_stability, "python": cmd_python, "cull": cmd_cull, "blur": cmd_blur, "lights": cmd_lights, "volumes": cmd_volumes, "scale": cmd_scale}[a.cmd](a)
+     "stability": cmd_stability, "python": cmd_python, "cull": cmd_cull, "blur": cmd_blur, "lights": cmd_lights, "volumes": cmd_volumes, "scale": cmd_scale, "tiles": cmd_tiles}[a.cmd](a)
 
 
 if __name__ == "__main__":

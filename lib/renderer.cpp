@@ -217,7 +217,8 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     StageTimer timer;
     progress.stage(0, 10);
     const detail::MemoryBudget budget = budgetFor(g, mSettings);
-    const detail::LevelOfDetail lod(g, camera, mSettings);
+    // Tiles seen small coarsen within the frame's slabs (projectSplats forms them again).
+    const detail::LevelOfDetail lod(g, camera, mSettings, detail::widestLatticeSpacing(g, detail::frameSlabs(g, camera, mSettings), mSettings));
     detail::KernelSet kernels = detail::extractKernels(g, mSettings, &lod, &progress, &budget);
     budget.check(double(kernels.kernels.size()), "kernels", detail::kBytesPerKernel);
     // Refined kernels where voxels are large on screen, quasi-interpolating weights for the rest.

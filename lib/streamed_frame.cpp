@@ -50,17 +50,17 @@ void Renderer::renderStreamedFogVolume(const GridSource::Impl& g, const Camera& 
     StageTimer timer;
     progress.stage(0, 5);
     const detail::MemoryBudget budget = detail::budgetFor(g, mSettings);
-    const detail::LevelOfDetail lod(g, camera, mSettings);
     const std::vector<detail::Brick> bricks = detail::listBricks(g);
     // The slabs every window shares: --slab thick, unless some kernel could span more than
     // kSlabSpanTarget of them (the whole frame raises the thickness from the kernels it made;
     // it renders those grids). A lens part's pinhole moves in the lens plane: its depths, and so
-    // its slabs, are the whole lens's.
+    // its slabs, are the whole lens's. Tiles seen small coarsen within them.
     const SlabGrid slabs = detail::frameSlabs(g, camera, mSettings);
+    const detail::LevelOfDetail lod(g, camera, mSettings, detail::widestLatticeSpacing(g, slabs, mSettings));
     {
         int widest = mSettings.splat.lodPixels > 0.0 ? detail::LevelOfDetail::kLeafDim : 1;
         for (const detail::Brick& b : bricks) {
-            if (!b.leaf) widest = std::max(widest, detail::tileLatticeSpacing(b.box.dim().x(), mSettings.splat.tileKernelSpacing));
+            if (!b.leaf) widest = std::max(widest, detail::tileLattice(b.box, mSettings.splat.tileKernelSpacing, &lod).widest());
         }
         const Mat3d& a = g.indexToWorldLinear;
         const double norm = std::sqrt(glm::dot(a[0], a[0]) + glm::dot(a[1], a[1]) + glm::dot(a[2], a[2])); // >= the largest stretch

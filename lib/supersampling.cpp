@@ -21,21 +21,49 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 /// Index-space padding of the active box that every kernel's reach fits in: 3 standard
 /// deviations of a level-of-detail block of 8 voxels (sigma 4, centred 4 inside) or a draft
 /// tile lattice (spacing 8, sigma 4.8), a halo voxel (--prefilter), rounded up; larger tiles'
-/// lattices (up to a 64th of the tile a step) add a sixteenth of the largest tile.
+/// lattices (up to one kernel the tile's size, seen small) add the reach of the largest tile's.
 constexpr double kKernelReachVoxels = 16.0;
 
-/// The largest active tile's edge, in voxels (0: none).
-int largestActiveTile(const openvdb::FloatGrid& grid)
+/// Sub-pixels multiply the kernels of active tiles larger than a leaf node by up to S^3 (their
+/// lattices follow the sub-pixels, docs/equations.md#active-tiles-seen-small): S is lowered
+/// until they are at most this many a pixel of the image, between kTileKernelsAtLeast and
+/// kTileKernelsAtMost (so that a thumbnail costs what a thumbnail resolves).
+constexpr double kTileKernelsAPixel = 32.0;
+constexpr double kTileKernelsAtLeast = double(1 << 16);
+constexpr double kTileKernelsAtMost = double(1 << 21);
+
+/// Calls @a f(box) for each active tile of @a grid.
+template <typename F>
+void forEachActiveTile(const openvdb::FloatGrid& grid, F&& f)
 {
-    int largest = 0;
     auto it = grid.tree().cbeginValueOn();
     it.setMaxDepth(openvdb::FloatTree::ValueOnCIter::LEAF_DEPTH - 1); // tiles only, no voxel
     for (; it; ++it) {
         openvdb::CoordBBox box;
         it.getBoundingBox(box);
-        largest = std::max(largest, box.dim().x());
+        f(box);
     }
+}
+
+/// The largest active tile's edge, in voxels (0: none).
+int largestActiveTile(const openvdb::FloatGrid& grid)
+{
+    int largest = 0;
+    forEachActiveTile(grid, [&](const openvdb::CoordBBox& box) { largest = std::max(largest, box.dim().x()); });
     return largest;
+}
+
+/// The kernels the active tiles larger than a leaf node make through @a camera (tileLattice,
+/// without the slabs' limit), counted up to @a most.
+double tileKernels(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings, double most)
+{
+    const LevelOfDetail lod(grid, camera, settings);
+    double kernels = 0.0;
+    forEachActiveTile(*grid.field, [&](const openvdb::CoordBBox& box) {
+        if (kernels > most || box.dim().x() <= int(openvdb::FloatTree::LeafNodeType::DIM)) return;
+        kernels += double(tileLattice(box, settings.splat.tileKernelSpacing, &lod).kernels(box.dim().x()));
+    });
+    return kernels;
 }
 
 } // namespace
@@ -43,6 +71,11 @@ int largestActiveTile(const openvdb::FloatGrid& grid)
 double supersampledPixelBudget(int width, int height)
 {
     return std::max(16.0 * double(width) * double(height), double(1 << 22));
+}
+
+double tileKernelBudget(int width, int height)
+{
+    return std::clamp(kTileKernelsAPixel * double(width) * double(height), kTileKernelsAtLeast, kTileKernelsAtMost);
 }
 
 double medianVoxelPixels(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings)
@@ -54,18 +87,14 @@ double medianVoxelPixels(const GridSource::Impl& grid, const Camera& camera, con
     tbb::parallel_for(std::size_t(0), leaves.size(), [&](std::size_t i) {
         sizes[i] = {lod.voxelPixels(leaves[i]->origin(), int(openvdb::FloatTree::LeafNodeType::DIM)), double(leaves[i]->onVoxelCount())};
     });
-    // Tiles of a leaf node's size (a uniform block pruned from voxels) count as its voxels.
-    // Larger tiles do not: uniform inside, they are no finer detail than their faces, and
-    // 4096^3 root tiles seen from afar asked for 28 x 28 sub-pixels, whose slabs (they follow
-    // the sub-pixels) cut every tile kernel into 28 times as many shares: 24 GB.
-    constexpr int kLeafDim = int(openvdb::FloatTree::LeafNodeType::DIM);
-    auto it = grid.field->tree().cbeginValueOn();
-    it.setMaxDepth(openvdb::FloatTree::ValueOnCIter::LEAF_DEPTH - 1); // tiles only, no voxel
-    for (; it; ++it) {
-        openvdb::CoordBBox box;
-        it.getBoundingBox(box);
-        if (box.dim().x() == kLeafDim) sizes.emplace_back(lod.voxelPixels(box.min(), kLeafDim), double(kLeafDim * kLeafDim * kLeafDim));
-    }
+    // Active tiles count as their voxels: a dense tile's face is as sharp as a voxel's, and
+    // seen small it covers too much at one sample a pixel as voxels do (a cube of 2^3 tiles of
+    // 128^3 voxels 5 pixels wide: alpha +168 %, +22 % at 8 x 8 sub-pixels). What their kernels
+    // cost with sub-pixels is bounded in chooseSupersampling (tileKernelBudget).
+    forEachActiveTile(*grid.field, [&](const openvdb::CoordBBox& box) {
+        const int dim = box.dim().x();
+        sizes.emplace_back(lod.voxelPixels(box.min(), dim), double(dim) * double(dim) * double(dim));
+    });
     if (sizes.empty()) return kInf;
     std::sort(sizes.begin(), sizes.end());
     double total = 0.0;
@@ -94,7 +123,9 @@ Supersampling reachedWindow(const GridSource::Impl& grid, const Camera& camera, 
     const Mat3d inverse = glm::inverse(grid.indexToWorldLinear);
     const double travel = largestTravel(grid, settings) *
                           std::sqrt(glm::dot(inverse[0], inverse[0]) + glm::dot(inverse[1], inverse[1]) + glm::dot(inverse[2], inverse[2]));
-    const double pad = kKernelReachVoxels + double(largestActiveTile(*grid.field)) / 16.0 + travel;
+    const int largest = largestActiveTile(*grid.field);
+    const double tileReach = largest > 0 ? settings.splat.cutoffRadius * kernelSigmaVoxels(Kernel{Vec3d(0.0), 0.0f, float(largest)}, settings.splat.kernelSigma) : 0.0;
+    const double pad = std::max(kKernelReachVoxels, tileReach) + travel;
     const Vec3d lo = Vec3d(box.min().x(), box.min().y(), box.min().z()) - pad;
     const Vec3d hi = Vec3d(box.max().x(), box.max().y(), box.max().z()) + pad;
     // The box's image is the hull of its corners' where every corner is in front of the near
@@ -154,7 +185,22 @@ Supersampling chooseSupersampling(const GridSource::Impl& grid, const Camera& ca
     const double pixels = double(s.width) * double(s.height);
     const double most = std::min(supersampledPixelBudget(camera.width(), camera.height()), budget.itemsWithin(0.5, kBytesPerPixel));
     s.factor = std::max(1, std::min(wanted, int(std::floor(std::sqrt(most / pixels)))));
-    if (s.factor < wanted) {
+    // Tiles' lattices follow the sub-pixels: at most tileKernelBudget of their kernels (the
+    // count grows with the factor; without sub-pixels they make what they make).
+    const double tileBudget = tileKernelBudget(camera.width(), camera.height());
+    const auto tilesFit = [&](int factor) {
+        return tileKernels(grid, camera.window(s.x0, s.y0, s.width, s.height, factor), settings, tileBudget) <= tileBudget;
+    };
+    if (s.factor > 1 && !tilesFit(s.factor)) {
+        int lo = 1, hi = s.factor; // tilesFit(hi) is false; lo fits or is 1
+        while (hi - lo > 1) {
+            const int mid = (lo + hi) / 2;
+            (tilesFit(mid) ? lo : hi) = mid;
+        }
+        s.factor = lo;
+        s.tileLimited = true;
+    }
+    if (s.factor < wanted && !s.tileLimited) {
         std::ostringstream w;
         w << "--supersample lowered from " << wanted << " to " << s.factor << " sub-pixels a pixel side: " << s.width << "x" << s.height
           << " pixels at " << wanted << "x" << wanted << " would pass " << std::llround(most) << " sub-pixels (16 images, or half of --max-memory); "

@@ -34,6 +34,9 @@ struct Supersampling
     /// that range: going from 2 x 2 sub-pixels to one sample a pixel changed pyro's image by up
     /// to 0.26 in a pixel between two camera positions 1e-4 apart (popping in a fly-in).
     double blend = 0.0;
+    /// True where the factor was lowered so that active tiles' kernels stay within
+    /// tileKernelBudget.
+    bool tileLimited = false;
 };
 
 /// The last quarter of the span below supersampleSpan, over which a factor of 2 fades into one
@@ -44,10 +47,14 @@ inline constexpr double kBlendShare = 0.25;
 /// what one supersampled frame may take in time and memory before the factor is lowered.
 double supersampledPixelBudget(int width, int height);
 
+/// Kernels of active tiles larger than a leaf node that sub-pixels may make, at most (their
+/// lattices follow the sub-pixels): 32 a pixel of the @a width x @a height image, between 2^16
+/// and 2^21.
+double tileKernelBudget(int width, int height);
+
 /// The median over the active voxels of their screen size in pixels (LevelOfDetail::voxelPixels
-/// of each leaf node and each active tile of a leaf node's size, weighted by its active voxels;
-/// larger tiles are left out; +inf where there are none, or where the median node reaches the
-/// near plane).
+/// of each leaf node and each active tile, weighted by its active voxels; +inf where there are
+/// none, or where the median node reaches the near plane).
 double medianVoxelPixels(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings);
 
 /// The pixels of @a camera's image that the volume's splats can reach: its active box (and its
@@ -58,8 +65,10 @@ Supersampling reachedWindow(const GridSource::Impl& grid, const Camera& camera, 
 
 /// The sub-pixel samples for @a camera: S = ceil(supersampleSpan / median voxel pixels) in
 /// [1, supersample], lowered to fit supersampledPixelBudget and half the memory @a budget
-/// (a warning line then, in @a warnings); 1 for a @a passes.deep image (warned where the voxels
-/// asked for more), and where the window is empty.
+/// (a warning line then, in @a warnings), and so that active tiles larger than a leaf node,
+/// whose lattices follow the sub-pixels, make at most tileKernelBudget kernels (no warning: a
+/// designed bound); 1 for a @a passes.deep image (warned where the voxels asked for more), and
+/// where the window is empty.
 Supersampling chooseSupersampling(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings,
     const PassRequest& passes, const MemoryBudget& budget, std::vector<std::string>& warnings);
 

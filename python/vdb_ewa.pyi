@@ -256,8 +256,9 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
         filter, Eq. 33: always adds --lowpass), swan (uniform scaling) or none (default: floor)
     cutoff_radius (--cutoff-radius): footprint cut-off radius in std. deviations, range [1, 6] (default:
         3)
-    slab (--slab): image-aligned slab thickness in voxel lengths, range [0.05, 10000]; with --lod > 0 no
-        thinner than --lod/16 pixel widths at the nearest active voxel (default: 2)
+    slab (--slab): image-aligned slab thickness in voxel lengths, range [0.05, 10000]; no thinner than
+        --lod/16 pixel widths (--supersample-span/16 at --lod 0) at the nearest active voxel (default:
+        2)
     quality (--quality): preset of the speed/accuracy knobs: draft, default, high or final (refined
         kernels); explicit options override it (values in docs/performance.md) (default: default)
     exp (--exp): footprint exp(-r/2): incremental (forward differencing), exact or table (default:
@@ -271,8 +272,10 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
         their edge (no step to flicker as they move); off: truncated (default: off, draft on)
     precision (--precision): world-to-camera transform and covariances in double or float (default:
         double)
-    tile_spacing (--tile-spacing): largest kernel spacing in voxels for active tiles, 1 to voxelise them
-        (default: 4)
+    tile_spacing (--tile-spacing): largest kernel spacing in voxels for active tiles seen large, 1 to
+        voxelise them; seen small a tile's spacing follows --lod pixels (--supersample-span at --lod 0)
+        up to the tile's own size, between two spacings continuously with distance
+        (docs/equations.md#active-tiles-seen-small) (default: 4, draft 8, high 2)
     refine (--refine): where voxels span N pixels or more, their kernels on a lattice N times finer: the
         trilinear field sampled every 1/N voxel (emission and temperature grids too), kernels N times
         narrower, N^3 as many; range [1, 4], 1 = off (default: 1)
@@ -285,7 +288,8 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
         become one kernel where the block projects to at most this many pixels, each voxel shared
         between two block sizes continuously with distance (no popping); level sets: one surface kernel
         a 2^3 or 4^3 block of voxels (for each sheet through it) where the block projects to at most a
-        quarter as many; 0 = off (default: 2)
+        quarter as many; active tiles seen small: their kernels this many pixels apart (--tile-spacing);
+        0 = off (tiles: --supersample-span pixels) (default: 2)
     lod_error (--lod-error): level of detail, fog volumes: a block wider than a pixel merges only where
         its values are smooth: the transmittance through any depth of it differs by at most this much
         between its columns; range [0, 1], 1 = by screen size alone (default: 0.05, draft 0.25)
@@ -293,9 +297,10 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
         pixels, the pixels the volume covers are composited in S x S sub-pixels and averaged (a box
         filter, as a camera averages a pixel; one footprint a pixel wide averages optical depth instead,
         which renders small volumes too opaque and too bright: docs/equations.md#sub-pixel-samples), S =
-        ceil(span / the median voxel's pixels) up to this; at most 16 images' sub-pixels (and half of
-        --max-memory); up to S^2 times the compositing where it acts; range [1, 64], 1 = off (default:
-        32; draft 16)
+        ceil(span / the median voxel's pixels, active tiles counting as their voxels) up to this; at
+        most 16 images' sub-pixels (and half of --max-memory), and 32 kernels a pixel of tiles larger
+        than a leaf node (their lattices follow the sub-pixels); up to S^2 times the compositing where
+        it acts; range [1, 64], 1 = off (default: 32; draft 16)
     supersample_span (--supersample-span): fog volumes: sub-pixels a voxel should span, in [0.5, 16];
         larger converges further to a camera's average where voxels are small, at more sub-pixels; at 2
         images have converged as far as sub-pixels take them (default: 2; draft 1)

@@ -353,8 +353,10 @@ TEST(Extremes, MemoryBudgetStopsEachStageBeforeItAllocates)
     tiles->setName("density");
     for (int i = 0; i < 64; ++i) tiles->tree().addTile(3, openvdb::Coord(4096 * i, 0, 0), 1.0f, true); // 64 x 4096^3 voxels
     const GridSource tiled = gridSourceFromOpenVDB(tiles);
+    // From inside the row, along it: the tiles near the eye keep lattices of 8 to 64 voxels
+    // (seen from afar each would be a few kernels: TilesSeenSmall.*).
     const std::string kernels = message([&] {
-        Renderer(s).render(tiled, Camera(lookAtCamera(Vec3d(0.0, 0.0, 1e5), Vec3d(0.0), 64, 64), tiled.worldCentre()));
+        Renderer(s).render(tiled, Camera(lookAtCamera(Vec3d(131072.0 + 2048.0, 2048.0, 2048.0), Vec3d(1e6, 2048.0, 2048.0), 64, 64), tiled.worldCentre()));
     });
     EXPECT_NE(kernels.find("voxel and active-tile kernels need"), std::string::npos) << kernels;
 
@@ -382,10 +384,11 @@ TEST(Extremes, MemoryBudgetStopsEachStageBeforeItAllocates)
 }
 
 // Eight active tiles of 128^3 voxels at the corners of a cube 2^14 voxels wide, seen from far
-// away (each tile a fraction of a pixel): with a level of detail the slabs follow what the
-// pixels resolve (a sixteenth of --lod pixel widths at the nearest tile) instead of --slab, so a
-// tile kernel spans one slab instead of about seven; the image is the thin slabs' within a
-// percent summed. The shared assets' images do not change (their voxels are wider).
+// away (each tile a fraction of a pixel): the slabs follow what the pixels resolve (a sixteenth
+// of --lod pixel widths at the nearest tile, of --supersample-span at --lod 0) instead of --slab, and
+// each tile is one kernel its own size; the image is that of thin slabs and the tiles' lattices
+// seen large (--lod 1e-3) within a percent summed. The shared assets' images do not change
+// (their voxels are wider).
 TEST(Extremes, SlabsFollowWhatThePixelsResolveFarAway)
 {
     openvdb::FloatGrid::Ptr tiles = openvdb::FloatGrid::create(0.0f);
@@ -398,11 +401,14 @@ TEST(Extremes, SlabsFollowWhatThePixelsResolveFarAway)
     // the slabs would follow the sub-pixels).
     thick.splat.supersample = 1;
     RenderSettings thin = thick;
-    thin.splat.lodPixels = 0.0; // slabs of --slab 2 voxels (tiles do not merge either way)
+    thin.splat.lodPixels = 1e-3; // slabs of --slab 2 voxels, tiles' lattices of --tile-spacing 4
+    RenderSettings off = thick;
+    off.splat.lodPixels = 0.0; // slabs no thinner than --supersample-span (2) / 16 pixels
     // The nearest active value: the tiles' far corner at z = 16,511 (padded half a voxel).
     const double pixel = (60000.0 - 16511.5) / far.focalPixels();
     EXPECT_NEAR(detail::frameSlabs(grid.impl(), far, thick).thickness, 2.0 / 16.0 * pixel, 1e-9 * pixel);
     EXPECT_EQ(detail::frameSlabs(grid.impl(), far, thin).thickness, 2.0);
+    EXPECT_NEAR(detail::frameSlabs(grid.impl(), far, off).thickness, 2.0 / 16.0 * pixel, 1e-9 * pixel);
     const Camera near(lookAtCamera(Vec3d(64.0, 64.0, 400.0), Vec3d(64.0), 64, 48), grid.worldCentre());
     EXPECT_EQ(detail::frameSlabs(grid.impl(), near, thick).thickness, 2.0);
     RenderStats a, b;
@@ -416,13 +422,15 @@ TEST(Extremes, SlabsFollowWhatThePixelsResolveFarAway)
     }
     std::printf("slab composites %llu against %llu; max difference %.3g (peak %.3g); RGB sum %.4g against %.4g, alpha sum %.4g against %.4g\n",
         (unsigned long long)a.slabComposites, (unsigned long long)b.slabComposites, maxAbsDiff(withLod, without), peak, rgb[0], rgb[1], alpha[0], alpha[1]);
-    // Measured: 1,112 slab composites against 28,541; RGB summed 51.47 against 51.59, alpha
-    // 28.15 both; the largest pixel difference 0.016 (of 0.58).
+    // Measured: 2,160 slab composites against 28,541; RGB summed 52.48 against 51.59, alpha
+    // 28.11 against 28.15; the largest pixel difference 0.105 (of 0.58), where a tile's one
+    // kernel is lit where its lattice's 32^3 were. With the lattices seen large both ways (before
+    // they followed the pixels): 1,112 composites, RGB within 0.23 %, 0.016 at most.
     EXPECT_GT(alpha[1], 10.0);
     EXPECT_LT(a.slabComposites * 10, b.slabComposites);
-    EXPECT_NEAR(rgb[0], rgb[1], 0.01 * rgb[1]);
-    EXPECT_NEAR(alpha[0], alpha[1], 1e-3 * alpha[1]);
-    EXPECT_LE(maxAbsDiff(withLod, without), 0.05 * peak);
+    EXPECT_NEAR(rgb[0], rgb[1], 0.025 * rgb[1]);
+    EXPECT_NEAR(alpha[0], alpha[1], 3e-3 * alpha[1]);
+    EXPECT_LE(maxAbsDiff(withLod, without), 0.25 * peak);
 }
 
 TEST(Extremes, MemoryBudgetCountsKernelsAfterTheLevelOfDetailMergesThem)

@@ -298,10 +298,13 @@ TEST(Supersampling, TheSubPixelsFadeOutWithoutAJump)
     EXPECT_GT(maxAbsDiff(renderGrid(grid, fadeStart, s), renderGrid(grid, fadeStart, one)), 0.02);
 }
 
-// Tiles of a leaf node's size are voxels pruned into a uniform block: they count in the median
-// voxel. Larger tiles do not (uniform inside): 512 root tiles of 4096^3 seen from afar once
-// asked for 28 x 28 sub-pixels, whose slabs cut every tile kernel into 28 times the shares.
-TEST(Supersampling, LeafSizedTilesCountAsVoxelsLargerTilesDoNot)
+// Active tiles count as their voxels: a dense tile's face is as sharp as a voxel's. Their
+// lattices follow the sub-pixels, so the factor is lowered until the tiles larger than a leaf
+// node make at most 32 kernels a pixel (tileKernelBudget): 16^3 internal tiles of 128^3 seen
+// from 12,000 units at 160x90 (voxels of 1/58 pixel) would take 32 x 32 and 1.4e8 kernels;
+// they take fewer, without a warning.
+// Before they counted, they took none and their opaque faces spread (TilesSeenSmall.*).
+TEST(Supersampling, ActiveTilesCountAsVoxelsAndTheirKernelsBoundTheSubPixels)
 {
     RenderSettings s;
     for (const int edge : {64, 4096}) {
@@ -312,11 +315,20 @@ TEST(Supersampling, LeafSizedTilesCountAsVoxelsLargerTilesDoNot)
         ASSERT_EQ(source.impl().activeVoxels, 0u);
         // A voxel is a quarter of a pixel (orthographic: frame 4 x 64 units over 64 pixels).
         const Camera camera(orthoDownZ(edge / 2.0, edge / 2.0, 1e5, 4.0 * 64.0, 64), source.worldCentre());
-        const double px = detail::medianVoxelPixels(source.impl(), camera, s);
-        if (edge == 64) {
-            EXPECT_NEAR(px, 0.25, 1e-9);
-        } else {
-            EXPECT_TRUE(std::isinf(px)) << px;
-        }
+        EXPECT_NEAR(detail::medianVoxelPixels(source.impl(), camera, s), 0.25, 1e-9) << edge;
     }
+    auto internal = openvdb::FloatGrid::create(0.0f);
+    internal->setGridClass(openvdb::GRID_FOG_VOLUME);
+    internal->fill(openvdb::CoordBBox(openvdb::Coord(0), openvdb::Coord(2047)), 0.5f, true);
+    const GridSource source = gridSourceFromOpenVDB(internal);
+    const Camera far(lookAtCamera(Vec3d(1024.0, 1024.0, 14048.0), Vec3d(1024.0), 160, 90), source.worldCentre());
+    std::vector<std::string> warnings;
+    const detail::MemoryBudget budget(8e9, "internal");
+    const detail::Supersampling sub = detail::chooseSupersampling(source.impl(), far, s, PassRequest{}, budget, warnings);
+    EXPECT_LT(sub.voxelPixels, 1.0 / 50.0);
+    EXPECT_GT(sub.factor, 1);
+    EXPECT_LT(sub.factor, 16);
+    EXPECT_TRUE(sub.tileLimited);
+    EXPECT_TRUE(warnings.empty());
+    // The frame's kernels: TilesSeenSmall.FilesOfTilesSeenFromAfarRenderInSeconds.
 }

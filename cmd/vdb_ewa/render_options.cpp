@@ -136,7 +136,7 @@ void RenderOptions::add(CLI::App* app)
     mApp->add_option("--lowpass", mLowpass, "screen-space low-pass filter variance in pixels^2, range [0, 100], > 0 unless --aa none (default: " + fmt(rs.splat.lowpass) + ")");
     mApp->add_option("--aa", mAa, "anti-aliasing: floor (each footprint axis at least --lowpass wide), ewa (resampling filter, Eq. 33: always adds --lowpass), swan (uniform scaling) or none (default: floor)");
     mApp->add_option("--cutoff-radius", mCutoffRadius, "footprint cut-off radius in std. deviations, range [1, 6] (default: " + fmt(rs.splat.cutoffRadius) + ")");
-    mApp->add_option("--slab", mSlab, "image-aligned slab thickness in voxel lengths, range [0.05, 10000]; with --lod > 0 no thinner than --lod/16 pixel widths at the nearest active voxel (default: " + fmt(rs.splat.slab) + ")");
+    mApp->add_option("--slab", mSlab, "image-aligned slab thickness in voxel lengths, range [0.05, 10000]; no thinner than --lod/16 pixel widths (--supersample-span/16 at --lod 0) at the nearest active voxel (default: " + fmt(rs.splat.slab) + ")");
     mApp->add_option("--quality", mQuality,
         "preset of the speed/accuracy knobs: draft, default, high or final (refined kernels); explicit options override it "
         "(values in docs/performance.md) (default: default)");
@@ -145,16 +145,17 @@ void RenderOptions::add(CLI::App* app)
     mApp->add_option("--renormalize", mRenormalize, "on: divide footprints by the mass kept inside --cutoff-radius; off: keep the truncated mass (default: on)");
     mApp->add_option("--taper", mTaper, "on: footprints are the Gaussian less its value at --cutoff-radius, falling to 0 at their edge (no step to flicker as they move); off: truncated (default: off, draft on)");
     mApp->add_option("--precision", mPrecision, "world-to-camera transform and covariances in double or float (default: double)");
-    mApp->add_option("--tile-spacing", mTileSpacing, "largest kernel spacing in voxels for active tiles, 1 to voxelise them (default: 4)");
+    mApp->add_option("--tile-spacing", mTileSpacing, "largest kernel spacing in voxels for active tiles seen large, 1 to voxelise them; seen small a tile's spacing follows --lod pixels (--supersample-span at --lod 0) up to the tile's own size, between two spacings continuously with distance (docs/equations.md#active-tiles-seen-small) (default: 4, draft 8, high 2)");
     mApp->add_option("--refine", mRefine, "where voxels span N pixels or more, their kernels on a lattice N times finer: the trilinear field sampled every 1/N voxel (emission and temperature grids too), kernels N times narrower, N^3 as many; range [1, 4], 1 = off (default: " + std::to_string(rs.splat.refine) + ")");
     mApp->add_option("--refine-emission", mRefineEmission, "emission and temperature grids where their light does not go as the density (light over density changes several-fold between neighbouring voxels) in optically thick density: the light sampled every 1/n voxel, n up to N as the voxels span n pixels or more (2 at least); --refine refines the emitters too; range [1, 4], 1 = off (default: " + std::to_string(rs.splat.refineEmission) + "; draft 1, high and final 4)");
-    mApp->add_option("--lod", mLod, "level of detail, pixels in [0, 64]: fog volumes: blocks of 2, 4 or 8 voxels a side become one kernel where the block projects to at most this many pixels, each voxel shared between two block sizes continuously with distance (no popping); level sets: one surface kernel a 2^3 or 4^3 block of voxels (for each sheet through it) where the block projects to at most a quarter as many; 0 = off (default: " + fmt(rs.splat.lodPixels) + ")");
+    mApp->add_option("--lod", mLod, "level of detail, pixels in [0, 64]: fog volumes: blocks of 2, 4 or 8 voxels a side become one kernel where the block projects to at most this many pixels, each voxel shared between two block sizes continuously with distance (no popping); level sets: one surface kernel a 2^3 or 4^3 block of voxels (for each sheet through it) where the block projects to at most a quarter as many; active tiles seen small: their kernels this many pixels apart (--tile-spacing); 0 = off (tiles: --supersample-span pixels) (default: " + fmt(rs.splat.lodPixels) + ")");
     mApp->add_option("--lod-error", mLodError, "level of detail, fog volumes: a block wider than a pixel merges only where its values are smooth: the transmittance through any depth of it differs by at most this much between its columns; range [0, 1], 1 = by screen size alone (default: " + fmt(rs.splat.lodError) + ", draft 0.25)");
     mApp->add_option("--supersample", mSupersample,
         "fog volumes: where the voxels look smaller than --supersample-span pixels, the pixels the volume covers are composited "
         "in S x S sub-pixels and averaged (a box filter, as a camera averages a pixel; one footprint a pixel wide averages optical "
         "depth instead, which renders small volumes too opaque and too bright: docs/equations.md#sub-pixel-samples), S = "
-        "ceil(span / the median voxel's pixels) up to this; at most 16 images' sub-pixels (and half of --max-memory); up to S^2 "
+        "ceil(span / the median voxel's pixels, active tiles counting as their voxels) up to this; at most 16 images' sub-pixels (and half "
+        "of --max-memory), and 32 kernels a pixel of tiles larger than a leaf node (their lattices follow the sub-pixels); up to S^2 "
         "times the compositing where it acts; range [1, " + std::to_string(kMaxSupersample) + "], 1 = off (default: " +
         std::to_string(rs.splat.supersample) + "; draft 16)");
     mApp->add_option("--supersample-span", mSupersampleSpan,

@@ -59,7 +59,7 @@ BrickBounds BrickBounder::bound(const Brick& brick) const
     // tile's lattice, or voxels; voxels' halo kernels (--prefilter) sit one voxel outside.
     int spacing = 1;
     if (!brick.leaf) {
-        spacing = tileLatticeSpacing(brick.box.dim().x(), mSettings.splat.tileKernelSpacing);
+        spacing = tileLattice(brick.box, mSettings.splat.tileKernelSpacing, mLod).widest();
     } else if (mLod) {
         // A block's continuous level is at most the node's size level; it splits between that
         // level's floor and the next (LevelOfDetail::blockLevels, split).

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace vdb_ewa {
 namespace detail {
@@ -68,11 +69,11 @@ bool pixelBox(const Footprint& fp, int width, int height, int& x0, int& y0, int&
 
 namespace {
 
-/// With a level of detail (--lod > 0), a slab is no thinner than --lod / kSlabsPerLodPixel
-/// pixel widths at the nearest active value: depth resolved finer than a fraction of what the
-/// pixels resolve across costs a share in every slab a kernel spans and changes nothing one can
-/// see (eight root tiles of 4096^3 voxels under a fifth of a pixel each: tile kernels 110 slabs
-/// deep, 26.5 s at 160x90; docs/numerics.md#dense-faces).
+/// A slab is no thinner than LevelOfDetail::latticePixels / kSlabsPerLodPixel pixel widths at
+/// the nearest active value: depth resolved finer than a fraction of what the pixels resolve
+/// across costs a share in every slab a kernel spans and changes nothing one can see (eight root
+/// tiles of 4096^3 voxels under a fifth of a pixel each: tile kernels 110 slabs deep, 26.5 s at
+/// 160x90; docs/numerics.md#dense-faces).
 constexpr double kSlabsPerLodPixel = 16.0;
 
 } // namespace
@@ -83,7 +84,7 @@ SlabGrid frameSlabs(const GridSource::Impl& grid, const Camera& camera, const Re
     const bool perspective = camera.projection() == Projection::Perspective;
     slabs.zBase = perspective ? 0.0 : camera.near();
     slabs.thickness = settings.splat.slab * grid.voxelLength;
-    if (!(settings.splat.lodPixels > 0.0) || !grid.linear) return slabs;
+    if (!grid.linear) return slabs;
     const openvdb::CoordBBox box = grid.grid->evalActiveVoxelBoundingBox(); // a walk of the tree: only where used
     if (box.empty()) return slabs;
     // A pixel's width at the nearest active value: from the eye to the world box around the
@@ -101,8 +102,20 @@ SlabGrid frameSlabs(const GridSource::Impl& grid, const Camera& camera, const Re
         }
         nearest = glm::length(camera.eye() - glm::clamp(camera.eye(), lo, hi));
     }
-    slabs.thickness = std::max(slabs.thickness, settings.splat.lodPixels / kSlabsPerLodPixel * nearest / camera.focalPixels());
+    slabs.thickness = std::max(slabs.thickness, LevelOfDetail::latticePixels(settings.splat) / kSlabsPerLodPixel * nearest / camera.focalPixels());
     return slabs;
+}
+
+double widestLatticeSpacing(const GridSource::Impl& grid, const SlabGrid& slabs, const RenderSettings& settings)
+{
+    if (!grid.linear) return std::numeric_limits<double>::infinity();
+    // A coarse kernel of spacing s reaches kDepthTruncation sigmas either side of its centre
+    // along the ray, sigma = kernelSigmaVoxels(s) index lengths, stretched by at most the
+    // Frobenius norm of A.
+    const Mat3d& a = grid.indexToWorldLinear;
+    const double norm = std::sqrt(glm::dot(a[0], a[0]) + glm::dot(a[1], a[1]) + glm::dot(a[2], a[2]));
+    const double sigmaPerSpacing = kernelSigmaVoxels(Kernel{Vec3d(0.0), 0.0f, 2.0f}, settings.splat.kernelSigma) / 2.0;
+    return double(kSlabSpanTarget) * slabs.thickness / (2.0 * kDepthTruncation * sigmaPerSpacing * norm);
 }
 
 SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels, const std::vector<Rgb>& colors,

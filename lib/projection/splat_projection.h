@@ -114,10 +114,16 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels, c
     const Camera& camera, const RenderSettings& settings, const PassRequest& passes = {}, Progress* progress = nullptr,
     const SlabGrid* slabs = nullptr);
 
-/// The frame's slabs before any raise: --slab voxel lengths thick, or with --lod > 0 no thinner
-/// than --lod / 16 pixel widths at the nearest active voxel (docs/equations.md#slabs-that-follow-the-pixels-far-away),
-/// from the eye (perspective: distance along the ray) or the near plane (orthographic: depth).
+/// The frame's slabs before any raise: --slab voxel lengths thick, but no thinner than
+/// LevelOfDetail::latticePixels / 16 (--lod; --supersample-span at --lod 0) pixel widths at the nearest active
+/// voxel (docs/equations.md#slabs-that-follow-the-pixels-far-away), from the eye (perspective:
+/// distance along the ray) or the near plane (orthographic: depth).
 SlabGrid frameSlabs(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings);
+
+/// The widest lattice spacing (voxels) whose coarse kernels span at most kSlabSpanTarget of
+/// @a slabs along any ray (the streamed frame's test), so that tiles seen small never raise the
+/// slab thickness (LevelOfDetail::latticeLevel); +inf for grids that are not affine.
+double widestLatticeSpacing(const GridSource::Impl& grid, const SlabGrid& slabs, const RenderSettings& settings);
 
 } // namespace detail
 } // namespace vdb_ewa

@@ -134,6 +134,27 @@ int tileLatticeSpacing(int tileDim, int maxSpacing)
     return s;
 }
 
+std::size_t TileLattice::kernels(int dim) const
+{
+    const auto cube = [](std::size_t n) { return n * n * n; };
+    const std::size_t n = std::size_t(dim / spacing);
+    return (upper < 1.0 ? cube(n) : 0) + (upper > 0.0 ? cube(n / 2) : 0);
+}
+
+TileLattice tileLattice(const openvdb::CoordBBox& box, int maxSpacing, const LevelOfDetail* lod)
+{
+    const int dim = box.dim().x();
+    TileLattice lattice;
+    lattice.spacing = tileLatticeSpacing(dim, maxSpacing);
+    if (!lod) return lattice;
+    const double seenLarge = std::log2(double(lattice.spacing)), own = std::log2(double(dim));
+    const double level = std::clamp(lod->latticeLevel(box.min(), dim), seenLarge, own);
+    const int floor = std::min(int(std::floor(level)), int(own));
+    lattice.spacing = 1 << floor;
+    lattice.upper = floor < int(own) ? level - double(floor) : 0.0;
+    return lattice;
+}
+
 UnitKernelProbe::UnitKernelProbe(const GridSource::Impl& grid, const RenderSettings& settings, const LevelOfDetail* lod)
     : mGrid(grid), mLod(lod), mCutoff(float(settings.cutoff)), mTileSpacing(settings.splat.tileKernelSpacing),
       mAccessor(grid.grid->tree())
@@ -157,7 +178,8 @@ bool UnitKernelProbe::isUnit(const openvdb::Coord& ijk)
         const int depth = mAccessor.getValueDepth(ijk);
         using Root = openvdb::FloatTree::RootNodeType;
         const int dim = depth == 0 ? int(Root::ChildNodeType::DIM) : depth == 1 ? int(Root::ChildNodeType::ChildNodeType::DIM) : int(LeafT::DIM);
-        return tileLatticeSpacing(dim, mTileSpacing) == 1;
+        const openvdb::Coord min = ijk & ~(dim - 1);
+        return tileLattice(openvdb::CoordBBox::createCube(min, dim), mTileSpacing, mLod).hasUnitKernels();
     }
     // The leaf's unit kernels as extractKernels makes them: every kept voxel, or where the
     // level of detail merges, the voxels given a positive share at level 0.
@@ -314,7 +336,8 @@ KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& set
     struct Tile
     {
         openvdb::Coord min;
-        int dim, spacing;
+        int dim;
+        TileLattice lattice;
         float density;
         std::size_t offset;
     };
@@ -330,10 +353,9 @@ KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& set
         if (vc == ValueClass::NotANumber) set.notANumber += voxelsInTile;
         if (vc == ValueClass::Clamped) set.clamped += voxelsInTile;
         if (density <= 0.0f) continue;
-        const int s = tileLatticeSpacing(dim, settings.splat.tileKernelSpacing);
-        tiles.push_back({box.min(), dim, s, density, set.kernels.size() + tileKernels});
-        const std::size_t n = std::size_t(dim / s);
-        tileKernels += n * n * n;
+        const TileLattice lattice = tileLattice(box, settings.splat.tileKernelSpacing, lod);
+        tiles.push_back({box.min(), dim, lattice, density, set.kernels.size() + tileKernels});
+        tileKernels += lattice.kernels(dim);
         // Checked tile by tile: a damaged file's millions of tiles stop here, not in the resize.
         if (budget) budget->check(double(set.kernels.size() + tileKernels), "voxel and active-tile kernels", kBytesPerKernel);
     }
@@ -341,14 +363,18 @@ KernelSet extractKernels(const GridSource::Impl& grid, const RenderSettings& set
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tiles.size()), [&](const tbb::blocked_range<std::size_t>& range) {
         for (std::size_t t = range.begin(); t < range.end(); ++t) {
             const Tile& tile = tiles[t];
-            const int s = tile.spacing, n = tile.dim / s;
-            const Vec3d origin = Vec3d(tile.min.x(), tile.min.y(), tile.min.z()) - 0.5 + 0.5 * s;
             std::size_t slot = tile.offset;
-            for (int i = 0; i < n; ++i)
-                for (int j = 0; j < n; ++j)
-                    for (int k = 0; k < n; ++k) {
-                        set.kernels[slot++] = {origin + double(s) * Vec3d(i, j, k), tile.density, float(s)};
-                    }
+            // Each lattice carries its share of the value: together they keep the tile's mass.
+            const auto lattice = [&](int s, double share) {
+                const int n = tile.dim / s;
+                const Vec3d origin = Vec3d(tile.min.x(), tile.min.y(), tile.min.z()) - 0.5 + 0.5 * s;
+                const float density = float(share * double(tile.density));
+                for (int i = 0; i < n; ++i)
+                    for (int j = 0; j < n; ++j)
+                        for (int k = 0; k < n; ++k) set.kernels[slot++] = {origin + double(s) * Vec3d(i, j, k), density, float(s)};
+            };
+            if (tile.lattice.upper < 1.0) lattice(tile.lattice.spacing, 1.0 - tile.lattice.upper);
+            if (tile.lattice.upper > 0.0) lattice(2 * tile.lattice.spacing, tile.lattice.upper);
         }
     });
     return set;

@@ -83,10 +83,31 @@ struct KernelSet
     std::vector<std::array<float, 3>> emitted;
 };
 
-/// Lattice spacing (voxels) used for an active tile of @a tileDim voxels a side: the largest
-/// power of two <= min(tileDim, maxSpacing), but coarse enough that a tile yields at most
-/// 64^3 kernels. See docs/equations.md#active-tiles.
+/// Lattice spacing (voxels) used for an active tile of @a tileDim voxels a side seen large:
+/// the largest power of two <= min(tileDim, maxSpacing), but coarse enough that a tile yields
+/// at most 64^3 kernels. See docs/equations.md#active-tiles.
 int tileLatticeSpacing(int tileDim, int maxSpacing);
+
+/// The lattices an active tile becomes (docs/equations.md#active-tiles-seen-small): kernels
+/// @c spacing voxels apart carrying 1 - @c upper of its value and, where @c upper > 0, kernels
+/// twice as far apart carrying the rest. Seen small, the spacing follows the pixels up to the
+/// tile's own size, continuously in the camera (no popping), the tile's optical depth kept.
+struct TileLattice
+{
+    int spacing = 1;
+    double upper = 0.0;
+    /// The widest kernel spacing it makes.
+    int widest() const { return upper > 0.0 ? 2 * spacing : spacing; }
+    /// True if it makes kernels of the voxel lattice (isUnitKernel).
+    bool hasUnitKernels() const { return spacing == 1 && upper < 1.0; }
+    /// How many kernels it makes over a tile of @a dim voxels a side.
+    std::size_t kernels(int dim) const;
+};
+
+/// The lattices of the active tile @a box (a cube of a power-of-two side): with @a lod, the
+/// continuous level clamp(LevelOfDetail::latticeLevel, log2(tileLatticeSpacing), log2(side))
+/// split between its floor and the next; without, tileLatticeSpacing alone.
+TileLattice tileLattice(const openvdb::CoordBBox& box, int maxSpacing, const LevelOfDetail* lod);
 
 /// The streamed frame's unit of work (docs/architecture.md#the-streamed-frame): a leaf node of
 /// the grid, or one of its active tiles.

@@ -11,8 +11,9 @@
 namespace vdb_ewa {
 namespace detail {
 
-LevelOfDetail::LevelOfDetail(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings)
-    : mGrid(grid), mCamera(camera), mMaxPixels(settings.splat.lodPixels), mMaxError(settings.splat.lodError)
+LevelOfDetail::LevelOfDetail(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings, double widestLattice)
+    : mGrid(grid), mCamera(camera), mMaxPixels(settings.splat.lodPixels), mMaxError(settings.splat.lodError),
+      mLatticePixels(latticePixels(settings.splat)), mWidestLattice(widestLattice)
 {
     for (int c = 0; c < 3; ++c) mExtinction[c] = settings.medium.extinction()[c];
 }
@@ -41,6 +42,13 @@ LevelOfDetail::NodeLevels LevelOfDetail::nodeLevels(const openvdb::Coord& min, i
     const double px = voxelPixels(min, dim);
     if (!(px > 0.0 && px < std::numeric_limits<double>::infinity())) return {none, none};
     return {std::log2(mMaxPixels / px), std::log2(kFreeMergePixels / px)};
+}
+
+double LevelOfDetail::latticeLevel(const openvdb::Coord& min, int dim) const
+{
+    const double px = voxelPixels(min, dim);
+    if (!(px > 0.0 && px < std::numeric_limits<double>::infinity())) return -std::numeric_limits<double>::infinity();
+    return std::min(std::log2(mLatticePixels / px), std::log2(mWidestLattice) - 1.0);
 }
 
 bool LevelOfDetail::smoothBlock(float lo, float hi, int block) const

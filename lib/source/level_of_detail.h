@@ -12,6 +12,7 @@
 #include "support/openvdb.h"
 
 #include <algorithm>
+#include <limits>
 
 namespace vdb_ewa {
 namespace detail {
@@ -39,8 +40,23 @@ public:
     static constexpr double kFreeMergePixels = 1.0;
 
     /// --lod (settings.splat.lodPixels, 0 = no merging) and --lod-error (settings.splat.lodError)
-    /// with the medium's extinction from @a settings.
-    LevelOfDetail(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings);
+    /// with the medium's extinction from @a settings. @a widestLattice: the widest spacing
+    /// (voxels) latticeLevel may reach, the frame's slabs' (widestLatticeSpacing,
+    /// splat_projection.h); +inf: no limit.
+    LevelOfDetail(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings,
+        double widestLattice = std::numeric_limits<double>::infinity());
+
+    /// How many pixels a lattice over a uniform region (an active tile) may span between its
+    /// kernels: --lod, or at --lod 0 --supersample-span, what sub-pixels make a voxel span
+    /// (docs/equations.md#active-tiles-seen-small).
+    static double latticePixels(const SplatOptions& splat) { return splat.lodPixels > 0.0 ? splat.lodPixels : splat.supersampleSpan; }
+
+    /// The continuous level (log2 of a spacing in voxels) of a lattice over the uniform node
+    /// whose voxels span [min, min + dim - 1]: log2(latticePixels / voxelPixels), the spacing
+    /// that projects to latticePixels at the node's nearest point, at most
+    /// log2(widestLattice) - 1 (so that the two spacings a level splits between stay within
+    /// it); -inf where the node reaches the near plane. Continuous in the camera.
+    double latticeLevel(const openvdb::Coord& min, int dim) const;
 
     /// The continuous levels of the node whose voxels span [min, min + dim - 1]: @c size =
     /// log2(lodPixels / voxelPixels) (the level a block reaches at which its spacing projects
@@ -97,6 +113,7 @@ private:
     const GridSource::Impl& mGrid;
     Camera mCamera;
     double mMaxPixels, mMaxError, mExtinction[3];
+    double mLatticePixels, mWidestLattice;
 };
 
 } // namespace detail
