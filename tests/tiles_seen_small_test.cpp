@@ -222,7 +222,8 @@ TEST(TilesSeenSmall, FilesOfTilesSeenFromAfarRenderInSeconds)
         std::printf("%d tiles of %d^3, value %g, from %g: %.2f s, %llu kernels; alpha %.1f against the near face's %.1f\n",
             c.n * c.n * c.n, tileDim(c.level), double(c.value), c.distance, seconds, (unsigned long long)stats.kernels, alphaSum(image), face * face);
         EXPECT_LT(stats.kernels, 200000u);
-        EXPECT_LT(seconds, 15.0 * kLatencySlack); // 1-4 s in the Release build
+        // 1-4 s in the Release build; the sanitized build runs the internal tiles 7x slower (31 s).
+        EXPECT_LT(seconds, kLatencySlack > 1.0 ? 120.0 : 15.0);
         // An opaque edge spreads a footprint's reach beyond the face where too few sub-pixels
         // resolve it (docs/equations.md#active-tiles-seen-small): measured +10.7 % (one sample
         // a pixel: 2 x 2 would make 2.4 M kernels) and +8.3 % (4 x 4).
