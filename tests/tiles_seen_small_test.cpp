@@ -226,7 +226,7 @@ TEST(TilesSeenSmall, FilesOfTilesSeenFromAfarRenderInSeconds)
         EXPECT_LT(seconds, kLatencySlack > 1.0 ? 120.0 : 15.0);
         // An opaque edge spreads a footprint's reach beyond the face where too few sub-pixels
         // resolve it (docs/equations.md#active-tiles-seen-small): measured +10.7 % (one sample
-        // a pixel: 2 x 2 would make 2.4 M kernels) and +8.3 % (4 x 4).
+        // a pixel: 2 x 2 would make 2.4 M kernels) and +8.3 % (3 x 3).
         EXPECT_GT(alphaSum(image), face * face);
         EXPECT_LT(alphaSum(image), 1.15 * face * face);
     }
