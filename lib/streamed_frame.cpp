@@ -62,10 +62,7 @@ void Renderer::renderStreamedFogVolume(const GridSource::Impl& g, const Camera& 
         for (const detail::Brick& b : bricks) {
             if (!b.leaf) widest = std::max(widest, detail::tileLattice(b.box, mSettings.splat.tileKernelSpacing, &lod).widest());
         }
-        const Mat3d& a = g.indexToWorldLinear;
-        const double norm = std::sqrt(glm::dot(a[0], a[0]) + glm::dot(a[1], a[1]) + glm::dot(a[2], a[2])); // >= the largest stretch
-        const double sd = norm * detail::kernelSigmaVoxels(detail::Kernel{Vec3d(0.0), 0.0f, float(widest)}, mSettings.splat.kernelSigma);
-        if (2.0 * detail::kDepthTruncation * sd / double(detail::kSlabSpanTarget) > slabs.thickness) return;
+        if (detail::slabsSpanned(g, slabs, mSettings, widest) > double(detail::kSlabSpanTarget)) return;
     }
     // The sub-frames (Renderer::renderSubFrames): sub-frame s of n takes the shutter's part s and
     // the lens's part s. Each holds an image of its own; where n images do not fit in half the

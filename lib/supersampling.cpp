@@ -3,6 +3,7 @@
 
 #include "source/source.h"
 #include "support/blank_frame.h"
+#include "support/matrix_norm.h"
 
 #include <tbb/parallel_for.h>
 
@@ -120,9 +121,7 @@ Supersampling reachedWindow(const GridSource::Impl& grid, const Camera& camera, 
     Supersampling none;
     if (box.empty()) return none;
     // Motion blur's largest travel in index units (|A^-1| <= its Frobenius norm).
-    const Mat3d inverse = glm::inverse(grid.indexToWorldLinear);
-    const double travel = largestTravel(grid, settings) *
-                          std::sqrt(glm::dot(inverse[0], inverse[0]) + glm::dot(inverse[1], inverse[1]) + glm::dot(inverse[2], inverse[2]));
+    const double travel = largestTravel(grid, settings) * frobeniusNorm(glm::inverse(grid.indexToWorldLinear));
     const int largest = largestActiveTile(*grid.field);
     const double tileReach = largest > 0 ? settings.splat.cutoffRadius * kernelSigmaVoxels(Kernel{Vec3d(0.0), 0.0f, float(largest)}, settings.splat.kernelSigma) : 0.0;
     const double pad = std::max(kKernelReachVoxels, tileReach) + travel;

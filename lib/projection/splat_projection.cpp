@@ -3,6 +3,7 @@
 
 #include "shading/shading.h"
 #include "source/source.h"
+#include "support/matrix_norm.h"
 
 #include <vdb_ewa/ewa_kernel.h>
 
@@ -106,16 +107,20 @@ SlabGrid frameSlabs(const GridSource::Impl& grid, const Camera& camera, const Re
     return slabs;
 }
 
+double slabsSpanned(const GridSource::Impl& grid, const SlabGrid& slabs, const RenderSettings& settings, double spacing)
+{
+    // kDepthTruncation sigmas either side of the centre along the ray, sigma =
+    // kernelSigmaVoxels(spacing) index lengths, stretched by at most the Frobenius norm of A.
+    const double sd = frobeniusNorm(grid.indexToWorldLinear) * kernelSigmaVoxels(Kernel{Vec3d(0.0), 0.0f, float(spacing)}, settings.splat.kernelSigma);
+    return 2.0 * kDepthTruncation * sd / slabs.thickness;
+}
+
 double widestLatticeSpacing(const GridSource::Impl& grid, const SlabGrid& slabs, const RenderSettings& settings)
 {
     if (!grid.linear) return std::numeric_limits<double>::infinity();
-    // A coarse kernel of spacing s reaches kDepthTruncation sigmas either side of its centre
-    // along the ray, sigma = kernelSigmaVoxels(s) index lengths, stretched by at most the
-    // Frobenius norm of A.
-    const Mat3d& a = grid.indexToWorldLinear;
-    const double norm = std::sqrt(glm::dot(a[0], a[0]) + glm::dot(a[1], a[1]) + glm::dot(a[2], a[2]));
-    const double sigmaPerSpacing = kernelSigmaVoxels(Kernel{Vec3d(0.0), 0.0f, 2.0f}, settings.splat.kernelSigma) / 2.0;
-    return double(kSlabSpanTarget) * slabs.thickness / (2.0 * kDepthTruncation * sigmaPerSpacing * norm);
+    // Coarse kernels' reach is proportional to their spacing (kCoarseKernelSigma x spacing or
+    // more): spacing 2 spans slabsSpanned(2) slabs.
+    return 2.0 * double(kSlabSpanTarget) / slabsSpanned(grid, slabs, settings, 2.0);
 }
 
 SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels, const std::vector<Rgb>& colors,

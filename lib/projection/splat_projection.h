@@ -120,9 +120,15 @@ SplatSet projectSplats(const GridSource::Impl& grid, const KernelSet& kernels, c
 /// distance along the ray) or the near plane (orthographic: depth).
 SlabGrid frameSlabs(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings);
 
+/// How many of @a slabs a kernel of lattice spacing @a spacing (kernelSigmaVoxels) spans at
+/// most along any ray of an affine grid: its kDepthTruncation sigmas either side of its centre,
+/// stretched by at most the Frobenius norm of the grid's transform.
+double slabsSpanned(const GridSource::Impl& grid, const SlabGrid& slabs, const RenderSettings& settings, double spacing);
+
 /// The widest lattice spacing (voxels) whose coarse kernels span at most kSlabSpanTarget of
-/// @a slabs along any ray (the streamed frame's test), so that tiles seen small never raise the
-/// slab thickness (LevelOfDetail::latticeLevel); +inf for grids that are not affine.
+/// @a slabs along any ray (slabsSpanned, the streamed frame's test), so that tiles seen small
+/// never raise the slab thickness (LevelOfDetail::latticeLevel); +inf for grids that are not
+/// affine.
 double widestLatticeSpacing(const GridSource::Impl& grid, const SlabGrid& slabs, const RenderSettings& settings);
 
 } // namespace detail

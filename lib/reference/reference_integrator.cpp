@@ -5,6 +5,7 @@
 #include "source/source.h"
 #include "support/blank_frame.h"
 #include "support/empty_space.h"
+#include "support/matrix_norm.h"
 #include "support/openvdb_tools.h"
 
 #include <vdb_ewa/error.h>
@@ -227,6 +228,28 @@ private:
     double mTime = 0.0;
 };
 
+/// A pixel's own pseudo-random numbers in [0, 1), from a hash of (@a x, @a y) with the given
+/// multipliers and seed (a SplitMix64-style mixer): the Cranley-Patterson rotations of the
+/// pixel's samples, no pattern shared between pixels, the same for any thread count.
+class PixelRandom
+{
+public:
+    PixelRandom(int x, int y, std::uint64_t mx, std::uint64_t my, std::uint64_t seed = 0)
+        : mHash(std::uint64_t(std::uint32_t(x)) * mx ^ std::uint64_t(std::uint32_t(y)) * my ^ seed)
+    {
+    }
+    double next()
+    {
+        mHash ^= mHash >> 31;
+        mHash *= 0xBF58476D1CE4E5B9ull;
+        mHash ^= mHash >> 29;
+        return double(mHash >> 11) * 0x1.0p-53;
+    }
+
+private:
+    std::uint64_t mHash;
+};
+
 /// A ray's place in the shutter (in [0, 1)) and on the lens (the unit disc).
 struct BlurSample
 {
@@ -239,14 +262,8 @@ struct BlurSample
 /// disc by Shirley and Chiu's concentric map.
 BlurSample blurSample(int x, int y, int i, int n)
 {
-    std::uint64_t h = std::uint64_t(std::uint32_t(x)) * 0x9E3779B97F4A7C15ull ^ std::uint64_t(std::uint32_t(y)) * 0xC2B2AE3D27D4EB4Full;
-    const auto next = [&h] {
-        h ^= h >> 31;
-        h *= 0xBF58476D1CE4E5B9ull;
-        h ^= h >> 29;
-        return double(h >> 11) * 0x1.0p-53;
-    };
-    const double r0 = next(), r1 = next(), r2 = next();
+    PixelRandom random(x, y, 0x9E3779B97F4A7C15ull, 0xC2B2AE3D27D4EB4Full);
+    const double r0 = random.next(), r1 = random.next(), r2 = random.next();
     BlurSample b;
     b.shutter = std::fmod((double(i) + 0.5) / double(n) + r0, 1.0);
     const double u = 2.0 * std::fmod(double(i) * 0.7548776662466927 + r1, 1.0) - 1.0;
@@ -276,19 +293,12 @@ double radicalInverse(std::uint32_t i, std::uint32_t b)
 }
 
 /// Ray @a i's place in pixel (@a x, @a y), in [0, 1)^2: the Halton points of bases 2
-/// and 3 (well spread for any n, unlike the R2 points blurSample gives the lens), rotated by a
-/// hash of the pixel (Cranley-Patterson: no pattern shared between pixels; the same for any
-/// thread count).
+/// and 3 (well spread for any n, unlike the R2 points blurSample gives the lens), rotated by the
+/// pixel's PixelRandom (its own multipliers and seed: independent of blurSample's).
 Vec2d pixelSample(int x, int y, int i)
 {
-    std::uint64_t h = std::uint64_t(std::uint32_t(x)) * 0xD6E8FEB86659FD93ull ^ std::uint64_t(std::uint32_t(y)) * 0x9E3779B97F4A7C15ull ^ 0x5851F42D4C957F2Dull;
-    const auto next = [&h] {
-        h ^= h >> 31;
-        h *= 0xBF58476D1CE4E5B9ull;
-        h ^= h >> 29;
-        return double(h >> 11) * 0x1.0p-53;
-    };
-    const double r0 = next(), r1 = next();
+    PixelRandom random(x, y, 0xD6E8FEB86659FD93ull, 0x9E3779B97F4A7C15ull, 0x5851F42D4C957F2Dull);
+    const double r0 = random.next(), r1 = random.next();
     return Vec2d(std::fmod(radicalInverse(std::uint32_t(i), 2) + r0, 1.0), std::fmod(radicalInverse(std::uint32_t(i), 3) + r1, 1.0));
 }
 
@@ -440,9 +450,7 @@ Frame rayMarchReference(const GridSource::Impl& grid, const Camera& camera, cons
     // Trilinear support: one voxel beyond the active ones; with motion blur, as far again as
     // any point travels (|A^-1| <= its Frobenius norm takes world lengths to index lengths), and
     // empty space is skipped only that far from the still field.
-    const Mat3d inverse = glm::inverse(grid.indexToWorldLinear);
-    const double travel = largestTravel(grid, settings) *
-                          std::sqrt(glm::dot(inverse[0], inverse[0]) + glm::dot(inverse[1], inverse[1]) + glm::dot(inverse[2], inverse[2]));
+    const double travel = largestTravel(grid, settings) * frobeniusNorm(glm::inverse(grid.indexToWorldLinear));
     const Vec3d boxLo = Vec3d(box.min().x(), box.min().y(), box.min().z()) - 1.0 - travel;
     const Vec3d boxHi = Vec3d(box.max().x(), box.max().y(), box.max().z()) + 1.0 + travel;
     if (progress) progress->stage(0, 100);
