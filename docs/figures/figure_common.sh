@@ -46,6 +46,28 @@ out_option() {
 assets_dir() { echo "${VDB_EWA_ASSETS:-../shared/grids}"; }
 figure_font() { echo "${FIGURE_FONT:-/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf}"; }
 
+# The start of a generator that takes --out DIR only and renders with vdb_ewa: its options
+# (out_option), then ewa, out (absolute), assets and font set, $VDB_EWA_ASSETS made absolute, and
+# the cd to the project root.
+# shellcheck disable=SC2034 # ewa, out, assets and font are the caller's
+figure_start() {
+  out_option "$@"
+  ewa="$(ewa_bin)"
+  out="$(out_dir "$out")"
+  absolute_assets
+  cd "$(dirname "$0")/../.." || exit 1
+  assets="$(assets_dir)"
+  font="$(figure_font)"
+}
+
+# After the checks: the output folder made, and tmp a scratch folder removed on exit.
+# shellcheck disable=SC2034 # tmp is the caller's
+figure_scratch() {
+  mkdir -p "$out"
+  tmp="$(mktemp -d)"
+  trap 'rm -rf "$tmp"' EXIT
+}
+
 # Checks that exit 1 with a message naming the generator.
 need_tools() { # TOOL...: each a command on PATH or an executable path
   local tool

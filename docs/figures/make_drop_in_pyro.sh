@@ -13,19 +13,11 @@
 #   committed image).
 set -euo pipefail
 source "$(dirname "$0")/figure_common.sh"
-out_option "$@"
-ewa="$(ewa_bin)"
-out="$(out_dir "$out")"
-absolute_assets
-cd "$(dirname "$0")/../.."
-assets="$(assets_dir)"
-font="$(figure_font)"
+figure_start "$@"
 need_tools "$ewa" vdb_render oiiotool
 need_asset "$assets/pyro.vdb"
 need_font "$font"
-mkdir -p "$out"
-tmp="$(mktemp -d)"
-trap 'rm -rf "$tmp"' EXIT
+figure_scratch
 
 # The README's command line, in vdb_render's syntax, for both renderers.
 shot=(-res 960x540 -translate 0.225,2.175,15.75 -lookat 0.225,2.175,-0.225

@@ -15,20 +15,12 @@
 #   committed image).
 set -euo pipefail
 source "$(dirname "$0")/figure_common.sh"
-out_option "$@"
-ewa="$(ewa_bin)"
-out="$(out_dir "$out")"
-absolute_assets
-cd "$(dirname "$0")/../.."
-assets="$(assets_dir)"
+figure_start "$@"
 python="${PYTHON:-/usr/bin/python3}"
-font="$(figure_font)"
 need_tools "$ewa" "$python" oiiotool
 need_asset "$assets/pyro.vdb"
 need_font "$font"
-mkdir -p "$out"
-tmp="$(mktemp -d)"
-trap 'rm -rf "$tmp"' EXIT
+figure_scratch
 
 "$python" docs/figures/make_pyro_fire.py "$assets/pyro.vdb" "$tmp/pyro_fire.vdb"
 # docs/lighting.md's command line.

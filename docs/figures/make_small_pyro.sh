@@ -14,19 +14,11 @@
 #   committed image).
 set -euo pipefail
 source "$(dirname "$0")/figure_common.sh"
-out_option "$@"
-ewa="$(ewa_bin)"
-out="$(out_dir "$out")"
-absolute_assets
-cd "$(dirname "$0")/../.."
-assets="$(assets_dir)"
-font="$(figure_font)"
+figure_start "$@"
 need_tools "$ewa" oiiotool awk
 need_asset "$assets/pyro.vdb"
 need_font "$font"
-mkdir -p "$out"
-tmp="$(mktemp -d)"
-trap 'rm -rf "$tmp"' EXIT
+figure_scratch
 
 shot=(-res 160x90 -translate 0.225,2.175,43.45 -lookat 0.225,2.175,-0.225 --scatter 2 --gain 0 -q)
 "$ewa" "$assets/pyro.vdb" "$tmp/before.exr" "${shot[@]}" --supersample 1
