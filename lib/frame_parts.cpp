@@ -4,6 +4,8 @@
 #include "raster/raster.h"
 #include "shading/shading.h"
 
+#include <tbb/task_arena.h>
+
 #include <algorithm>
 #include <sstream>
 #include <tuple>
@@ -147,10 +149,17 @@ void addLightStats(const std::vector<LightMap>& lights, const PointLights& point
         stats.lightRays += map.rays();
         stats.lightRaysMarched += map.rays();
     }
+    // Light on demand is marched inside the compositing: its thread-time, shared out over the
+    // threads, moves from the rasteriser's stage to the shadows'.
+    double marching = 0.0;
     for (const LightMap& light : lights) {
         stats.lightRays += light.rays();
         stats.lightRaysMarched += light.raysMarched();
+        marching += light.marchThreadSeconds();
     }
+    marching = std::clamp(marching / double(tbb::this_task_arena::max_concurrency()), 0.0, stats.rasterSeconds);
+    stats.shadowSeconds += marching;
+    stats.rasterSeconds -= marching;
 }
 
 namespace {
@@ -184,6 +193,15 @@ PointLights pointLightMaps(const RenderSettings& settings, const GridSource::Imp
         break;
     }
     return lights;
+}
+
+bool lightMapsOutgrowFrame(const RenderSettings& settings, const GridSource::Impl& g, const MemoryBudget& budget, double pixels)
+{
+    const double lightPoints = lightMapPoints(settings, budget);
+    for (std::size_t l = 0; l < settings.lights.size(); ++l) {
+        if (LightMap::plannedPoints(g, settings, l, lightPoints) > kLightPointsPerPixelMarchedWhole * pixels) return true;
+    }
+    return false;
 }
 
 std::vector<LightMap> lightMaps(const RenderSettings& settings, const GridSource::Impl& g, const MemoryBudget& budget,

@@ -82,8 +82,22 @@ void addMotionStats(const MotionStats& motion, RenderStats& stats);
 /// What motion blur clamped or stretched, a line each (@a splitSigmas: MotionBlur::splitSigmas).
 void motionWarnings(const MotionStats& motion, double splitSigmas, std::vector<std::string>& warnings);
 
-/// The light maps' rays in all and marched, into @a stats (the point lights' are marched whole).
+/// The light maps' rays in all and marched, into @a stats (the point lights' are marched whole),
+/// and the time spent marching light on demand, moved from the rasteriser's stage to the
+/// shadows' (call it after the rasteriser's time is in @a stats).
 void addLightStats(const std::vector<LightMap>& lights, const PointLights& pointLights, RenderStats& stats);
+
+/// A whole frame marches its light maps whole unless one would hold more lattice points than
+/// this many a pixel: then it marches what its lookups read (light on demand), as the streamed
+/// frame does. A file of tiles 32,768 voxels wide at 160x90 and `final` held 2e8 points for
+/// 14,400 pixels (14.8 s of a 15.6 s frame); pig at `high` and 1080p 82 a pixel, marched
+/// whole, where blocks of 16 x 16 rays march 1.1-1.3x faster than tiles of 4
+/// (docs/performance.md#light-rays-marched-against-looked-up).
+constexpr double kLightPointsPerPixelMarchedWhole = 1024.0;
+
+/// Whether a light map of @a g would hold more than kLightPointsPerPixelMarchedWhole lattice
+/// points a pixel of a frame of @a pixels.
+bool lightMapsOutgrowFrame(const RenderSettings& settings, const GridSource::Impl& g, const MemoryBudget& budget, double pixels);
 
 /// Each light's light map. They take at most a quarter of the budget (4 bytes a lattice point),
 /// shared between the lights; a warning where that coarsened them. Marched whole, or

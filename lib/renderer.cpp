@@ -241,9 +241,13 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     }
     stats.kernelSeconds = timer.lap();
     progress.stage(10, 35);
-    const std::vector<detail::LightMap> lights = lightMaps(mSettings, g, budget, progress, stats.warnings);
+    // A map far larger than the frame is marched where the compositor looks it up, as the
+    // streamed frame's (a file of tiles seen from afar at `final`); --cull off and an --iso
+    // surface, which looks the maps up at its kernels, march them whole.
+    const bool lightOnDemand = mSettings.cull && std::isnan(mSettings.surface.iso) &&
+        detail::lightMapsOutgrowFrame(mSettings, g, budget, double(camera.width()) * double(camera.height()));
+    const std::vector<detail::LightMap> lights = lightMaps(mSettings, g, budget, progress, stats.warnings, lightOnDemand);
     const detail::PointLights pointLights = detail::pointLightMaps(mSettings, g, budget, progress, stats.warnings);
-    addLightStats(lights, pointLights, stats);
     stats.shadowSeconds = timer.lap();
     if (emittersLowered) {
         std::ostringstream w;
@@ -269,6 +273,7 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     frame = detail::rasterizeSplats(splats, camera, mSettings, passes, raster, lights, !colors.empty(), &progress, &budget,
         iso ? &iso->layer : nullptr, iso && passes.shadow ? &iso->shadow : nullptr, &pointLights);
     stats.rasterSeconds = timer.lap();
+    addLightStats(lights, pointLights, stats);
 
     stats.activeVoxels = kernels.activeVoxels;
     stats.activeTiles = kernels.activeTiles;

@@ -13,7 +13,6 @@
 #include "source/source.h"
 
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <limits>
@@ -277,13 +276,6 @@ void Renderer::renderStreamedFogVolume(const GridSource::Impl& g, const Camera& 
         }
     }
     stats.rasterSeconds += timer.lap();
-    // The light was marched inside the compositing: its thread-time, shared out over the
-    // threads, moves from the rasteriser's stage to the shadows'.
-    double marching = 0.0;
-    for (const detail::LightMap& light : lights) marching += light.marchThreadSeconds();
-    marching = std::min(marching / double(tbb::this_task_arena::max_concurrency()), stats.rasterSeconds);
-    stats.shadowSeconds += marching;
-    stats.rasterSeconds -= marching;
     detail::addRasterStats(rasterStats, stats);
     detail::addLightStats(lights, pointLights, stats);
     if (outOfOrder) stats.warnings.push_back(detail::countLine(outOfOrder, "splats started in front of their window (a bound of the streamed frame is wrong; --cull off renders without it)"));

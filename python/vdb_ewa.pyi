@@ -399,9 +399,10 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
         run time; images within 1e-5 of off); off: one pixel at a time, the reference it is tested
         against (default: on)
     cull (--cull): fog volumes: on: the streamed frame, bricks (leaf nodes, active tiles) composited
-        front to back in depth windows, those behind opaque screen tiles never expanded into kernels
-        (images within 1e-5 of off); off: every kernel built and projected, the reference it is tested
-        against (default: on; docs/architecture.md#the-streamed-frame)
+        front to back in depth windows, those behind opaque screen tiles never expanded into kernels,
+        light marched where it is looked up (images within 1e-5 of off); off: every kernel built and
+        projected and every light ray marched, the reference it is tested against (default: on;
+        docs/architecture.md#the-streamed-frame)
     max_memory (--max-memory): memory budget of a frame in bytes, with an optional K, M, G or T suffix
         (powers of 1024), range [64M, 1e18]; a frame that would need more stops before allocating it
         (exit 5) (default: 0 = 3/4 of the memory the farm task or container was granted

@@ -347,8 +347,8 @@ private:
             out << "; streamed front to back: " << counted(s.bricks, "brick") << " in " << counted(s.windows, "depth window") << ", "
                 << s.bricksExpanded << " expanded, " << s.bricksHidden << " hidden behind opaque tiles, " << s.bricksOutside << " outside the frame, "
                 << s.splatsInFlight << " splats in flight at most";
-            if (s.lightRays > 0) out << "; light on demand: " << s.lightRaysMarched << " of " << s.lightRays << " light-map rays marched";
         }
+        if (s.lightRays > 0 && (s.streamed || s.lightRaysMarched < s.lightRays)) out << "; light on demand: " << s.lightRaysMarched << " of " << s.lightRays << " light-map rays marched";
         if (s.supersample > 1) {
             out << "; composited at " << s.supersample << "x" << s.supersample << " sub-pixels a pixel over " << s.supersampleWindow[2] << "x"
                 << s.supersampleWindow[3] << " pixels from (" << s.supersampleWindow[0] << ", " << s.supersampleWindow[1]

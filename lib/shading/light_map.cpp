@@ -12,6 +12,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
 
 namespace vdb_ewa {
@@ -86,14 +87,90 @@ double shadowStopDepth(const float* extinction, double cutoff)
     return depth;
 }
 
+namespace {
+
+/// Without gain: the depth at which vdb_render's shadow ray from each sample of a lattice ray
+/// stops. @a tau[k] = P(k + 1), the sum of samples k + 1 .. top (0 from tau.size() on), falls
+/// with k; the ray from k stops after the first m > k with tau[k] - tau[m] > @a stop and keeps
+/// tau[k] - tau[m], up to one sample past the stop (not the floor at @a stop: 2.7 % too
+/// bright in pyro's dense core at --shadowstep 0.375, docs/numerics.md#the-light-maps-stop).
+/// As k falls tau[k] - stop grows, so that m never rises: one pointer, moved down once.
+void stoppedDepths(const std::vector<double>& tau, double stop, float* out)
+{
+    const int count = int(tau.size());
+    const auto at = [&](int m) { return m < count ? tau[std::size_t(m)] : 0.0; };
+    int m = count; // the lowest m > k with at(m) < tau[k] - stop, once there is one
+    for (int k = count - 1; k >= 0; --k) {
+        const double limit = tau[std::size_t(k)] - stop;
+        if (limit > 0.0) {
+            while (m - 1 > k && at(m - 1) < limit) --m;
+            out[k] = float(tau[std::size_t(k)] - at(m));
+        } else {
+            out[k] = float(tau[std::size_t(k)]); // shallower than the stop: the ray runs out first
+        }
+    }
+}
+
+} // namespace
+
 struct LightMap::MarchScratch
 {
     MarchScratch(const GridSource::Impl& grid, int steps, std::size_t terms) : skipper(*grid.field, 0), density(std::size_t(steps)), f(terms) {}
     EmptySpaceSkipper skipper;
     std::vector<double> density, f;
+    std::vector<double> tau;   ///< a ray's samples before they are stored
     std::vector<float> depths; ///< a tile's samples, ray after ray
     std::vector<Ray> rays;     ///< offsets within depths
 };
+
+std::optional<LightMap::LatticeFrame> LightMap::latticeFrame(const GridSource::Impl& grid, const RenderSettings& settings, std::size_t light,
+    double pointBudget)
+{
+    const openvdb::CoordBBox box = grid.field->evalActiveVoxelBoundingBox();
+    if (box.empty()) return std::nullopt;
+    // Frame: e1, e2 across the light, l towards it; units h across, the step along (world
+    // lengths in voxel lengths, as vdb_render's steps).
+    const double ell = grid.voxelLength;
+    double h = settings.shadow.resolution, step = settings.shadow.step;
+    const Vec3d l = settings.lights[light].unitDirection();
+    const Vec3d e1 = glm::normalize(glm::cross(l, std::abs(l.x) < 0.6 ? Vec3d(1, 0, 0) : Vec3d(0, 1, 0)));
+    const Vec3d e2 = glm::cross(l, e1);
+    LatticeFrame f;
+    const std::array<Vec3d, 8> corners = paddedBoxCorners(grid, box);
+    for (int attempt = 0;; ++attempt) {
+        f.fromWorld = glm::transpose(Mat3d(e1 / (h * ell), e2 / (h * ell), l / (step * ell)));
+        // The padded active box (trilinear support) in map coordinates; lattice from its corner.
+        f.lo = Vec3d(1e300);
+        f.hi = Vec3d(-1e300);
+        for (const Vec3d& corner : corners) {
+            const Vec3d q = f.fromWorld * corner;
+            f.lo = glm::min(f.lo, q);
+            f.hi = glm::max(f.hi, q);
+        }
+        // Anchored at the box's corner, not at world multiples: the lattice moves with the grid,
+        // so the image does not depend on where in the world the scene is.
+        f.hi = f.lo + glm::ceil(f.hi - f.lo);
+        // Within the budget, or coarsened: a finer step or ray spacing than the grid's extent
+        // allows is raised, both by the same factor (docs/numerics.md#the-light-maps-budget).
+        const Vec3d n = f.hi - f.lo + Vec3d(1.0);
+        const double scale = std::max(std::cbrt(n.x * n.y * n.z / pointBudget), std::sqrt(n.x * n.y * 16.0 / pointBudget));
+        if (!(scale > 1.0) || attempt == 8) break;
+        h *= 1.01 * scale;
+        step *= 1.01 * scale;
+    }
+    f.resolution = h;
+    f.step = step;
+    return f;
+}
+
+double LightMap::plannedPoints(const GridSource::Impl& grid, const RenderSettings& settings, std::size_t light, double pointBudget)
+{
+    if (OpticalModel(settings).dark(light)) return 0.0;
+    const std::optional<LatticeFrame> f = latticeFrame(grid, settings, light, pointBudget);
+    if (!f) return 0.0;
+    const Vec3d n = f->hi - f->lo + Vec3d(1.0);
+    return n.x * n.y * n.z;
+}
 
 LightMap::LightMap(const GridSource::Impl& grid, const RenderSettings& settings, std::size_t light, Progress* progress, double pointBudget,
     bool onDemand)
@@ -106,42 +183,15 @@ LightMap::LightMap(const GridSource::Impl& grid, const RenderSettings& settings,
     mUnlit = model.dark(light);
     mShadowStep = settings.shadow.step;
     mShadowResolution = settings.shadow.resolution;
-    const openvdb::CoordBBox box = grid.field->evalActiveVoxelBoundingBox();
     setUnits(progress, 0);
-    if (mUnlit || box.empty()) return;
-
-    // Frame: e1, e2 across the light, l towards it; units h across, the step along (world
-    // lengths in voxel lengths, as vdb_render's steps).
-    const double ell = grid.voxelLength;
-    double h = settings.shadow.resolution, step = settings.shadow.step;
-    const Vec3d l = settings.lights[light].unitDirection();
-    const Vec3d e1 = glm::normalize(glm::cross(l, std::abs(l.x) < 0.6 ? Vec3d(1, 0, 0) : Vec3d(0, 1, 0)));
-    const Vec3d e2 = glm::cross(l, e1);
-    Vec3d lo, hi;
-    const std::array<Vec3d, 8> corners = paddedBoxCorners(grid, box);
-    for (int attempt = 0;; ++attempt) {
-        mFromWorld = glm::transpose(Mat3d(e1 / (h * ell), e2 / (h * ell), l / (step * ell)));
-        // The padded active box (trilinear support) in map coordinates; lattice from its corner.
-        lo = Vec3d(1e300);
-        hi = Vec3d(-1e300);
-        for (const Vec3d& corner : corners) {
-            const Vec3d q = mFromWorld * corner;
-            lo = glm::min(lo, q);
-            hi = glm::max(hi, q);
-        }
-        // Anchored at the box's corner, not at world multiples: the lattice moves with the grid,
-        // so the image does not depend on where in the world the scene is.
-        hi = lo + glm::ceil(hi - lo);
-        // Within the budget, or coarsened: a finer step or ray spacing than the grid's extent
-        // allows is raised, both by the same factor (docs/numerics.md#the-light-maps-budget).
-        const Vec3d n = hi - lo + Vec3d(1.0);
-        const double scale = std::max(std::cbrt(n.x * n.y * n.z / pointBudget), std::sqrt(n.x * n.y * 16.0 / pointBudget));
-        if (!(scale > 1.0) || attempt == 8) break;
-        h *= 1.01 * scale;
-        step *= 1.01 * scale;
-    }
-    mShadowResolution = h;
-    mShadowStep = step;
+    if (mUnlit) return;
+    const std::optional<LatticeFrame> frame = latticeFrame(grid, settings, light, pointBudget);
+    if (!frame) return;
+    mFromWorld = frame->fromWorld;
+    const Vec3d lo = frame->lo, hi = frame->hi;
+    mShadowResolution = frame->resolution;
+    mShadowStep = frame->step;
+    const double step = mShadowStep;
     const Mat3d worldFromMap = glm::inverse(mFromWorld);
     mOrigin = worldFromMap * lo;
     mNu = int(hi.x - lo.x) + 1;
@@ -150,10 +200,22 @@ LightMap::LightMap(const GridSource::Impl& grid, const RenderSettings& settings,
 
     // vdb_render weighs a shadow sample s voxel lengths away by 1 / (1 + gain s): as a sum of
     // exponentials, each term a first-order recursive filter along the ray (ExponentialSum).
-    // No gain is the one term 1 (ExponentialSum's own case).
-    const ExponentialSum sum(settings.shadow.gain * step, double(mNw));
+    // No gain is the one term 1 (ExponentialSum's own case), and so is a gain that changes no
+    // weight along the longest ray by a float's precision (a denormal gain, 1e-310).
+    const bool gain = settings.shadow.gain * step * double(mNw) > 1e-8;
+    const ExponentialSum sum(gain ? settings.shadow.gain * step : 0.0, double(mNw));
     mWeight = sum.a;
     mDecay = sum.decay;
+    // Without gain a ray's samples are suffix sums, and the sample at which vdb_render's ray
+    // from each of them stops is found in one pass (stoppedDepths): the rays hold the stop,
+    // the lookups need no floor. With gain each sample weighs by its distance from where the
+    // ray starts, so the stop stays a floor at shadowStopDepth, which is up to one sample short.
+    mRayStopDepth = double(mStopDepth);
+    mStopsInRays = !gain && std::isfinite(mRayStopDepth);
+    if (mStopsInRays) {
+        mStopDepth = std::numeric_limits<float>::infinity();
+        mLogGreyFloor = -std::numeric_limits<float>::infinity();
+    }
     mMargin = int(std::ceil(2.0 / step)); // kept below a ray's lowest density
     mCutoff = settings.cutoff;
     mGrid = &grid;
@@ -279,14 +341,21 @@ void LightMap::marchRays(int i0, int i1, int j0, int j1, MarchScratch& scratch) 
                 depths.resize(depths.size() + std::size_t(ray.count));
                 float* depth = depths.data() + ray.offset;
                 std::fill(f.begin(), f.end(), 0.0);
+                std::vector<double>& tauOf = scratch.tau;
+                tauOf.resize(std::size_t(ray.count));
                 for (int k = kTop; k >= ray.kLo; --k) {
                     if (k < kTop) {
                         double tau = 0.0;
                         for (int n = 0; n < terms; ++n) tau += mWeight[std::size_t(n)] * f[std::size_t(n)];
-                        depth[k - ray.kLo] = float(tau);
+                        tauOf[std::size_t(k - ray.kLo)] = tau;
                     }
                     const double d = density[std::size_t(k)];
                     for (int n = 0; n < terms; ++n) f[std::size_t(n)] = mDecay[std::size_t(n)] * (f[std::size_t(n)] + d * mShadowStep);
+                }
+                if (mStopsInRays) {
+                    stoppedDepths(tauOf, mRayStopDepth, depth);
+                } else {
+                    for (int k = 0; k < ray.count; ++k) depth[k] = float(tauOf[std::size_t(k)]);
                 }
             }
             rays.push_back(ray);

@@ -22,6 +22,7 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <vector>
 
 namespace vdb_ewa {
@@ -70,6 +71,11 @@ public:
     /// @a progress, which must then outlive the map, is checked for cancellation meanwhile.
     LightMap(const GridSource::Impl& grid, const RenderSettings& settings, std::size_t light = 0, Progress* progress = nullptr,
         double pointBudget = kLightMapPointBudget, bool onDemand = false);
+
+    /// Lattice points (rays x steps) the map of settings.lights[@a light] takes within
+    /// @a pointBudget, before any is marched: 0 for a dark light or an empty grid.
+    static double plannedPoints(const GridSource::Impl& grid, const RenderSettings& settings, std::size_t light,
+        double pointBudget = kLightMapPointBudget);
 
     /// Rays are marched on demand in square tiles of this many rays a side: the lookups of
     /// the shared assets at 1080p read 78-91 % of the rays marched (63-82 % with tiles of 8,
@@ -122,7 +128,8 @@ public:
     void densityDepths(const Vec3d& q0, const Vec3d& q1, float& d0, float& d1) const;
 
     /// The light's transmittance at map coordinates @a q, with vdb_render's early stop
-    /// (|T|^2 >= cutoff) as a floor.
+    /// (|T|^2 >= cutoff): without gain, the depth one sample past it, as its ray marched from
+    /// the lattice point keeps it; with gain, as a floor.
     std::array<float, 3> transmittance(const Vec3d& q) const { return transmittanceOfDepth(densityDepth(q)); }
 
     /// The light's transmittance behind a unit-extinction optical depth @a depth (densityDepth),
@@ -151,6 +158,18 @@ public:
     Lattice lattice() const;
 
 private:
+    /// The lattice's frame: map coordinates of world points, the padded active box's range in
+    /// them, and the ray spacing and step (voxel lengths) within the point budget.
+    struct LatticeFrame
+    {
+        Mat3d fromWorld{1.0};
+        Vec3d lo{0.0}, hi{0.0};
+        double resolution = 0.0, step = 0.0;
+    };
+    /// None for an empty grid.
+    static std::optional<LatticeFrame> latticeFrame(const GridSource::Impl& grid, const RenderSettings& settings, std::size_t light,
+        double pointBudget);
+
     /// A lattice ray as marched (stored as mRayKLo, mRayCount, mRayOffset).
     struct Ray
     {
@@ -192,8 +211,15 @@ private:
     /// range of their own, in the order the tiles are marched.
     mutable UntouchedArray<float> mDepth;
     float mExtinction[3];
-    float mStopDepth;    ///< shadowStopDepth: where vdb_render's shadow ray stops (unit-extinction depth)
-    float mLogGreyFloor; ///< ln sqrt(cutoff / 3): a grey medium's floor (-extinction x mStopDepth)
+    /// The lookups' floor: shadowStopDepth, where vdb_render's shadow ray stops (unit-extinction
+    /// depth), and ln sqrt(cutoff / 3), a grey medium's floor (-extinction x mStopDepth); none
+    /// (infinite) where the rays' samples hold the stop themselves (mStopsInRays).
+    float mStopDepth;
+    float mLogGreyFloor;
+    /// Without gain each ray's samples hold the depth at which vdb_render's shadow ray from
+    /// there stops, one sample past shadowStopDepth (stoppedDepths), not a floor.
+    bool mStopsInRays = false;
+    double mRayStopDepth = 0.0; ///< shadowStopDepth, for marching
     bool mGrey = true;   ///< the same extinction in R, G and B
     bool mUnlit;
 
