@@ -754,8 +754,9 @@ def scale_metrics(out, ref):
 
 def cmd_scale(args):
     """Issue 52: every preset where voxels look small, against the reference integrator
-    supersampled (--pixel-samples: 16 rays a pixel, 1024 where a voxel spans under half a pixel,
-    where footprints are a few dozen pixels and 64 rays left the wisps' alpha noisy at 0.05;
+    supersampled (--pixel-samples: 16 rays a pixel, 256 where a voxel spans under half a pixel and
+    1024 under a fifth, where footprints are a few dozen pixels and 64 rays left the wisps' alpha
+    noisy at 0.05;
     --step 0.25, --shadowstep 0.375, vdb_render's converged model), on the sample cloud and the
     shared assets, seen from the README camera's direction at the distance where a voxel spans
     PX pixels; two media: vdb_render's model, and a thick one with physical shadows. Time of
@@ -764,7 +765,7 @@ def cmd_scale(args):
     focal = w * 50.0 / 41.2136  # pixels: vdb_render's default 50 mm lens on a 41.2136 mm film back
     tmp = tempfile.mkdtemp(prefix="vdb_ewa_scale_")
     print(f"# {args.res}: median of {args.repeat} runs a setting, {os.cpu_count()} cores; reference: --method raymarch "
-          "--step 0.25 --shadowstep 0.375 --pixel-samples 16 (1024 below half a pixel a voxel); figures over the reference's footprint")
+          "--step 0.25 --shadowstep 0.375 --pixel-samples 16 (256 below half a pixel a voxel, 1024 below a fifth); figures over the reference's footprint")
     print("| scene | medium | voxel (px) | setting | PSNR (dB) | brightness | alpha IoU | time / vdb_render defaults |")
     print("|---|---|---|---|---|---|---|---|")
     wanted = None if args.scenes == "all" else args.scenes.split(",")
@@ -777,9 +778,11 @@ def cmd_scale(args):
             eye = ",".join(f"{t + d / n * dist:.6g}" for t, d in zip(target, direction))
             camera = ["-res", args.res, "-translate", eye, "-lookat", ",".join(f"{t:.6g}" for t in target)]
             for medium, model in SCALE_MEDIA:
+                if args.media != "all" and ("thick" if "thick" in medium else "thin") not in args.media.split(","):
+                    continue
                 ref = os.path.join(tmp, "ref.exr")
                 run([*EWA_RENDER, path, ref, *camera, *model, "--method", "raymarch", "--step", "0.25", "--shadowstep", "0.375",
-                     "--pixel-samples", "1024" if px < 0.5 else "16"])
+                     "--pixel-samples", "1024" if px < 0.2 else "256" if px < 0.5 else "16"])
                 peer = timed(["vdb_render", path, os.path.join(tmp, "peer.exr"), *camera,
                               *(a.replace("--", "-") for a in model)], args.repeat)
                 for name, extra in SCALE_SETTINGS:
@@ -1333,6 +1336,7 @@ def main():
     ssc = sub.add_parser("scale")
     ssc.add_argument("--res", default="240x135")
     ssc.add_argument("--px", default="0.1,0.3,1,3", help="pixels a voxel spans")
+    ssc.add_argument("--media", default="all", help="thin (vdb_render's model), thick (physical shadows) or all")
     ssc.add_argument("--scenes", default="all", help="comma-separated: cloud,smoke,pyro,pig")
     ssc.add_argument("--repeat", type=int, default=3)
     sub.add_parser("tiles")
