@@ -24,7 +24,7 @@ ExponentialSum::ExponentialSum(double gainPerStep, double steps)
     // every eta from where e^u (1/g + K) is e^-12 (the mass left out below, relative) to where
     // e^u (1/g + 1) is 36.6 (exp(-36.6) is nothing at the nearest sample, k = 1). In logs
     // throughout: g may be 1e-300 or 1e308.
-    if (!(gainPerStep > 0.0)) { // no gain, or one that underflowed: every sample weighs 1
+    if (!(gainPerStep * steps > 1e-8)) { // no gain, or one no weight feels: every sample weighs 1
         a.push_back(1.0);
         decay.push_back(1.0);
         return;
@@ -200,12 +200,11 @@ LightMap::LightMap(const GridSource::Impl& grid, const RenderSettings& settings,
 
     // vdb_render weighs a shadow sample s voxel lengths away by 1 / (1 + gain s): as a sum of
     // exponentials, each term a first-order recursive filter along the ray (ExponentialSum).
-    // No gain is the one term 1 (ExponentialSum's own case), and so is a gain that changes no
-    // weight along the longest ray by a float's precision (a denormal gain, 1e-310).
-    const bool gain = settings.shadow.gain * step * double(mNw) > 1e-8;
-    const ExponentialSum sum(gain ? settings.shadow.gain * step : 0.0, double(mNw));
+    // No gain is the one term 1 (ExponentialSum's own case, also for a gain no weight feels).
+    const ExponentialSum sum(settings.shadow.gain * step, double(mNw));
     mWeight = sum.a;
     mDecay = sum.decay;
+    const bool gain = !(mWeight.size() == 1 && mDecay[0] == 1.0);
     // Without gain a ray's samples are suffix sums, and the sample at which vdb_render's ray
     // from each of them stops is found in one pass (stoppedDepths): the rays hold the stop,
     // the lookups need no floor. With gain each sample weighs by its distance from where the

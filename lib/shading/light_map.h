@@ -38,8 +38,9 @@ namespace detail {
 struct ExponentialSum
 {
     std::vector<double> a, decay;
-    /// @param gainPerStep g = gain x step (infinity is taken as the largest double; 0, or a
-    ///        product that underflowed, gives the one term 1)
+    /// @param gainPerStep g = gain x step (infinity is taken as the largest double; a g that
+    ///        changes no weight over K steps by 1e-8, g K <= 1e-8, gives the one term 1, as 0
+    ///        and denormal gains do)
     /// @param steps K, the longest distance in steps (>= 1)
     ExponentialSum(double gainPerStep, double steps);
     /// The sum at @a k steps (k >= 1): about 1 / (1 + g k).
