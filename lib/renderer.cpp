@@ -332,7 +332,7 @@ void Renderer::renderGrid(const GridSource::Impl& g, const Camera& camera, const
     if (g.grid->getGridClass() == openvdb::GRID_LEVEL_SET) {
         renderLevelSet(g, camera, passes, frame, stats, progress);
     } else if (mSettings.method == Method::RayMarch) {
-        frame = detail::rayMarchReference(g, camera, mSettings, passes, stats, &progress);
+        frame = detail::rayMarchReference(g, camera, mSettings, passes, budgetFor(g, mSettings), stats, &progress);
     } else if (mSettings.method == Method::RayMarchGaussian) {
         frame = detail::rayMarchGaussianSum(g, camera, mSettings, passes, stats, &progress);
     } else {
@@ -433,6 +433,9 @@ Frame Renderer::renderFrame(const GridSource& grid, const Camera& camera, const 
         run();
     }
     progress.finish();
+    if (!grid.isLevelSet() && movesOverTheShutter(g)) {
+        if (std::string w = detail::longPathWarning(g, mSettings); !w.empty()) stats.warnings.push_back(std::move(w));
+    }
     if (mSettings.splat.refine > 1 && (grid.isLevelSet() || mSettings.method != Method::Splat)) {
         stats.warnings.push_back(std::string("--refine changes nothing here: it refines the splatter's fog-volume kernels, not ") +
                                  (grid.isLevelSet() ? "a level set's surface kernels" : "the field --method raymarch integrates"));

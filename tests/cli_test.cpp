@@ -4,6 +4,7 @@
 #include "cli_fixtures.h"
 #include "fixtures.h"
 #include "image_read.h"
+#include "mantaflow_fixture.h"
 
 #include <gtest/gtest.h>
 
@@ -552,6 +553,25 @@ TEST_F(Cli, LightsAPyroShot)
     EXPECT_GT(readExr(mDir.file("sky.exr")).pixel(16, 16)[2], unlit.pixel(16, 16)[2] + 0.01f);
     writeImage(Image(32, 32), mDir.file("square.hdr"), nullptr, {"Linear Rec.709 (sRGB)", {}});
     expectFailure(file + " " + mDir.file("out.exr") + camera + " --environment " + mDir.file("square.hdr"), 2, "twice as wide as high");
+}
+
+TEST_F(Cli, AMantaflowCachesBlurLongerThanItselfSaysTheScaleItsUnitNeeds)
+{
+    // Mantaflow's vectors are cells per its time unit: read as world units a second, the fire
+    // would move 1.25 units over a frame, past its own size (1.2). One line says so, and the
+    // scale that reads them right; with that scale (3 voxels of travel), none.
+    const std::string file = mDir.file("fire.vdb");
+    MantaflowFire().write(file);
+    const std::string options = " -res 32x18 -translate 3.5,0.575,0.575 -lookat 0.575,0.575,0.575 --velocity-grid velocity --shutter -0.5,0.5";
+    const CliRun raw = runCli(mDir, file + " " + mDir.file("raw.exr") + options);
+    ASSERT_EQ(raw.code, 0) << raw.err;
+    EXPECT_NE(raw.err.find("its fastest voxel moves"), std::string::npos) << raw.err;
+    EXPECT_NE(raw.err.find("Mantaflow caches hold cells per its time unit: --velocity-unit second --velocity-scale 0.125"), std::string::npos) << raw.err;
+    const std::size_t at = raw.err.rfind('\n', raw.err.find("its fastest voxel")) + 1;
+    EXPECT_LE(raw.err.find('\n', at) - at - file.size(), 300u) << "one line of at most 300 characters besides the file's name";
+    const CliRun scaled = runCli(mDir, file + " " + mDir.file("scaled.exr") + options + " --velocity-scale 0.125");
+    ASSERT_EQ(scaled.code, 0) << scaled.err;
+    EXPECT_EQ(scaled.err.find("fastest voxel"), std::string::npos) << scaled.err;
 }
 
 TEST_F(Cli, MotionBlursAPyroShotAndFocusesItsLens)

@@ -1,6 +1,8 @@
 /// @file reference_integrator.cpp
 #include "reference/reference_integrator.h"
 
+#include "reference/moved_voxels.h"
+
 #include "shading/shading.h"
 #include "source/source.h"
 #include "support/blank_frame.h"
@@ -157,11 +159,12 @@ private:
 class TrilinearSampler
 {
 public:
-    TrilinearSampler(const GridSource::Impl& grid, const RenderSettings& settings, const EmissionModel* emission)
+    /// @a moved: motion blur's moved voxels (null: a still field).
+    TrilinearSampler(const GridSource::Impl& grid, const RenderSettings& settings, const EmissionModel* emission, const MovedVoxels* moved)
         : mGrid(grid), mSettings(settings), mAccessor(grid.field->getConstAccessor()), mColor(grid), mInputToWorking(settings.inputToWorking), mModel(settings), mCutoff(settings.cutoff),
           mTinted(bool(grid.color)), mShadow(settings.lights.size(), Rgb{1.0f, 1.0f, 1.0f}), mEmission(grid, emission)
     {
-        if (grid.velocity) mVelocity.emplace(grid);
+        if (moved) mMoved.emplace(*moved);
         for (std::size_t l = 0; l < settings.lights.size(); ++l) {
             if (!mModel.dark(l)) mShadows.emplace_back(l, ShadowMarcher(grid, settings, l));
         }
@@ -178,14 +181,19 @@ public:
 
     bool sample(Vec3d pIndex, double& density, double source[3], Vec3d& emitted)
     {
-        if (mVelocity && mTime != 0.0) {
-            // Each point of the still field moves linearly with its own velocity v: the point
-            // at p now came from x with x + v(x) t = p, found by fixed-point iteration; the
-            // sample (density, light, colour, emission) is the still field's there.
-            const Vec3d p = mGrid.indexToWorld(pIndex);
-            Vec3d x = p;
-            for (int i = 0; i < 4; ++i) x = p - mVelocity->at(x) * mTime;
-            pIndex = mGrid.worldToIndex(x);
+        if (mMoved) {
+            // Each voxel moves linearly with the velocity at its centre: the material at p now
+            // came from x = p - w t, w the velocity of the voxels whose moved tents cover p; the
+            // sample (density, light, colour, emission) is the still field's there. No voxel
+            // covers p: empty space.
+            Vec3d from;
+            if (!mMoved->origin(pIndex, mTime, from)) {
+                density = 0.0;
+                for (int c = 0; c < 3; ++c) source[c] = 0.0;
+                emitted = Vec3d(0.0);
+                return false;
+            }
+            pIndex = from;
         }
         float d = 0.0f;
         openvdb::tools::BoxSampler::sample(mAccessor, openvdb::Vec3d(pIndex.x, pIndex.y, pIndex.z), d);
@@ -224,7 +232,7 @@ private:
     bool mTinted;
     std::vector<Rgb> mShadow; ///< per light: its transmittance at the sample (1 if dark)
     EmissionSampler mEmission;
-    std::optional<VelocitySampler> mVelocity;
+    std::optional<MovedVoxels::Finder> mMoved;
     double mTime = 0.0;
 };
 
@@ -427,7 +435,7 @@ Frame marchRays(const GridSource::Impl& grid, const Camera& camera, const Render
 } // namespace
 
 Frame rayMarchReference(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings,
-    const PassRequest& passes, RenderStats& stats, Progress* progress)
+    const PassRequest& passes, const MemoryBudget& budget, RenderStats& stats, Progress* progress)
 {
     checkMarchable(grid, passes, "raymarch");
     const auto t0 = std::chrono::steady_clock::now();
@@ -453,9 +461,14 @@ Frame rayMarchReference(const GridSource::Impl& grid, const Camera& camera, cons
     const double travel = largestTravel(grid, settings) * frobeniusNorm(glm::inverse(grid.indexToWorldLinear));
     const Vec3d boxLo = Vec3d(box.min().x(), box.min().y(), box.min().z()) - 1.0 - travel;
     const Vec3d boxHi = Vec3d(box.max().x(), box.max().y(), box.max().z()) + 1.0 + travel;
+    // Motion blur: the voxels the material moves with, indexed where they are over the shutter.
+    std::optional<MovedVoxels> moved;
+    if (grid.velocity && settings.motionBlur.shutterClose > settings.motionBlur.shutterOpen) {
+        moved.emplace(grid, *occupancy, settings, budget);
+    }
     if (progress) progress->stage(0, 100);
     Frame frame = marchRays(grid, camera, settings, passes, *occupancy, int(std::ceil(travel)), boxLo, boxHi,
-        [&] { return TrilinearSampler(grid, settings, emission ? &*emission : nullptr); }, progress);
+        [&] { return TrilinearSampler(grid, settings, emission ? &*emission : nullptr, moved ? &*moved : nullptr); }, progress);
     stats.rasterSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return frame;
 }

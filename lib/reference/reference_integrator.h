@@ -8,6 +8,7 @@
 #pragma once
 
 #include "source/source.h"
+#include "support/memory_budget.h"
 #include "support/progress.h"
 
 #include <vdb_ewa/camera.h>
@@ -25,10 +26,12 @@ constexpr double kReferenceTruncation = 4.0;
 /// --cutoff skipped, as vdb_render does), the light's transmittance from a ShadowMarcher
 /// started at the sample, the material colour there; each step is composited with the exact
 /// homogeneous update (OpticalModel). Passes: Z (the crossing found within a step as in the
-/// splatter) and transmittance. @throw ValueError for non-affine grids and for the other
-/// passes. @a progress: one unit per row; throws Cancelled.
+/// splatter) and transmittance. Motion blur: each ray at its own shutter time samples the still
+/// field where the material there came from (MovedVoxels; @a budget bounds them). @throw
+/// ValueError for non-affine grids and for the other passes, BudgetError. @a progress: one unit
+/// per row; throws Cancelled.
 Frame rayMarchReference(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings,
-    const PassRequest& passes, RenderStats& stats, Progress* progress = nullptr);
+    const PassRequest& passes, const MemoryBudget& budget, RenderStats& stats, Progress* progress = nullptr);
 
 /// The same march through the splatter's Gaussian reconstruction instead: the sum of all
 /// kernels within 4 sigma (active tiles voxelised: unit-spaced kernels), each pre-shaded with

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 
 namespace vdb_ewa {
 namespace detail {
@@ -45,9 +46,36 @@ Vec3d VelocitySampler::at(const Vec3d& pWorld)
 {
     const openvdb::Vec3d p = mGrid.velocity->transform().worldToIndex(openvdb::Vec3d(pWorld.x, pWorld.y, pWorld.z));
     openvdb::Vec3s v(0.0f);
-    if (mStaggered) openvdb::tools::StaggeredBoxSampler::sample(mAccessor, p, v);
+    if (mStaggered) v = staggered(p);
     else openvdb::tools::BoxSampler::sample(mAccessor, p, v);
     return worldVelocity(mGrid, v);
+}
+
+openvdb::Vec3s VelocitySampler::staggered(const openvdb::Vec3d& p)
+{
+    // OpenVDB's staggered layout (StaggeredBoxSampler): component a of voxel ijk sits at the face
+    // ijk - e_a / 2, so it is read trilinearly at p + e_a / 2. A cache clipped to its density
+    // (Mantaflow's) leaves the outer faces of its boundary cells in inactive voxels: their
+    // values are unknown, not 0, so each component weighs its active faces alone (a boundary
+    // cell's face would otherwise halve its speed out of the material).
+    openvdb::Vec3s v(0.0f);
+    for (int a = 0; a < 3; ++a) {
+        openvdb::Vec3d q = p;
+        q[a] += 0.5;
+        const openvdb::Coord lo = openvdb::Coord::floor(q);
+        const openvdb::Vec3d f = q - lo.asVec3d();
+        double sum = 0.0, weight = 0.0;
+        for (int corner = 0; corner < 8; ++corner) {
+            const openvdb::Coord c = lo + openvdb::Coord(corner & 1, (corner >> 1) & 1, corner >> 2);
+            const double w = ((corner & 1) ? f.x() : 1.0 - f.x()) * (((corner >> 1) & 1) ? f.y() : 1.0 - f.y()) * ((corner >> 2) ? f.z() : 1.0 - f.z());
+            openvdb::Vec3s value;
+            if (!(w > 0.0) || !mAccessor.probeValue(c, value)) continue;
+            sum += w * double(value[a]);
+            weight += w;
+        }
+        v[a] = weight > 0.0 ? float(sum / weight) : mAccessor.getValue(lo)[a]; // no active face: the background
+    }
+    return v;
 }
 
 namespace {
@@ -210,11 +238,9 @@ MotionStats moveKernels(const GridSource::Impl& grid, const RenderSettings& sett
     return stats;
 }
 
-double largestTravel(const GridSource::Impl& grid, const RenderSettings& settings)
+double fastestVelocity(const GridSource::Impl& grid)
 {
     if (!grid.velocity) return 0.0;
-    const MotionBlur& blur = settings.motionBlur;
-    const double reach = std::max(std::abs(blur.displacementPerVelocity(blur.shutterOpen)), std::abs(blur.displacementPerVelocity(blur.shutterClose)));
     // The largest stored vector (tiles, voxels and the background) bounds the trilinear samples:
     // the tiles and the background here, the leaves' voxels in parallel.
     const auto longest = [&](const openvdb::Vec3s& v) { return glm::length(worldVelocity(grid, v)); };
@@ -225,7 +251,7 @@ double largestTravel(const GridSource::Impl& grid, const RenderSettings& setting
     std::vector<const openvdb::Vec3SGrid::TreeType::LeafNodeType*> leaves;
     leaves.reserve(grid.velocity->tree().leafCount());
     for (auto leaf = grid.velocity->tree().cbeginLeaf(); leaf; ++leaf) leaves.push_back(leaf.getLeaf());
-    most = tbb::parallel_reduce(tbb::blocked_range<std::size_t>(0, leaves.size(), 16), most,
+    return tbb::parallel_reduce(tbb::blocked_range<std::size_t>(0, leaves.size(), 16), most,
         [&](const tbb::blocked_range<std::size_t>& range, double m) {
             for (std::size_t i = range.begin(); i < range.end(); ++i) {
                 const openvdb::Vec3s* values = leaves[i]->buffer().data();
@@ -234,7 +260,41 @@ double largestTravel(const GridSource::Impl& grid, const RenderSettings& setting
             return m;
         },
         [](double a, double b) { return std::max(a, b); });
-    return std::min(most * reach, kMaxTravelVoxels * grid.voxelLength);
+}
+
+double largestTravel(const GridSource::Impl& grid, const RenderSettings& settings)
+{
+    if (!grid.velocity) return 0.0;
+    const MotionBlur& blur = settings.motionBlur;
+    const double reach = std::max(std::abs(blur.displacementPerVelocity(blur.shutterOpen)), std::abs(blur.displacementPerVelocity(blur.shutterClose)));
+    return std::min(fastestVelocity(grid) * reach, kMaxTravelVoxels * grid.voxelLength);
+}
+
+std::string longPathWarning(const GridSource::Impl& grid, const RenderSettings& settings)
+{
+    if (!grid.velocity) return {};
+    const MotionBlur& blur = settings.motionBlur;
+    const double path = std::min(fastestVelocity(grid), kMaxTravelVoxels * grid.voxelLength) *
+                        std::abs(blur.displacementPerVelocity(blur.shutterClose) - blur.displacementPerVelocity(blur.shutterOpen));
+    const openvdb::CoordBBox box = grid.field->evalActiveVoxelBoundingBox();
+    if (box.empty()) return {};
+    // The active box's longest side in world units (its edges through the linear map).
+    const Vec3d extent = Vec3d(box.dim().x(), box.dim().y(), box.dim().z());
+    double size = 0.0;
+    for (int a = 0; a < 3; ++a) size = std::max(size, glm::length(grid.indexToWorldLinear[a] * extent[a]));
+    if (!(path > size)) return {};
+    std::ostringstream w;
+    w.precision(3);
+    w << "velocity grid '" << grid.velocity->getName() << "': its fastest voxel moves " << path << " units over the shutter, " << path / size
+      << "x the volume's size: check --velocity-unit, --velocity-scale, --fps";
+    // Blender's Mantaflow writes its velocities in cells per Mantaflow time unit, and tags its
+    // grids with file_base_resolution: 2.5 voxel lengths a second at a Time Scale of 1.
+    const openvdb::FloatMetadata::ConstPtr voxel = grid.velocity->getMetadata<openvdb::FloatMetadata>("file_voxel_size");
+    if (grid.velocity->getGridClass() == openvdb::GRID_STAGGERED && grid.velocity->getMetadata<openvdb::Vec3IMetadata>("file_base_resolution") && voxel) {
+        w << "; Mantaflow caches hold cells per its time unit: --velocity-unit second --velocity-scale " << 2.5 * double(voxel->value())
+          << " (2.5 x voxel x Time Scale)";
+    }
+    return w.str();
 }
 
 } // namespace detail

@@ -14,6 +14,7 @@
 #include "support/rgb.h"
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace vdb_ewa {
@@ -26,8 +27,8 @@ inline constexpr int kMaxSubKernels = 64;
 inline constexpr double kMaxTravelVoxels = 4096.0;
 
 /// The velocity grid's vectors in world units per second or frame, as stored times
-/// GridSource::Impl::velocityToWorld, trilinear (staggered grids as such); non-finite
-/// components read as 0. One per thread.
+/// GridSource::Impl::velocityToWorld, trilinear; staggered (MAC) grids as such, each component
+/// at its face and from the active faces alone; non-finite components read as 0. One per thread.
 class VelocitySampler
 {
 public:
@@ -38,6 +39,9 @@ public:
     Vec3d atIndex(const Vec3d& pIndex);
 
 private:
+    /// A staggered grid's vector at index point @a p, each component from its active faces.
+    openvdb::Vec3s staggered(const openvdb::Vec3d& p);
+
     const GridSource::Impl& mGrid;
     openvdb::Vec3SGrid::ConstAccessor mAccessor;
     bool mStaggered;
@@ -71,6 +75,14 @@ MotionStats moveKernels(const GridSource::Impl& grid, const RenderSettings& sett
 /// world units (the velocity grid's largest vector): what the streamed frame's brick bounds
 /// grow by. 0 without a velocity grid.
 double largestTravel(const GridSource::Impl& grid, const RenderSettings& settings);
+
+/// The velocity grid's largest vector in world units per second or frame (unscaled), 0 without one.
+double fastestVelocity(const GridSource::Impl& grid);
+
+/// A warning where the fastest voxel's path over the shutter is longer than the volume's
+/// largest side (an absurd blur: velocities in another unit than the options say), naming the
+/// options that fix it (for a Blender Mantaflow cache, the scale its unit needs); empty otherwise.
+std::string longPathWarning(const GridSource::Impl& grid, const RenderSettings& settings);
 
 } // namespace detail
 } // namespace vdb_ewa
