@@ -32,7 +32,7 @@ struct PositionsAt
 } // namespace
 
 MovedVoxels::MovedVoxels(const GridSource::Impl& grid, const openvdb::FloatGrid& occupancy, const RenderSettings& settings,
-    const MemoryBudget& budget)
+    const MemoryBudget& budget, const Progress* progress)
 {
     const double count = double(occupancy.tree().activeVoxelCount());
     budget.check(count, "voxels moved by the reference's motion blur", sizeof(openvdb::Vec3i) + sizeof(openvdb::Vec3f) + 2.0 * kBytesPerVoxelSlice);
@@ -49,8 +49,7 @@ MovedVoxels::MovedVoxels(const GridSource::Impl& grid, const openvdb::FloatGrid&
     // Velocities in index units per unit of time, their travel clamped as the splatter's is.
     const MotionBlur& blur = settings.motionBlur;
     const double open = blur.displacementPerVelocity(blur.shutterOpen), close = blur.displacementPerVelocity(blur.shutterClose);
-    const double reach = std::max({std::abs(open), std::abs(close), 1e-300});
-    const double maxTravel = kMaxTravelVoxels * grid.voxelLength;
+    const TravelLimit limit(grid, blur);
     const Mat3d indexFromWorld = glm::inverse(grid.indexToWorldLinear);
     mVelocity.resize(mPosition.size());
     const double fastest = tbb::parallel_reduce(tbb::blocked_range<std::size_t>(0, mPosition.size(), 4096), 0.0,
@@ -59,8 +58,7 @@ MovedVoxels::MovedVoxels(const GridSource::Impl& grid, const openvdb::FloatGrid&
             for (std::size_t i = range.begin(); i < range.end(); ++i) {
                 const openvdb::Vec3i& c = mPosition[i];
                 Vec3d v = sampler.atIndex(Vec3d(c.x(), c.y(), c.z()));
-                const double speed = glm::length(v);
-                if (speed * reach > maxTravel) v *= maxTravel / (speed * reach);
+                limit.clamp(v);
                 const Vec3d w = indexFromWorld * v;
                 mVelocity[i] = openvdb::Vec3f(float(w.x), float(w.y), float(w.z));
                 most = std::max({most, std::abs(double(mVelocity[i].x())), std::abs(double(mVelocity[i].y())), std::abs(double(mVelocity[i].z()))});
@@ -81,6 +79,7 @@ MovedVoxels::MovedVoxels(const GridSource::Impl& grid, const openvdb::FloatGrid&
     const openvdb::math::Transform::Ptr unit = openvdb::math::Transform::createLinearTransform(1.0);
     mSlices.reserve(std::size_t(slices));
     for (int k = 0; k < slices; ++k) {
+        if (progress) progress->check();
         const PositionsAt at{mPosition, mVelocity, first + (double(k) + 0.5) * mSliceLength};
         mSlices.push_back(openvdb::tools::createPointIndexGrid<openvdb::tools::PointIndexGrid>(at, *unit));
     }

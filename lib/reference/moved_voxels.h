@@ -11,6 +11,7 @@
 #include "source/source.h"
 #include "support/memory_budget.h"
 #include "support/openvdb_point_index.h"
+#include "support/progress.h"
 
 #include <vdb_ewa/render_settings.h>
 
@@ -30,9 +31,10 @@ public:
     /// @a grid's index space). Velocities as the splatter samples them (VelocitySampler at each
     /// voxel centre, travel clamped to kMaxTravelVoxels). The shutter is cut into slices short
     /// enough that no voxel moves more than half a voxel from its slice's position, as many as
-    /// a quarter of @a budget holds (then the lookups search further). @throw BudgetError.
+    /// a quarter of @a budget holds (then the lookups search further). @throw BudgetError;
+    /// Cancelled (@a progress is checked between slices).
     MovedVoxels(const GridSource::Impl& grid, const openvdb::FloatGrid& occupancy, const RenderSettings& settings,
-        const MemoryBudget& budget);
+        const MemoryBudget& budget, const Progress* progress);
 
     std::size_t voxels() const { return mPosition.size(); }
     int slices() const { return int(mSlices.size()); }

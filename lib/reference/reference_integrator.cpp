@@ -464,7 +464,7 @@ Frame rayMarchReference(const GridSource::Impl& grid, const Camera& camera, cons
     // Motion blur: the voxels the material moves with, indexed where they are over the shutter.
     std::optional<MovedVoxels> moved;
     if (grid.velocity && settings.motionBlur.shutterClose > settings.motionBlur.shutterOpen) {
-        moved.emplace(grid, *occupancy, settings, budget);
+        moved.emplace(grid, *occupancy, settings, budget, progress);
     }
     if (progress) progress->stage(0, 100);
     Frame frame = marchRays(grid, camera, settings, passes, *occupancy, int(std::ceil(travel)), boxLo, boxHi,

@@ -25,6 +25,20 @@ Vec3d worldVelocity(const GridSource::Impl& grid, const openvdb::Vec3s& v)
 
 } // namespace
 
+TravelLimit::TravelLimit(const GridSource::Impl& grid, const MotionBlur& blur)
+    : mReach(std::max({std::abs(blur.displacementPerVelocity(blur.shutterOpen)), std::abs(blur.displacementPerVelocity(blur.shutterClose)), 1e-300})),
+      mMaxTravel(kMaxTravelVoxels * grid.voxelLength)
+{
+}
+
+bool TravelLimit::clamp(Vec3d& v) const
+{
+    const double speed = glm::length(v);
+    if (!(speed * mReach > mMaxTravel)) return false;
+    v *= mMaxTravel / (speed * mReach);
+    return true;
+}
+
 VelocitySampler::VelocitySampler(const GridSource::Impl& grid)
     : mGrid(grid), mAccessor(grid.velocity->getConstAccessor()), mStaggered(grid.velocity->getGridClass() == openvdb::GRID_STAGGERED),
       mOnLattice(!mStaggered && grid.velocity->transform() == grid.grid->transform())
@@ -127,8 +141,7 @@ MotionStats moveKernels(const GridSource::Impl& grid, const RenderSettings& sett
     const MotionBlur& blur = settings.motionBlur;
     const double open = blur.displacementPerVelocity(blur.shutterOpen), close = blur.displacementPerVelocity(blur.shutterClose);
     const double mid = 0.5 * (open + close), length = close - open;
-    const double reach = std::max({std::abs(open), std::abs(close), 1e-300});
-    const double maxTravel = kMaxTravelVoxels * grid.voxelLength;
+    const TravelLimit limit(grid, blur);
     // The kernel's narrowest world extent per voxel of sigma: the index-to-world map's smallest
     // singular value (conservative for sheared and anisotropic voxels: more sub-kernels).
     const Mat3d ata = glm::transpose(grid.indexToWorldLinear) * grid.indexToWorldLinear;
@@ -144,12 +157,8 @@ MotionStats moveKernels(const GridSource::Impl& grid, const RenderSettings& sett
             const Vec3d pWorld = grid.indexToWorld(k.pIndex);
             Vec3d v = velocity[i];
             Travel& t = travel[i];
-            const double speed = glm::length(v);
-            if (!(speed > 0.0)) continue;
-            if (speed * reach > maxTravel) { // absurd velocities: clamped
-                v *= maxTravel / (speed * reach);
-                t.clamped = true;
-            }
+            if (!(glm::length(v) > 0.0)) continue;
+            t.clamped = limit.clamp(v); // absurd velocities
             t.shift = v * mid;
             t.path = v * length;
             // The path's image in pixels (the projection's Jacobian at the mid-time centre) and
@@ -274,7 +283,7 @@ std::string longPathWarning(const GridSource::Impl& grid, const RenderSettings& 
 {
     if (!grid.velocity) return {};
     const MotionBlur& blur = settings.motionBlur;
-    const double path = std::min(fastestVelocity(grid), kMaxTravelVoxels * grid.voxelLength) *
+    const double path = std::min(fastestVelocity(grid), TravelLimit(grid, blur).fastest()) *
                         std::abs(blur.displacementPerVelocity(blur.shutterClose) - blur.displacementPerVelocity(blur.shutterOpen));
     const openvdb::CoordBBox box = grid.field->evalActiveVoxelBoundingBox();
     if (box.empty()) return {};

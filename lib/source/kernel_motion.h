@@ -26,6 +26,22 @@ inline constexpr int kMaxSubKernels = 64;
 /// clamped, and counted).
 inline constexpr double kMaxTravelVoxels = 4096.0;
 
+/// The bound on motion both integrators share: a point moves at most kMaxTravelVoxels voxel
+/// lengths of its grid from the frame's time over the shutter; faster velocities are slowed to it.
+class TravelLimit
+{
+public:
+    TravelLimit(const GridSource::Impl& grid, const MotionBlur& blur);
+    /// Slows @a v (world units per second or frame) to the bound; true if it had to.
+    bool clamp(Vec3d& v) const;
+    /// The fastest velocity within the bound.
+    double fastest() const { return mMaxTravel / mReach; }
+
+private:
+    double mReach;     ///< the largest displacement per velocity from the frame's time (MotionBlur)
+    double mMaxTravel; ///< world units
+};
+
 /// The velocity grid's vectors in world units per second or frame, as stored times
 /// GridSource::Impl::velocityToWorld, trilinear; staggered (MAC) grids as such, each component
 /// at its face and from the active faces alone; non-finite components read as 0. One per thread.
