@@ -129,6 +129,7 @@ RenderSettings RenderSettings::preset(Quality quality)
         s.motionBlur.samples = 1;
         s.motionBlur.layers = 1;
         s.motionBlur.splitSigmas = 4.0;
+        s.motionBlur.lightFollows = false;
         s.lensSamples = 1;
         s.splat.supersample = 16;
         s.splat.supersampleSpan = 1.0;
@@ -145,8 +146,6 @@ RenderSettings RenderSettings::preset(Quality quality)
         s.splat.refineEmission = 4;
         s.motionBlur.samples = 4;
         s.motionBlur.layers = 1;
-        s.motionBlur.splitSigmas = 2.0;
-        s.motionBlur.lightFollows = true;
         s.lensSamples = 8;
         break;
     case Quality::Final: // high, with refined kernels where voxels span 2 pixels or more

@@ -364,17 +364,18 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
     motion_split (--motion-split): motion blur: a kernel whose path over its sub-frame is longer on the
         screen than this many of its standard deviations is split into sub-kernels of at most that
         length; smaller keeps the blur's box shape closer (a single kernel's blur within 1.2 % of its
-        peak at 2, 4.6 % at 3, 11 % at 4) at the cost of more kernels; in [0.5, 64] (default: 3; draft
-        4, high and final 2)
+        peak at 2, 4.6 % at 3, 11 % at 4) at the cost of more kernels; in [0.5, 64] (default: 2; draft
+        4)
     motion_layers (--motion-layers): motion blur: transmittances each pixel keeps over each sub-frame,
         one per equal part of its shutter; a split kernel's pieces darken only their parts, so an opaque
-        edge moving across a pixel covers it part of the shutter, as sub-frames would, in one sweep
-        (docs/equations.md#shutter-layers); 1: off; range [1, 8] (default: 2; draft 1, high and final 1)
+        edge moving across a pixel covers it part of the shutter, as sub-frames would, in one sweep,
+        each layer lit where its own material came from (--motion-light follow)
+        (docs/equations.md#shutter-layers); 1: off; range [1, 8] (default: 3; draft 1, high and final 1)
     motion_light (--motion-light): motion blur: follow (each slab sample lit where its material was in
-        the still field, as the reference carries each point's light along its path) or still (lit by
-        the still field's light where the material is now: the shutter's mid-time shadows, about 1.2x
-        faster and 2 dB further from the reference on pyro) (default: still; draft still, high and final
-        follow)
+        the still field, each shutter layer where its own was, as the reference carries each point's
+        light along its path) or still (lit by the still field's light where the material is now: the
+        shutter's mid-time shadows, faster, but a rising fire is lit above its own shadow: pyro 4 dB and
+        a Mantaflow fire 10 dB further from the reference at default) (default: follow; draft still)
     lens_samples (--lens-samples): depth of field: sub-frames, each through its own part of the lens
         (rings of sectors of equal area) and blurred by that part's circle of confusion, averaged;
         widened kernels blur optical depth where a camera averages images, so thick media need more to

@@ -419,8 +419,9 @@ TEST(MotionBlur, BothIntegratorsAgreeOnAMantaflowLikeFire)
 {
     // A fire laid out as Mantaflow writes it (mantaflow_fixture.h), its velocities read in their
     // own unit (--velocity-scale 2.5 x the voxel: 3 voxels of travel over a frame): the splatter
-    // at `high` agrees with the reference on the blurred frame as on the still frame (within
-    // 0.5 dB), and the blur shows.
+    // agrees with the reference on the blurred frame as on the still frame, at `default` (one
+    // sweep, three shutter layers, each lit where its own material came from) within 1 dB and
+    // at `high` (sub-frames) within 0.5 dB, and the blur shows.
     const MantaflowFire fire;
     const GridSource still = withEmissionGrid(gridSourceFromOpenVDB(fire.density), fire.flame);
     const GridSource moving = withVelocityGrid(still, fire.velocity);
@@ -429,23 +430,27 @@ TEST(MotionBlur, BothIntegratorsAgreeOnAMantaflowLikeFire)
     cam.height = 45;
     cam.translate = Vec3d(3.5, 0.575, 0.575);
     cam.lookAt = Vec3d(0.575, 0.575, 0.575);
-    RenderSettings splat = RenderSettings::preset(Quality::High);
-    splat.gridEmission.color = Vec3d(1.0, 0.35, 0.08);
-    splat.gridEmission.intensity = 3.0;
-    splat.motionBlur.shutterOpen = -0.5;
-    splat.motionBlur.shutterClose = 0.5;
-    splat.motionBlur.velocityScale = MantaflowFire::kSecondsScale;
-    RenderSettings reference = splat;
-    reference.method = Method::RayMarch;
-    reference.step = 0.25;
-    reference.blurSamples = 32;
-    const Frame stillSplat = render(still, cam, splat), stillReference = render(still, cam, reference);
-    const Frame movingSplat = render(moving, cam, splat), movingReference = render(moving, cam, reference);
-    const double stillAgreement = psnrRgb(stillSplat.beauty, stillReference.beauty), movingAgreement = psnrRgb(movingSplat.beauty, movingReference.beauty);
-    std::printf("Mantaflow-like fire at high: still %.1f dB, blurred %.1f dB; the reference's blur %.1f dB\n", stillAgreement, movingAgreement,
-        psnrRgb(stillReference.beauty, movingReference.beauty));
-    EXPECT_GT(movingAgreement, stillAgreement - 0.5); // 1.6 dB above; the reference that looked the velocity up at its samples: 0.9 below
-    EXPECT_LT(psnrRgb(stillReference.beauty, movingReference.beauty), stillAgreement - 3.0) << "the blur shows";
+    // default: 37.7 against 38.0 dB; each layer lit by the layers' mean move instead: 30.9.
+    // high: 40.2 against 38.6 dB; the reference that looked the velocity up at its samples: 0.9 below.
+    for (const auto& [quality, name, margin] : {std::tuple{Quality::Default, "default", 1.0}, std::tuple{Quality::High, "high", 0.5}}) {
+        RenderSettings splat = RenderSettings::preset(quality);
+        splat.gridEmission.color = Vec3d(1.0, 0.35, 0.08);
+        splat.gridEmission.intensity = 3.0;
+        splat.motionBlur.shutterOpen = -0.5;
+        splat.motionBlur.shutterClose = 0.5;
+        splat.motionBlur.velocityScale = MantaflowFire::kSecondsScale;
+        RenderSettings reference = splat;
+        reference.method = Method::RayMarch;
+        reference.step = 0.25;
+        reference.blurSamples = 32;
+        const Frame stillSplat = render(still, cam, splat), stillReference = render(still, cam, reference);
+        const Frame movingSplat = render(moving, cam, splat), movingReference = render(moving, cam, reference);
+        const double stillAgreement = psnrRgb(stillSplat.beauty, stillReference.beauty), movingAgreement = psnrRgb(movingSplat.beauty, movingReference.beauty);
+        std::printf("Mantaflow-like fire at %s: still %.1f dB, blurred %.1f dB; the reference's blur %.1f dB\n", name,
+            stillAgreement, movingAgreement, psnrRgb(stillReference.beauty, movingReference.beauty));
+        EXPECT_GT(movingAgreement, stillAgreement - margin) << name;
+        EXPECT_LT(psnrRgb(stillReference.beauty, movingReference.beauty), stillAgreement - 3.0) << "the blur shows";
+    }
 }
 
 TEST(MotionBlur, TheStreamedFrameEqualsTheWholeFrame)

@@ -232,23 +232,24 @@ struct MotionBlur
     /// standard deviations along it (the low-pass filter's included) is split into sub-kernels
     /// of at most that length: a Gaussian convolved with a box is then one Gaussian of the
     /// box's variance added to within 1.2 % (2), 4.6 % (3) or 11 % (4) of its peak
-    /// (docs/equations.md#motion-blur). Presets: draft 4, default 3, high and final 2.
-    double splitSigmas = 3.0;
+    /// (docs/equations.md#motion-blur). Presets: draft 4, default, high and final 2.
+    double splitSigmas = 2.0;
     /// The light follows the material: each slab sample is lit where its material is in the
-    /// still field (the optical depth's mean move subtracted), as the reference carries each
-    /// point's light along its path; false: lit by the still field's light where the material
-    /// is now (the shutter's mid-time shadows), faster (pyro: 1.2x) and about 2 dB further from
-    /// the reference (docs/equations.md#motion-blur). Presets: draft and default false, high
-    /// and final true.
-    bool lightFollows = false;
+    /// still field (the optical depth's mean move subtracted; with shutter layers, each layer's
+    /// own), as the reference carries each point's light along its path; false: lit by the
+    /// still field's light where the material is now (the shutter's mid-time shadows): faster,
+    /// but a rising fire is lit above its own shadow (docs/equations.md#motion-blur). Presets:
+    /// draft false, the others true.
+    bool lightFollows = true;
     /// Shutter layers: within each sub-frame, every pixel keeps this many transmittances, one
     /// per equal part of the sub-frame's shutter, and a sub-kernel adds its optical depth to
     /// the parts its piece of the path covers (kernels whose paths are not split: to all). So an
     /// opaque edge that moves across a pixel covers it for part of the shutter instead of all of
     /// it, as sub-frames would, at the cost of one sweep; a slab's colour is shared by its
-    /// layers (docs/equations.md#shutter-layers). 1: off. Presets: draft 1, default 2, high
-    /// and final 1 (their sub-frames converge).
-    int layers = 2;
+    /// layers, each layer lit where its own material came from (lightFollows)
+    /// (docs/equations.md#shutter-layers). 1: off. Presets: draft 1, default 3, high and final 1
+    /// (their sub-frames converge).
+    int layers = 3;
 
     /// Seconds (VelocityUnit::Second) or frames a velocity is multiplied by to move a point over
     /// the time from the frame's to @a frames frames later, scale included.

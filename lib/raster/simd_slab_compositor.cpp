@@ -323,72 +323,120 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
             source[c] = emitted;
             litSum[c] = colouredSum[c] = zero;
         }
-        // Motion blur: the lanes' mean move (world), 0 where nothing moved (shiftOf).
-        Floats moved[3] = {zero, zero, zero};
-        if (anyLighted && !mShift.empty()) {
-            const std::size_t m = slot(slab) * kShiftPlanes * kTilePixels + std::size_t(p);
-            const Floats weight = hn::LoadU(d, &mShift[m + 3 * kTilePixels]);
-            const auto some = hn::Gt(weight, zero);
-            for (int k = 0; k < 3; ++k) moved[k] = hn::IfThenElseZero(some, hn::Div(hn::LoadU(d, &mShift[m + std::size_t(k) * kTilePixels]), weight));
-        }
-        for (std::size_t light = 0; anyLighted && light < mOptions.lights.size(); ++light) {
-            const LightMap::Lattice map = mOptions.lights[light].map->lattice();
-            const double z = mOptions.slabs.start(slab), thickness = mOptions.slabs.thickness;
-            const LightRays& rays = mRays[light];
-            Floats log0[3], log1[3];
-            // The move in the map's coordinates (LightMap::direction, a linear map).
-            Floats shift[3] = {zero, zero, zero};
+        // The lanes' light for optical depths @a depth and scattering weights @a scatter, their
+        // material moved by shutter layer @a layer's mean move (shiftOf: with no piece on some
+        // layers only, layer 0's is the whole's), the lights summed into @a litOut and
+        // @a colouredOut.
+        const auto lightLanes = [&](const Floats (&depth)[C], const Floats (&scatter)[C], int layer, Floats (&litOut)[C], Floats (&colouredOut)[C]) {
+            // Motion blur: the lanes' mean move (world), 0 where nothing moved (shiftOf).
+            Floats moved[3] = {zero, zero, zero};
             if (!mShift.empty()) {
-                for (int k = 0; k < 3; ++k) {
-                    Vec3d axis(0.0);
-                    axis[k] = 1.0;
-                    const Vec3d column = mOptions.lights[light].map->direction(axis);
-                    for (int i = 0; i < 3; ++i) shift[i] = hn::MulAdd(hn::Set(d, float(column[i])), moved[k], shift[i]);
-                }
+                const std::size_t m = shiftIndex(slab, layer) + std::size_t(p);
+                Floats sum[kShiftPlanes];
+                for (int k = 0; k < kShiftPlanes; ++k) sum[k] = hn::LoadU(d, &mShift[m + std::size_t(k) * kTilePixels]);
+                const auto some = hn::Gt(sum[3], zero);
+                for (int k = 0; k < 3; ++k) moved[k] = hn::IfThenElseZero(some, hn::Div(sum[k], sum[3]));
             }
-            MapPoints q0 = mapPoints(map, rays.base, rays.dir, p, u0, z, thickness, shift), q1 = mapPoints(map, rays.base, rays.dir, p, u1, z, thickness, shift);
-            offLatticeUnless(map, lightedLanes, q0);
-            offLatticeUnless(map, lightedLanes, q1);
-            logTransmittances(map, densityDepths(map, q0), C, log0);
-            logTransmittances(map, densityDepths(map, q1), C, log1);
-            const Floats floor = hn::Set(d, kLogLightFloor); // as lightLogRatio
-            for (int c = 0; c < C; ++c) {
-                const Floats front = hn::Exp(d, log0[c]);
-                const Floats logRatio = hn::Sub(hn::Max(log0[c], floor), hn::Max(log1[c], floor));
-                const Floats l = hn::IfThenElseZero(lightedLanes, hn::Mul(weight[c], lightIntegral(tau[c], front, logRatio)));
-                const Floats scale = hn::Set(d, mOptions.lights[light].scale[c]);
-                litSum[c] = hn::Add(litSum[c], l);
-                colouredSum[c] = hn::MulAdd(scale, l, colouredSum[c]);
-                source[c] = hn::MulAdd(scale, l, source[c]);
-            }
-        }
-        if (anyLighted && mOptions.pointLights) {
-            // Point lights: each lit lane's layer looked up lane by lane (pointLightAt: a cube
-            // of rays, not a lattice the vector lookup reads), then lit as the lights above.
-            alignas(64) float lane0[kLanes], lane1[kLanes], front[3][kLanes], logRatio[3][kLanes], falloff[kLanes];
-            hn::Store(u0, d, lane0);
-            hn::Store(u1, d, lane1);
-            const PointLights& points = *mOptions.pointLights;
-            for (std::size_t light = 0; light < points.maps().size(); ++light) {
-                for (int i = 0; i < kLanes; ++i) {
-                    std::array<float, 3> f{1.0f, 1.0f, 1.0f}, r{0.0f, 0.0f, 0.0f};
-                    float g = 0.0f;
-                    if (lighted[i] != 0.0f) pointLightAt(light, p + i, slab, lane0[i], lane1[i], f, r, g);
-                    for (int c = 0; c < 3; ++c) {
-                        front[c][i] = f[std::size_t(c)];
-                        logRatio[c][i] = r[std::size_t(c)];
+            for (std::size_t light = 0; light < mOptions.lights.size(); ++light) {
+                const LightMap::Lattice map = mOptions.lights[light].map->lattice();
+                const double z = mOptions.slabs.start(slab), thickness = mOptions.slabs.thickness;
+                const LightRays& rays = mRays[light];
+                Floats log0[3], log1[3];
+                // The move in the map's coordinates (LightMap::direction, a linear map).
+                Floats shift[3] = {zero, zero, zero};
+                if (!mShift.empty()) {
+                    for (int k = 0; k < 3; ++k) {
+                        Vec3d axis(0.0);
+                        axis[k] = 1.0;
+                        const Vec3d column = mOptions.lights[light].map->direction(axis);
+                        for (int i = 0; i < 3; ++i) shift[i] = hn::MulAdd(hn::Set(d, float(column[i])), moved[k], shift[i]);
                     }
-                    falloff[i] = g;
                 }
-                const Floats g = hn::Load(d, falloff);
+                MapPoints q0 = mapPoints(map, rays.base, rays.dir, p, u0, z, thickness, shift), q1 = mapPoints(map, rays.base, rays.dir, p, u1, z, thickness, shift);
+                offLatticeUnless(map, lightedLanes, q0);
+                offLatticeUnless(map, lightedLanes, q1);
+                logTransmittances(map, densityDepths(map, q0), C, log0);
+                logTransmittances(map, densityDepths(map, q1), C, log1);
+                const Floats floor = hn::Set(d, kLogLightFloor); // as lightLogRatio
                 for (int c = 0; c < C; ++c) {
-                    const Floats l = hn::IfThenElseZero(lightedLanes, hn::Mul(weight[c], lightIntegral(tau[c], hn::Load(d, front[c]), hn::Load(d, logRatio[c]))));
-                    const Floats scale = hn::Mul(hn::Set(d, float(points.scale(light)[std::size_t(c)])), g);
-                    litSum[c] = hn::Add(litSum[c], l);
-                    colouredSum[c] = hn::MulAdd(scale, l, colouredSum[c]);
-                    source[c] = hn::MulAdd(scale, l, source[c]);
+                    const Floats front = hn::Exp(d, log0[c]);
+                    const Floats logRatio = hn::Sub(hn::Max(log0[c], floor), hn::Max(log1[c], floor));
+                    const Floats l = hn::IfThenElseZero(lightedLanes, hn::Mul(scatter[c], lightIntegral(depth[c], front, logRatio)));
+                    litOut[c] = hn::Add(litOut[c], l);
+                    colouredOut[c] = hn::MulAdd(hn::Set(d, mOptions.lights[light].scale[c]), l, colouredOut[c]);
                 }
             }
+            if (mOptions.pointLights) {
+                // Point lights: each lit lane's layer looked up lane by lane (pointLightAt: a cube
+                // of rays, not a lattice the vector lookup reads), then lit as the lights above.
+                alignas(64) float lane0[kLanes], lane1[kLanes], front[3][kLanes], logRatio[3][kLanes], falloff[kLanes];
+                hn::Store(u0, d, lane0);
+                hn::Store(u1, d, lane1);
+                const PointLights& points = *mOptions.pointLights;
+                for (std::size_t light = 0; light < points.maps().size(); ++light) {
+                    for (int i = 0; i < kLanes; ++i) {
+                        std::array<float, 3> f{1.0f, 1.0f, 1.0f}, r{0.0f, 0.0f, 0.0f};
+                        float g = 0.0f;
+                        if (lighted[i] != 0.0f) pointLightAt(light, p + i, slab, lane0[i], lane1[i], shiftOf(slab, p + i, layer), f, r, g);
+                        for (int c = 0; c < 3; ++c) {
+                            front[c][i] = f[std::size_t(c)];
+                            logRatio[c][i] = r[std::size_t(c)];
+                        }
+                        falloff[i] = g;
+                    }
+                    const Floats g = hn::Load(d, falloff);
+                    for (int c = 0; c < C; ++c) {
+                        const Floats l = hn::IfThenElseZero(lightedLanes, hn::Mul(scatter[c], lightIntegral(depth[c], hn::Load(d, front[c]), hn::Load(d, logRatio[c]))));
+                        litOut[c] = hn::Add(litOut[c], l);
+                        colouredOut[c] = hn::MulAdd(hn::Mul(hn::Set(d, float(points.scale(light)[std::size_t(c)])), g), l, colouredOut[c]);
+                    }
+                }
+            }
+        };
+        // Lanes whose optical depth is on every layer (no piece of a path on some) are lit once.
+        bool ownLayers = false;
+        for (int k = 1; anyLighted && layers && !mShift.empty() && k < layers && !ownLayers; ++k) {
+            // (The splats on every layer add the same to each, in the same order: ownLayers.)
+            ownLayers = !hn::AllTrue(d, hn::Eq(hn::LoadU(d, &mShift[shiftIndex(slab, k) + 3 * kTilePixels + std::size_t(p)]),
+                                            hn::LoadU(d, &mShift[shiftIndex(slab, 0) + 3 * kTilePixels + std::size_t(p)])));
+        }
+        if (ownLayers) {
+            // Motion blur's shutter layers with the light following the material: each layer
+            // lit where its own material came from, by its own optical depth, seen through its
+            // own transmittance, returned per unit of the mean absorption (lightSlab).
+            Floats seen[C], litSeen[C], colouredSeen[C];
+            for (int c = 0; c < C; ++c) seen[c] = litSeen[c] = colouredSeen[c] = zero;
+            for (int k = 0; k < layers; ++k) {
+                Floats depth[C], scatter[C], litK[C], colouredK[C];
+                for (int c = 0; c < C; ++c) {
+                    depth[c] = hn::LoadU(d, &mLayerTau[layerIndex(slab, k, c) + std::size_t(p)]);
+                    const Floats positive = hn::Max(depth[c], zero);
+                    scatter[c] = mScatter.empty() ? positive
+                                                  : hn::IfThenElse(hn::Gt(tau[c], zero), hn::Div(hn::Mul(weight[c], positive), hn::IfThenElse(hn::Gt(tau[c], zero), tau[c], one)), weight[c]);
+                    litK[c] = colouredK[c] = zero;
+                }
+                lightLanes(depth, scatter, k, litK, colouredK);
+                for (int c = 0; c < C; ++c) {
+                    const Floats t = hn::LoadU(d, &mLayerT[layerT(k, c) + std::size_t(p)]);
+                    seen[c] = hn::MulAdd(t, hn::Load(d, layerAbsorbed[k][c]), seen[c]);
+                    litSeen[c] = hn::MulAdd(t, litK[c], litSeen[c]);
+                    colouredSeen[c] = hn::MulAdd(t, colouredK[c], colouredSeen[c]);
+                }
+            }
+            for (int c = 0; c < C; ++c) {
+                const Floats a = hn::Load(d, absorbed[c]);
+                const auto through = hn::And(hn::Gt(seen[c], hn::Set(d, kSeenFloor)), hn::Gt(a, zero));
+                const Floats over = hn::IfThenElse(through, seen[c], hn::Set(d, float(layers)));
+                // (The ratio first: the transmittances may be denormal. Nothing seen through any
+                // layer: their plain mean, which composites nothing.)
+                const Floats times = hn::IfThenElse(through, a, one);
+                litSum[c] = hn::Mul(hn::Div(litSeen[c], over), times);
+                colouredSum[c] = hn::Mul(hn::Div(colouredSeen[c], over), times);
+                source[c] = hn::Add(source[c], colouredSum[c]);
+            }
+        } else if (anyLighted) {
+            lightLanes(tau, weight, 0, litSum, colouredSum);
+            for (int c = 0; c < C; ++c) source[c] = hn::Add(source[c], colouredSum[c]);
         }
         const auto chosen = hn::Ne(hn::Load(d, composite), zero);
         Floats t2Now = zero;
@@ -457,9 +505,7 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
             hn::StoreU(zero, d, &mMoment2[slot(slab) * kTilePixels + std::size_t(p)]);
         }
         if (!mShift.empty()) {
-            for (std::size_t k = 0; k < std::size_t(kShiftPlanes); ++k) {
-                hn::StoreU(zero, d, &mShift[slot(slab) * kShiftPlanes * kTilePixels + k * kTilePixels + std::size_t(p)]);
-            }
+            for (std::size_t k = 0; k < shiftFloats(); k += kTilePixels) hn::StoreU(zero, d, &mShift[slot(slab) * shiftFloats() + k + std::size_t(p)]);
         }
     }
 }

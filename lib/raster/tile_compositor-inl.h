@@ -263,9 +263,20 @@ public:
                 if (shift && !mShift.empty() && w > 0.0f) {
                     // Motion blur: the optical depth's mean move, to look its light up where
                     // its material is in the still field (shiftOf).
-                    const std::size_t sb = slot(s.firstSlab + j) * kShiftPlanes * kTilePixels + std::size_t(p);
-                    for (int k = 0; k < 3; ++k) add(&mShift[sb + std::size_t(k) * kTilePixels], w * shift[k]);
-                    add(&mShift[sb + 3 * kTilePixels], w);
+                    // With shutter layers, per layer: a piece of a path on some, on theirs,
+                    // weighed as its optical depth there; the others on every layer.
+                    int first = 0, last = mLayerTau.empty() ? 1 : mLayers;
+                    float weight = w;
+                    if (s.layerCount != 0 && !mLayerTau.empty()) {
+                        first = std::min(int(s.layerFirst), mLayers - 1);
+                        last = std::min(first + int(s.layerCount), mLayers);
+                        weight *= float(mLayers) / float(last - first);
+                    }
+                    for (int b = first; b < last; ++b) {
+                        const std::size_t sb = shiftIndex(s.firstSlab + j, b) + std::size_t(p);
+                        for (int k = 0; k < 3; ++k) add(&mShift[sb + std::size_t(k) * kTilePixels], weight * shift[k]);
+                        add(&mShift[sb + 3 * kTilePixels], weight);
+                    }
                 }
             }
             for (int c = 0; c < C; ++c) {
@@ -331,7 +342,7 @@ private:
     {
         const std::pair<std::vector<float>*, std::size_t> planes[] = {{&mTau, C * kTilePixels}, {&mEmission, C * kTilePixels},
             {&mScatter, C * kTilePixels}, {&mPassEmission, std::size_t(mPassCount) * C * kTilePixels}, {&mMoment, kTilePixels},
-            {&mMoment2, kTilePixels}, {&mShift, kShiftPlanes * kTilePixels}, {&mLayerTau, std::size_t(mLayers) * C * kTilePixels}};
+            {&mMoment2, kTilePixels}, {&mShift, shiftFloats()}, {&mLayerTau, std::size_t(mLayers) * C * kTilePixels}};
         for (const auto& [plane, floats] : planes) {
             if (!plane->empty() && floats > 0) f(*plane, floats);
         }
@@ -347,7 +358,7 @@ private:
           mScatter(mOptions.tinted ? std::size_t(ringSize) * C * kTilePixels : 0, 0.0f),
           mMoment(mOptions.lit() ? std::size_t(ringSize) * kTilePixels : 0, 0.0f),
           mMoment2(mOptions.lit() ? std::size_t(ringSize) * kTilePixels : 0, 0.0f),
-          mShift(mOptions.lit() && mOptions.shifted ? std::size_t(ringSize) * kShiftPlanes * kTilePixels : 0, 0.0f),
+          mShift(mOptions.lit() && mOptions.shifted ? std::size_t(ringSize) * shiftFloats() : 0, 0.0f),
           mLayerTau(mLayers > 1 ? std::size_t(ringSize) * std::size_t(mLayers) * C * kTilePixels : 0, 0.0f),
           mDirty(std::size_t(ringSize))
     {
@@ -368,6 +379,13 @@ private:
     }
     /// Start of shutter layer k, channel c in mLayerT.
     static std::size_t layerT(int k, int c) { return (std::size_t(k) * C + std::size_t(c)) * kTilePixels; }
+    /// Floats of mShift per slot: a block of kShiftPlanes planes per shutter layer.
+    std::size_t shiftFloats() const { return std::size_t(mLayers) * kShiftPlanes * kTilePixels; }
+    /// Start of @a slab's shift block for shutter layer @a block in mShift.
+    std::size_t shiftIndex(std::int64_t slab, int block) const
+    {
+        return slot(slab) * shiftFloats() + std::size_t(block) * kShiftPlanes * kTilePixels;
+    }
 
     /// Motion blur's shutter layers, at the tile's first splat that covers only some of them:
     /// every layer starts from the transmittance so far (until then they were all equal; a
@@ -629,7 +647,7 @@ private:
     /// Light @a l on pixel p's ray across the layer from fraction @a u0 to @a u1 of @a slab's
     /// thickness, for the C channels carried: its transmittance at the front, and ln(front /
     /// back) (slabLightIntegral).
-    void lightAt(std::size_t l, int p, std::int64_t slab, float u0, float u1, std::array<float, 3>& front,
+    void lightAt(std::size_t l, int p, std::int64_t slab, float u0, float u1, const Vec3d& shift, std::array<float, 3>& front,
         std::array<float, 3>& logRatio) const
     {
         const double z = mOptions.slabs.start(slab);
@@ -637,7 +655,7 @@ private:
         float d0, d1;
         const LightRays& r = mRays[l];
         const LightMap& map = *mOptions.lights[l].map;
-        const Vec3d base = Vec3d(r.base[0][p], r.base[1][p], r.base[2][p]) - map.direction(shiftOf(slab, p)), dir(r.dir[0][p], r.dir[1][p], r.dir[2][p]);
+        const Vec3d base = Vec3d(r.base[0][p], r.base[1][p], r.base[2][p]) - map.direction(shift), dir(r.dir[0][p], r.dir[1][p], r.dir[2][p]);
         map.densityDepths(base + z0 * dir, base + z1 * dir, d0, d1);
         if (C == 1) {
             const float log0 = map.greyLogTransmittanceOfDepth(d0);
@@ -707,16 +725,33 @@ private:
         }
     }
 
+    /// Motion blur's shutter layers, the light following the material: pixel p's optical
+    /// depth in @a slab holds pieces of paths on some layers only (each layer is then lit
+    /// where its own material came from: lightSlab).
+    bool ownLayers(std::int64_t slab, int p) const
+    {
+        if (mLayerT.empty() || mShift.empty()) return false;
+        const float weight = mShift[shiftIndex(slab, 0) + 3 * kTilePixels + std::size_t(p)];
+        for (int k = 1; k < mLayers; ++k) {
+            // The splats on every layer add the same to each, in the same order.
+            if (mShift[shiftIndex(slab, k) + 3 * kTilePixels + std::size_t(p)] != weight) return true;
+        }
+        return false;
+    }
+
     /// Motion blur: the mean move of pixel p's optical depth in @a slab from where its material
     /// is in the still field (world; 0 without motion): the light is looked up there, as the
     /// reference carries each point's light along its path (docs/equations.md#motion-blur).
+    /// With shutter layers, of shutter layer @a layer's optical depth (the splats on every
+    /// layer and the pieces on that one): where no piece is on some layers only (ownLayers),
+    /// every layer's is the whole's.
     /// Weighed by the positive optical depths alone: halo kernels weigh negative, and a mass
     /// that nearly cancelled would throw the mean anywhere; this one stays among the moves
     /// (light on demand marches no further than the largest).
-    Vec3d shiftOf(std::int64_t slab, int p) const
+    Vec3d shiftOf(std::int64_t slab, int p, int layer = 0) const
     {
         if (mShift.empty()) return Vec3d(0.0);
-        const std::size_t m = slot(slab) * kShiftPlanes * kTilePixels + std::size_t(p);
+        const std::size_t m = shiftIndex(slab, layer) + std::size_t(p);
         const float weight = mShift[m + 3 * kTilePixels];
         if (!(weight > 0.0f)) return Vec3d(0.0);
         return Vec3d(mShift[m] / weight, mShift[m + kTilePixels] / weight, mShift[m + 2 * kTilePixels] / weight);
@@ -831,13 +866,57 @@ private:
         const std::size_t base = slot(slab) * C * kTilePixels;
         float u0, u1;
         layerOf(slab, p, mass, u0, u1);
+        float tau[C], weight[C];
+        for (int c = 0; c < C; ++c) {
+            const std::size_t i = base + c * kTilePixels + std::size_t(p);
+            tau[c] = mTau[i];
+            weight[c] = std::max(mScatter.empty() ? mTau[i] : mScatter[i], 0.0f);
+        }
+        if (!ownLayers(slab, p)) {
+            lightLayer(slab, p, u0, u1, shiftOf(slab, p), tau, weight, lit, lighted); // every layer's move the same
+            return;
+        }
+        // Motion blur's shutter layers with the light following the material: each layer lit
+        // where its own material came from, by its own optical depth, and seen through its
+        // own transmittance; the sum returned as the source per unit of the layers' mean
+        // absorption that compositeLayers spreads over them (docs/equations.md#shutter-layers).
+        float seen[C] = {}, litSeen[C] = {}, lightedSeen[C] = {};
+        for (int k = 0; k < mLayers; ++k) {
+            float tauK[C], weightK[C], litK[C] = {}, lightedK[C] = {};
+            for (int c = 0; c < C; ++c) {
+                tauK[c] = mLayerTau[layerIndex(slab, k, c) + std::size_t(p)];
+                // The layer's scattering weight: the slab's, in proportion to its optical depth.
+                weightK[c] = mScatter.empty() ? std::max(tauK[c], 0.0f) : tau[c] > 0.0f ? weight[c] * std::max(tauK[c], 0.0f) / tau[c] : weight[c];
+            }
+            lightLayer(slab, p, u0, u1, shiftOf(slab, p, k), tauK, weightK, litK, lightedK);
+            for (int c = 0; c < C; ++c) {
+                const float t = mLayerT[layerT(k, c) + std::size_t(p)];
+                seen[c] += t * slabAbsorbed(tauK[c]);
+                litSeen[c] += t * litK[c];
+                lightedSeen[c] += t * lightedK[c];
+            }
+        }
+        for (int c = 0; c < C; ++c) {
+            const float absorbed = slabAbsorbed(tau[c]);
+            // (The ratio first: the transmittances may be denormal. Nothing seen through any
+            // layer: their mean, which composites nothing.)
+            const bool through = seen[c] > kSeenFloor && absorbed > 0.0f;
+            lit[c] += through ? litSeen[c] / seen[c] * absorbed : litSeen[c] / float(mLayers);
+            lighted[c] += through ? lightedSeen[c] / seen[c] * absorbed : lightedSeen[c] / float(mLayers);
+        }
+    }
+
+    /// lightSlab's sums for a slab sample across the layer from fraction @a u0 to @a u1 of
+    /// @a slab's thickness, of optical depth @a tau and scattering weight @a weight per channel,
+    /// its material moved by @a shift (world) from where it is lit (shiftOf).
+    void lightLayer(std::int64_t slab, int p, float u0, float u1, const Vec3d& shift, const float* tau, const float* weight,
+        float* lit, float* lighted) const
+    {
         for (std::size_t l = 0; l < mOptions.lights.size(); ++l) {
             std::array<float, 3> front, logRatio;
-            lightAt(l, p, slab, u0, u1, front, logRatio);
+            lightAt(l, p, slab, u0, u1, shift, front, logRatio);
             for (int c = 0; c < C; ++c) {
-                const std::size_t i = base + c * kTilePixels + std::size_t(p);
-                const float term = std::max(mScatter.empty() ? mTau[i] : mScatter[i], 0.0f) *
-                                   slabLightIntegral(mTau[i], front[std::size_t(c)], logRatio[std::size_t(c)]);
+                const float term = weight[c] * slabLightIntegral(tau[c], front[std::size_t(c)], logRatio[std::size_t(c)]);
                 lit[c] += term;
                 lighted[c] += mOptions.lights[l].scale[c] * term;
             }
@@ -847,11 +926,9 @@ private:
         for (std::size_t l = 0; l < points.maps().size(); ++l) {
             std::array<float, 3> front, logRatio;
             float falloff;
-            pointLightAt(l, p, slab, u0, u1, front, logRatio, falloff);
+            pointLightAt(l, p, slab, u0, u1, shift, front, logRatio, falloff);
             for (int c = 0; c < C; ++c) {
-                const std::size_t i = base + c * kTilePixels + std::size_t(p);
-                const float term = std::max(mScatter.empty() ? mTau[i] : mScatter[i], 0.0f) *
-                                   slabLightIntegral(mTau[i], front[std::size_t(c)], logRatio[std::size_t(c)]);
+                const float term = weight[c] * slabLightIntegral(tau[c], front[std::size_t(c)], logRatio[std::size_t(c)]);
                 lit[c] += term;
                 lighted[c] += float(points.scale(l)[std::size_t(c)]) * falloff * term;
             }
@@ -860,13 +937,13 @@ private:
 
     /// Point light @a l on pixel p's ray across the layer from fraction @a u0 to @a u1 of
     /// @a slab's thickness (PointLights::acrossLayer at its world points).
-    void pointLightAt(std::size_t l, int p, std::int64_t slab, float u0, float u1, std::array<float, 3>& front,
+    void pointLightAt(std::size_t l, int p, std::int64_t slab, float u0, float u1, const Vec3d& shift, std::array<float, 3>& front,
         std::array<float, 3>& logRatio, float& falloff) const
     {
         const double z = mOptions.slabs.start(slab);
         const double z0 = z + double(u0) * mOptions.slabs.thickness, z1 = z + double(u1) * mOptions.slabs.thickness;
         const LightRays& r = mRays.back(); // world coordinates (traceRays)
-        const Vec3d base = Vec3d(r.base[0][p], r.base[1][p], r.base[2][p]) - shiftOf(slab, p), dir(r.dir[0][p], r.dir[1][p], r.dir[2][p]);
+        const Vec3d base = Vec3d(r.base[0][p], r.base[1][p], r.base[2][p]) - shift, dir(r.dir[0][p], r.dir[1][p], r.dir[2][p]);
         mOptions.pointLights->acrossLayer(l, base + z0 * dir, base + z1 * dir, front, logRatio, falloff);
     }
 
@@ -921,7 +998,7 @@ private:
         const std::size_t base = slot(slab) * C * kTilePixels;
         if (!mMoment.empty()) mMoment[slot(slab) * kTilePixels + std::size_t(p)] = mMoment2[slot(slab) * kTilePixels + std::size_t(p)] = 0.0f;
         if (!mShift.empty()) {
-            for (int k = 0; k < kShiftPlanes; ++k) mShift[slot(slab) * kShiftPlanes * kTilePixels + std::size_t(k) * kTilePixels + std::size_t(p)] = 0.0f;
+            for (std::size_t k = 0; k < shiftFloats(); k += kTilePixels) mShift[slot(slab) * shiftFloats() + k + std::size_t(p)] = 0.0f;
         }
         for (int c = 0; c < C; ++c) {
             const std::size_t i = base + c * kTilePixels + std::size_t(p);
@@ -959,8 +1036,12 @@ private:
     /// (lit frames only): where the slab's mass lies, for shading.
     std::vector<float> mMoment, mMoment2;
     /// Motion blur: per slot, the positive optical depth x its move, x, y, z planes (world),
-    /// then the positive optical depth's plane (shiftOf).
+    /// then the positive optical depth's plane (shiftOf); with shutter layers, these four per
+    /// layer (shiftIndex).
     static constexpr int kShiftPlanes = 4;
+    /// Below this, a slab sample seen through the shutter layers is lit by their plain mean
+    /// (lightSlab: it composites nothing a float can hold).
+    static constexpr float kSeenFloor = 1e-30f;
     std::vector<float> mShift;
     /// Motion blur's shutter layers (layers > 1 only): per slot, layer and channel, the optical
     /// depth of the splats that cover only some layers, then each layer's own (foldLayers).
