@@ -4,7 +4,10 @@
 ///        lens's circle of confusion; still frames bit-identical; the reference's samples.
 #include "fixtures.h"
 #include "mantaflow_fixture.h"
+#include "reference/moved_voxels.h"
 #include "source/source.h"
+#include "support/memory_budget.h"
+#include "support/progress.h"
 
 #include <vdb_ewa/ewa_kernel.h>
 #include <vdb_ewa/error.h>
@@ -376,6 +379,22 @@ TEST(MotionBlur, TheReferenceMovesMaterialWhereItsVelocityGridEnds)
         const double covered = x < 0.0 ? std::clamp(x + 2.55, 0.0, 1.0) : std::clamp(2.45 - x, 0.0, 1.0);
         EXPECT_NEAR(transmittance(i), 1.0 - covered * (1.0 - std::exp(-1.0)), 0.04) << x;
     }
+}
+
+TEST(MotionBlur, TheReferencesMovedVoxelsStopAtACancel)
+{
+    // The reference indexes its moved voxels slice by slice (up to 1024 point indexes): a
+    // cancel is checked between slices, so a render cancelled there does not wait for all.
+    auto grid = makeBoxGrid(openvdb::Coord(-20, -20, 0), openvdb::Coord(19, 19, 9), 0.5f, 0.1);
+    const GridSource moving = withVelocityGrid(gridSourceFromOpenVDB(grid), clippedVelocity(*grid, Vec3d(1.0, 0.0, 0.0)));
+    RenderSettings s = movingAbsorber(0.2);
+    const detail::MemoryBudget budget(1e9, "test");
+    const detail::MovedVoxels built(moving.impl(), *grid, s, budget, nullptr);
+    EXPECT_GT(built.slices(), 1) << "a path of 10 voxels needs several slices";
+    Interrupter cancelled;
+    cancelled.cancel();
+    const detail::Progress progress(&cancelled);
+    EXPECT_THROW(detail::MovedVoxels(moving.impl(), *grid, s, budget, &progress), Cancelled);
 }
 
 TEST(MotionBlur, StaggeredVelocitiesAreReadAtTheirFaces)
