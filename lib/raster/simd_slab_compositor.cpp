@@ -394,13 +394,13 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
             }
         };
         // Lanes whose optical depth is on every layer (no piece of a path on some) are lit once.
-        bool ownLayers = false;
-        for (int k = 1; anyLighted && layers && !mShift.empty() && k < layers && !ownLayers; ++k) {
+        bool perLayer = false;
+        for (int k = 1; anyLighted && layers && !mShift.empty() && k < layers && !perLayer; ++k) {
             // (The splats on every layer add the same to each, in the same order: ownLayers.)
-            ownLayers = !hn::AllTrue(d, hn::Eq(hn::LoadU(d, &mShift[shiftIndex(slab, k) + 3 * kTilePixels + std::size_t(p)]),
+            perLayer = !hn::AllTrue(d, hn::Eq(hn::LoadU(d, &mShift[shiftIndex(slab, k) + 3 * kTilePixels + std::size_t(p)]),
                                             hn::LoadU(d, &mShift[shiftIndex(slab, 0) + 3 * kTilePixels + std::size_t(p)])));
         }
-        if (ownLayers) {
+        if (perLayer) {
             // Motion blur's shutter layers with the light following the material: each layer
             // lit where its own material came from, by its own optical depth, seen through its
             // own transmittance, returned per unit of the mean absorption (lightSlab).
