@@ -4,7 +4,7 @@
 ///        lens's circle of confusion; still frames bit-identical; the reference's samples.
 #include "fixtures.h"
 #include "mantaflow_fixture.h"
-#include "reference/moved_voxels.h"
+#include "reference/reference.h"
 #include "source/source.h"
 #include "support/memory_budget.h"
 #include "support/progress.h"
