@@ -251,6 +251,11 @@ public:
     template <typename Add>
     [[gnu::always_inline]] inline void forEachPlane(const Splat& s, const float* shares, const float* moments, const float* passSources, const float* shift, int p, Add&& add)
     {
+        // Motion blur's shutter layers: the layers a piece of a path is on, [layerFirst,
+        // layerLast) (a splat on every layer: none of its own).
+        const bool layered = s.layerCount != 0 && !mLayerTau.empty();
+        const int layerFirst = layered ? std::min(int(s.layerFirst), mLayers - 1) : 0;
+        const int layerLast = layered ? std::min(layerFirst + int(s.layerCount), mLayers) : 0;
         for (int j = 0; j < int(s.slabCount); ++j) {
             const std::size_t base = slot(s.firstSlab + j) * C * kTilePixels + std::size_t(p);
             if (!mMoment.empty()) {
@@ -265,13 +270,8 @@ public:
                     // its material is in the still field (shiftOf).
                     // With shutter layers, per layer: a piece of a path on some, on theirs,
                     // weighed as its optical depth there; the others on every layer.
-                    int first = 0, last = mLayerTau.empty() ? 1 : mLayers;
-                    float weight = w;
-                    if (s.layerCount != 0 && !mLayerTau.empty()) {
-                        first = std::min(int(s.layerFirst), mLayers - 1);
-                        last = std::min(first + int(s.layerCount), mLayers);
-                        weight *= float(mLayers) / float(last - first);
-                    }
+                    const int first = layered ? layerFirst : 0, last = layered ? layerLast : mLayerTau.empty() ? 1 : mLayers;
+                    const float weight = layered ? w * (float(mLayers) / float(last - first)) : w;
                     for (int b = first; b < last; ++b) {
                         const std::size_t sb = shiftIndex(s.firstSlab + j, b) + std::size_t(p);
                         for (int k = 0; k < 3; ++k) add(&mShift[sb + std::size_t(k) * kTilePixels], weight * shift[k]);
@@ -280,14 +280,13 @@ public:
                 }
             }
             for (int c = 0; c < C; ++c) {
-                if (s.layerCount == 0 || mLayerTau.empty()) {
+                if (!layered) {
                     add(&mTau[base + std::size_t(c) * kTilePixels], shares[j] * s.tau[c]);
                 } else {
                     // Motion blur's shutter layers: the piece's optical depth over its part of
                     // the shutter, the layers' mean its share (foldLayers).
-                    const int first = std::min(int(s.layerFirst), mLayers - 1), last = std::min(first + int(s.layerCount), mLayers);
-                    const float each = shares[j] * s.tau[c] * float(mLayers) / float(last - first);
-                    for (int k = first; k < last; ++k) add(&mLayerTau[layerIndex(s.firstSlab + j, k, c) + std::size_t(p)], each);
+                    const float each = shares[j] * s.tau[c] * float(mLayers) / float(layerLast - layerFirst);
+                    for (int k = layerFirst; k < layerLast; ++k) add(&mLayerTau[layerIndex(s.firstSlab + j, k, c) + std::size_t(p)], each);
                 }
                 if (!mEmission.empty()) add(&mEmission[base + std::size_t(c) * kTilePixels], shares[j] * s.emission[c]);
                 if (!mScatter.empty()) add(&mScatter[base + std::size_t(c) * kTilePixels], shares[j] * s.scatter[c]);
