@@ -878,6 +878,47 @@ def cmd_python(args):
         print(f"{k:26s} {v:8.3f} {v / med['vdb_ewa CLI']:7.3f} {v / med['vdb_render']:13.3f}")
 
 
+def cmd_imagelod(args):
+    """Image-space level of detail (--image-lod): each scene at --image-lod off and each asked
+    value, interleaved round by round; the footprint samples at each level (-v), the median
+    frame time and CPU time against off in the same rounds, and the PSNR against off."""
+    tmp = tempfile.mkdtemp(prefix="vdb_ewa_imagelod_")
+    values = args.values.split(",")
+    print(f"# --image-lod against off, {args.res}, default preset, median of {args.repeat} interleaved rounds, "
+          f"{os.cpu_count()} cores")
+    print("| scene | camera | --image-lod | footprint samples (M): every pixel / 2nd / 4th / 8th | frame (s) | against off "
+          "| CPU against off | PSNR against off (dB) |")
+    print("|---|---|---|---|---|---|---|---|")
+    scenes = [(l, f, c) for (l, f, c) in SCENES if os.path.exists(f) and "tiles" not in l]
+    scenes.append(("dense block (generated)", dense_block(tmp), DENSE_BLOCK_CAMERA))
+    for label, path, cam in scenes:
+        for camera, cargs in (("README", cam.split()), ("default", [])):
+            if camera == "default" and "fog_tommy" not in label:
+                continue  # the inside of a volume: the one default camera that magnifies
+            settings = ["off", *values]
+            wall = {v: [] for v in settings}
+            cpu = {v: [] for v in settings}
+            counts = {}
+            for _ in range(args.repeat):
+                for v in settings:
+                    out = os.path.join(tmp, f"{v}.exr")
+                    before = os.times()
+                    dt, stdout = run([*EWA_RENDER, path, out, "-res", args.res, *cargs, "--image-lod", v, "-v"])
+                    after = os.times()
+                    wall[v].append(dt)
+                    cpu[v].append(after.children_user + after.children_system - before.children_user - before.children_system)
+                    m = re.search(r"(\d+) footprint samples(?: \((\d+) at every pixel, (\d+) every 2nd, (\d+) every 4th, (\d+) every 8th)?", stdout)
+                    total = int(m.group(1))
+                    counts[v] = [int(g) for g in m.groups()[1:]] if m.group(2) else [total, 0, 0, 0]
+            for v in settings:
+                psnr = "" if v == "off" else f"{diff(os.path.join(tmp, f'{v}.exr'), os.path.join(tmp, 'off.exr'))[1]:.1f}"
+                ratio = statistics.median([a / b for a, b in zip(wall[v], wall["off"])])
+                cpu_ratio = statistics.median([a / b for a, b in zip(cpu[v], cpu["off"])])
+                levels = " / ".join(f"{c / 1e6:.1f}" for c in counts[v])
+                print(f"| {label} | {camera} | {v} | {levels} | {statistics.median(wall[v]):.2f} | {ratio:.2f}x | {cpu_ratio:.2f}x "
+                      f"| {psnr} |", flush=True)
+
+
 def cmd_output(args):
     """The output stage's cost: pixel types, compressions, passes, deep files and the preview,
     interleaved with vdb_render's defaults; total time, the write stage (-v) and file size."""
@@ -886,7 +927,9 @@ def cmd_output(args):
     common = ["-res", args.res, *cam.split()]
     out = os.path.join(tmp, "o.exr")
     variants = [
-        ("default: half, zip", []), ("float, zip (vdb_render's file type)", ["--exr-type", "float"]),
+        ("default: half, zip (level 1)", []), ("half, zip --zip-level 4 (OpenEXR's default)", ["--zip-level", "4"]),
+        ("float, zip (vdb_render's file type)", ["--exr-type", "float"]),
+        ("float, zip --zip-level 4", ["--exr-type", "float", "--zip-level", "4"]),
         ("half, none", ["--compression", "none"]), ("half, zips", ["--compression", "zips"]),
         ("half, piz", ["--compression", "piz"]), ("half, dwaa", ["--compression", "dwaa"]),
         ("half, zip, --aov transmittance,shadow,emission", ["--aov", "transmittance,shadow,emission"]),
@@ -1297,6 +1340,10 @@ def main():
     svo.add_argument("--repeat", type=int, default=3)
     svo.add_argument("--ref-step", type=float, default=0.25)
     svo.add_argument("--keep", default="", help="folder that keeps the moved cloud and the reference between runs")
+    si = sub.add_parser("imagelod")
+    si.add_argument("--res", default="1920x1080")
+    si.add_argument("--values", default="4,2")
+    si.add_argument("--repeat", type=int, default=3)
     so = sub.add_parser("output")
     so.add_argument("--scene", default="smoke")
     so.add_argument("--res", default="1920x1080")
@@ -1348,7 +1395,7 @@ def main():
     sp2.add_argument("--res", default="960x540", help="the resolution of a ladder table")
     a = ap.parse_args()
     {"speed": cmd_speed, "sigma": cmd_sigma, "tradeoff": cmd_tradeoff, "targets": cmd_targets,
-     "output": cmd_output, "surfaces": cmd_surfaces, "holes": cmd_holes, "plot": cmd_plot, "ladder": cmd_ladder,
+     "output": cmd_output, "imagelod": cmd_imagelod, "surfaces": cmd_surfaces, "holes": cmd_holes, "plot": cmd_plot, "ladder": cmd_ladder,
      "analytic": cmd_analytic, "roofline": cmd_roofline, "scaling": cmd_scaling,
      "stability": cmd_stability, "python": cmd_python, "cull": cmd_cull, "blur": cmd_blur, "lights": cmd_lights, "volumes": cmd_volumes, "scale": cmd_scale, "tiles": cmd_tiles}[a.cmd](a)
 

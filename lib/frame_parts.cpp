@@ -76,6 +76,7 @@ void addPartStats(RenderStats& stats, RenderStats&& part, bool first)
              {&stats.bricksExpanded, total.bricksExpanded}, {&stats.bricksHidden, total.bricksHidden}, {&stats.windows, total.windows},
              {&stats.lightRaysMarched, total.lightRaysMarched}, {&stats.kernelsCulled, total.kernelsCulled}})
         *sum += add;
+    for (int k = 0; k < 4; ++k) stats.footprintSamplesAtLevel[k] += total.footprintSamplesAtLevel[k];
 }
 
 Frame assembleChannels(Frame (&channels)[3])
@@ -104,6 +105,7 @@ void addRasterStats(const RasterStats& raster, RenderStats& stats)
     stats.screenTilesOpaque = raster.tilesOpaque;
     stats.splatTilePairsSkipped = raster.pairsSkipped;
     stats.footprintSamples = raster.footprintSamples;
+    for (int k = 0; k < 4; ++k) stats.footprintSamplesAtLevel[k] = raster.levelSamples[k];
     stats.slabComposites = raster.slabComposites;
     stats.rasterBackend = raster.backend;
 }

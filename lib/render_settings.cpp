@@ -104,6 +104,7 @@ void RenderSettings::validate() const
     if (splat.refineEmission < 1 || splat.refineEmission > 4) fail("--refine-emission must be in [1, 4]");
     if (!(splat.lodPixels >= 0.0 && splat.lodPixels <= 64.0)) fail("--lod must be in [0, 64] pixels");
     if (!(splat.lodError >= 0.0 && splat.lodError <= 1.0)) fail("--lod-error must be in [0, 1] (a difference of transmittance)");
+    if (!(splat.imageLod == 0.0 || (splat.imageLod >= 1.0 && splat.imageLod <= 64.0))) fail("--image-lod must be off (0) or in [1, 64] samples");
     if (!std::isfinite(surface.isovalue)) fail("--isovalue must be finite");
     if (std::isinf(surface.iso)) fail("--iso must be finite");
     if (!(surface.isoOpacity >= 0.0 && surface.isoOpacity <= 1.0)) fail("--iso-opacity must be in [0, 1]");

@@ -123,6 +123,8 @@ py::dict statsOf(const RenderStats& s)
     d["splats"] = s.splats;
     d["splat_tile_pairs"] = s.splatTilePairs;
     d["splat_tile_pairs_skipped"] = s.splatTilePairsSkipped;
+    d["footprint_samples"] = s.footprintSamples;
+    d["footprint_samples_by_level"] = py::make_tuple(s.footprintSamplesAtLevel[0], s.footprintSamplesAtLevel[1], s.footprintSamplesAtLevel[2], s.footprintSamplesAtLevel[3]);
     d["streamed"] = s.streamed;
     d["bricks"] = s.bricks;
     d["bricks_expanded"] = s.bricksExpanded;

@@ -128,6 +128,7 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
            refine_emission: Optional[int] = None,
            lod: Optional[Number] = None,
            lod_error: Optional[Number] = None,
+           image_lod: OptionValue = None,
            supersample: Optional[int] = None,
            supersample_span: Optional[Number] = None,
            iso: Optional[Number] = None,
@@ -172,6 +173,7 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
            view: OptionValue = None,
            exr_type: OptionValue = None,
            compression: OptionValue = None,
+           zip_level: Optional[int] = None,
            aov: OptionValue = None,
            deep: Optional[bool] = None,
            ) -> Frame:
@@ -293,6 +295,14 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
     lod_error (--lod-error): level of detail, fog volumes: a block wider than a pixel merges only where
         its values are smooth: the transmittance through any depth of it differs by at most this much
         between its columns; range [0, 1], 1 = by screen size alone (default: 0.05, draft 0.25)
+    image_lod (--image-lod): image-space level of detail, samples, off or in [1, 64]: fog volumes: a
+        footprint is accumulated at every 2nd, 4th or 8th pixel of its screen tile, the coarsest whose
+        spacing its narrowest standard deviation spans at least this many times, and interpolated
+        bilinearly onto the pixels when its slab is composited (at most 1/(4 n^2) of a footprint's peak
+        off; docs/equations.md#image-space-level-of-detail); wide footprints (voxels seen large, a
+        camera inside the volume) cost a third to a 16th of the samples (not yet of the time:
+        docs/performance.md#image-space-level-of-detail); off = every footprint at every pixel (default:
+        off in every preset)
     supersample (--supersample): fog volumes: where the voxels look smaller than --supersample-span
         pixels, the pixels the volume covers are composited in S x S sub-pixels and averaged (a box
         filter, as a camera averages a pixel; one footprint a pixel wide averages optical depth instead,
@@ -427,6 +437,9 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
         half)
     compression (--compression): EXR compression: none, rle, zip, zips, piz, dwaa or dwab; other formats
         ignore it (a warning); --deep files take none, rle or zips (default: zip, zips for --deep)
+    zip_level (--zip-level): zlib level of zip and zips EXR compression, 1 (fastest) to 9 (smallest): at
+        1 a 1080p frame (half colour, float Z) writes in about half the time of OpenEXR's default 4,
+        15-30 % larger; range [1, 9] (default: 1)
     aov (--aov): extra passes as layer.R/G/B channels, comma-separated: transmittance, shadow, emission
         (alpha and Z are always written; definitions in docs/output.md)
     deep (--deep): write a deep scanline EXR: one sample per non-empty slab (R, G, B, A premultiplied,

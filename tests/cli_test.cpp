@@ -113,6 +113,11 @@ TEST_F(Cli, RendersAnExr)
     EXPECT_GT(counter("light-rays-marched"), 0.0);
     EXPECT_LE(counter("light-rays-marched"), counter("light-rays"));
     EXPECT_GT(counter("peak-memory-mb"), 5.0);
+    EXPECT_GT(counter("footprint-samples"), 0.0);
+    EXPECT_EQ(file.spec.get_string_attribute("vdb_ewa/footprint-samples-by-level"),
+        std::string(file.spec.get_string_attribute("vdb_ewa/footprint-samples")) + ",0,0,0"); // --image-lod off: every pixel
+    EXPECT_EQ(file.spec.get_string_attribute("vdb_ewa/image-lod"), "off");
+    EXPECT_EQ(file.spec.get_string_attribute("vdb_ewa/zip-level"), "1");
     EXPECT_NEAR(counter("peak-bytes-per-active-voxel"), counter("peak-memory-mb") * 1e6 / voxels, 0.01 * counter("peak-bytes-per-active-voxel") + 0.1);
 }
 
@@ -812,6 +817,11 @@ TEST_F(Cli, ArgumentAndOutputErrors)
     expectFailure("render " + mGrid + " " + out + " --aa bilinear", 2, "--aa");
     expectFailure("render " + mGrid + " " + out + " --lod -1", 2, "--lod");
     expectFailure("render " + mGrid + " " + out + " --lod-error 1.5", 2, "--lod-error");
+    expectFailure("render " + mGrid + " " + out + " --image-lod 0.5", 2, "--image-lod must be off (0) or in [1, 64] samples");
+    expectFailure("render " + mGrid + " " + out + " --image-lod nan", 2, "--image-lod must be off (0) or in [1, 64] samples");
+    expectFailure("render " + mGrid + " " + out + " --image-lod coarse", 2, "--image-lod");
+    expectFailure("render " + mGrid + " " + out + " --zip-level 0", 2, "--zip-level must be in [1, 9]");
+    expectFailure("render " + mGrid + " " + out + " --zip-level 10", 2, "--zip-level must be in [1, 9]");
     expectFailure("render " + mGrid + " " + out + " --supersample 0", 2, "--supersample must be in [1, 64]");
     expectFailure("render " + mGrid + " " + out + " --supersample 65", 2, "--supersample must be in [1, 64]");
     expectFailure("render " + mGrid + " " + out + " --supersample-span nan", 2, "--supersample-span must be in [0.5, 16]");
@@ -889,7 +899,8 @@ TEST_F(Cli, HelpDocumentsEveryOptionWithItsDefault)
              "--quality", "--exp", "--renormalize", "--taper", "--prefilter", "--precision", "--tile-spacing", "--refine", "--refine-emission", "--shadow-res", "--method",
              "--lod", "--lod-error", "--threads", "--max-memory", "--verbose", "--emission", "--ocio-config", "--working-space", "--output-space",
              "--preview", "--display", "--view", "--input-space", "--camera-file", "--exr-type", "--compression", "--aov", "--deep", "--isovalue",
-             "--shader", "--samples", "--color", "--iso", "--iso-opacity", "--supersample", "--supersample-span", "--pixel-samples"}) {
+             "--shader", "--samples", "--color", "--iso", "--iso-opacity", "--supersample", "--supersample-span", "--pixel-samples",
+             "--image-lod", "--zip-level"}) {
         EXPECT_NE(r.out.find(opt), std::string::npos) << opt;
     }
     EXPECT_NE(r.out.find("default: 1920x1080"), std::string::npos);

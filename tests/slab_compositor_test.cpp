@@ -7,6 +7,7 @@
 #include "fixtures.h"
 
 #include "raster/raster.h"
+#include "splat_fixtures.h"
 
 #include <gtest/gtest.h>
 #include <hwy/targets.h>
@@ -98,29 +99,6 @@ detail::SplatSet randomSplats(std::uint32_t seed, int count, int width, int heig
         set.splats.push_back(s);
     }
     return set;
-}
-
-/// Append a round grey splat to @a set: centre (cx, cy), standard deviation @a sigma pixels, peak
-/// optical depth @a tau, in @a slab alone, cut off at 3 sigma inside a @a width x @a height image.
-void addRoundSplat(detail::SplatSet& set, float cx, float cy, double sigma, float tau, std::int64_t slab, int width, int height)
-{
-    detail::Splat s{};
-    s.cx = cx;
-    s.cy = cy;
-    s.qa = s.qc = float(1.0 / (sigma * sigma));
-    s.cutoff = 9.0f;
-    const double h = 3.0 * sigma;
-    s.x0 = std::max(0, int(std::ceil(cx - h - 0.5)));
-    s.x1 = std::min(width - 1, int(std::floor(cx + h - 0.5)));
-    s.y0 = std::max(0, int(std::ceil(cy - h - 0.5)));
-    s.y1 = std::min(height - 1, int(std::floor(cy + h - 0.5)));
-    for (int c = 0; c < 3; ++c) s.tau[c] = s.scatter[c] = s.emission[c] = tau;
-    s.firstSlab = slab;
-    s.slabCount = 1;
-    s.shareOffset = set.shares.size();
-    set.shares.push_back(1.0f);
-    set.shareMoments.insert(set.shareMoments.end(), {0.5f, 0.3f});
-    set.splats.push_back(s);
 }
 
 /// The largest difference between two arrays (relative to max(1, |b|), or absolute), and the
@@ -217,6 +195,24 @@ TEST(SlabCompositor, SimdEqualsScalarOnRandomSplats)
                 EXPECT_GT(std::count_if(scalar.beauty.rgba.begin(), scalar.beauty.rgba.end(), [](float v) { return v > 0.01f; }), 100)
                     << c.name; // something was drawn
             }
+        }
+    });
+}
+
+// Image-space level of detail (--image-lod 1): the coarser levels' samples and their bilinear
+// reconstruction agree between the backends as every pixel's do.
+TEST(SlabCompositor, SimdEqualsScalarAtEveryImageLevel)
+{
+    if (!haveSimd()) GTEST_SKIP() << "no SIMD backend on this CPU (Highway target " << detail::simdTarget() << ")";
+    forEachSimdTarget([&] {
+        RenderSettings settings;
+        settings.splat.imageLod = 1.0;
+        PassRequest all;
+        all.depth = all.transmittance = all.shadow = all.emission = true;
+        for (const bool coloured : {false, true}) {
+            const detail::SplatSet set = randomSplats(13, 400, 77, 45, 1.0, 12.0, 0.6, coloured, detail::PassLayout(all).count);
+            const auto [simd, scalar] = bothBackends(set, 77, 45, all, settings);
+            expectFramesAgree(simd, scalar, coloured ? "coloured" : "grey");
         }
     });
 }

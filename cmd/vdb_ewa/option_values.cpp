@@ -52,6 +52,16 @@ std::string fmt(double v)
 
 std::string fmt3(const Vec3d& v) { return fmt(v.x) + "," + fmt(v.y) + "," + fmt(v.z); }
 
+double parseImageLod(const std::string& text)
+{
+    if (text == "off") return 0.0;
+    const std::vector<double> v = parseNumbers("image-lod", text);
+    if (v.size() != 1) throw ValueError("--image-lod: expected off or a number of samples, got '" + text + "'");
+    return v[0];
+}
+
+std::string imageLodName(double samples) { return samples == 0.0 ? "off" : fmt(samples); }
+
 Vec3d parseVec3(const std::string& option, const std::string& text, bool allowBroadcast)
 {
     const std::vector<double> v = parseNumbers(option, text);

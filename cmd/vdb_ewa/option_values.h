@@ -22,6 +22,12 @@ std::string fmt(double v);
 /// "X,Y,Z" of fmt().
 std::string fmt3(const Vec3d& v);
 
+/// --image-lod: "off" (0) or a number of samples (SplatOptions::imageLod, whose range
+/// RenderSettings::validate checks); @throw ValueError on anything else.
+double parseImageLod(const std::string& text);
+/// --image-lod as -v and the EXR header print it: "off" for 0.
+std::string imageLodName(double samples);
+
 /// "WxH" or "W,H", both >= 1.
 void parseResolution(const std::string& text, int& width, int& height);
 

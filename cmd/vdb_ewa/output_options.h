@@ -71,6 +71,7 @@ private:
         const Attributes& attributes) const;
 
     std::string mConfigPath, mInputSpace, mWorkingSpace, mOutputSpace, mDisplay, mView, mPreview, mExrType, mCompression, mAov;
+    std::optional<int> mZipLevel;
     bool mDeep = false;
     ImageFormat mFormat = ImageFormat::Exr; ///< the output's, by its extension
     std::string mDisplaySpace;              ///< what --display and --view encode to (8-bit outputs, --preview)

@@ -48,6 +48,16 @@ bool outputsWrittenSince(const std::string& output, const std::string& preview, 
     return newer(output) && (preview.empty() || newer(preview));
 }
 
+/// " (at every pixel A, every 2nd B, ...)": the footprint samples of each image level
+/// (--image-lod), when any was accumulated at a coarser level than every pixel.
+std::string levelSamples(const RenderStats& s)
+{
+    const std::uint64_t* at = s.footprintSamplesAtLevel;
+    if (at[1] + at[2] + at[3] == 0) return "";
+    return " (" + std::to_string(at[0]) + " at every pixel, " + std::to_string(at[1]) + " every 2nd, " + std::to_string(at[2]) +
+           " every 4th, " + std::to_string(at[3]) + " every 8th by --image-lod)";
+}
+
 class RenderCommand : public Command
 {
 public:
@@ -342,7 +352,7 @@ private:
                   << s.kernelsCulled << " kernels culled, " << s.splats << " splatted into " << s.splatTilePairs
                   << " (splat, tile) pairs; " << s.screenTilesOpaque << " of " << s.screenTiles
                   << " screen tiles turned opaque early, skipping " << s.splatTilePairsSkipped << " pairs; "
-                  << s.footprintSamples << " footprint samples, " << s.slabComposites << " slab composites (" << s.rasterBackend << " rasteriser)";
+                  << s.footprintSamples << " footprint samples" << levelSamples(s) << ", " << s.slabComposites << " slab composites (" << s.rasterBackend << " rasteriser)";
         if (s.streamed) {
             out << "; streamed front to back: " << counted(s.bricks, "brick") << " in " << counted(s.windows, "depth window") << ", "
                 << s.bricksExpanded << " expanded, " << s.bricksHidden << " hidden behind opaque tiles, " << s.bricksOutside << " outside the frame, "

@@ -150,6 +150,13 @@ void RenderOptions::add(CLI::App* app)
     mApp->add_option("--refine-emission", mRefineEmission, "emission and temperature grids where their light does not go as the density (light over density changes several-fold between neighbouring voxels) in optically thick density: the light sampled every 1/n voxel, n up to N as the voxels span n pixels or more (2 at least); --refine refines the emitters too; range [1, 4], 1 = off (default: " + std::to_string(rs.splat.refineEmission) + "; draft 1, high and final 4)");
     mApp->add_option("--lod", mLod, "level of detail, pixels in [0, 64]: fog volumes: blocks of 2, 4 or 8 voxels a side become one kernel where the block projects to at most this many pixels, each voxel shared between two block sizes continuously with distance (no popping); level sets: one surface kernel a 2^3 or 4^3 block of voxels (for each sheet through it) where the block projects to at most a quarter as many; active tiles seen small: their kernels this many pixels apart (--tile-spacing); 0 = off (tiles: --supersample-span pixels) (default: " + fmt(rs.splat.lodPixels) + ")");
     mApp->add_option("--lod-error", mLodError, "level of detail, fog volumes: a block wider than a pixel merges only where its values are smooth: the transmittance through any depth of it differs by at most this much between its columns; range [0, 1], 1 = by screen size alone (default: " + fmt(rs.splat.lodError) + ", draft 0.25)");
+    mApp->add_option("--image-lod", mImageLod,
+        "image-space level of detail, samples, off or in [1, 64]: fog volumes: a footprint is accumulated at every 2nd, 4th or 8th "
+        "pixel of its screen tile, the coarsest whose spacing its narrowest standard deviation spans at least this many times, and "
+        "interpolated bilinearly onto the pixels when its slab is composited (at most 1/(4 n^2) of a footprint's peak off; "
+        "docs/equations.md#image-space-level-of-detail); wide footprints (voxels seen large, a camera inside the volume) cost a "
+        "third to a 16th of the samples (not yet of the time: docs/performance.md#image-space-level-of-detail); off = every "
+        "footprint at every pixel (default: " + imageLodName(rs.splat.imageLod) + " in every preset)");
     mApp->add_option("--supersample", mSupersample,
         "fog volumes: where the voxels look smaller than --supersample-span pixels, the pixels the volume covers are composited "
         "in S x S sub-pixels and averaged (a box filter, as a camera averages a pixel; one footprint a pixel wide averages optical "
@@ -408,6 +415,7 @@ void RenderOptions::resolve(std::optional<int> frame, CameraSettings& cam, Rende
     if (mSlab) rs.splat.slab = *mSlab;
     if (mLod) rs.splat.lodPixels = *mLod;
     if (mLodError) rs.splat.lodError = *mLodError;
+    if (!mImageLod.empty()) rs.splat.imageLod = parseImageLod(mImageLod);
     if (mSupersample) rs.splat.supersample = *mSupersample;
     if (mSupersampleSpan) rs.splat.supersampleSpan = *mSupersampleSpan;
     if (mIsovalue) rs.surface.isovalue = *mIsovalue;
@@ -542,6 +550,11 @@ Attributes RenderOptions::statsAttributes(const RenderStats& s)
                                   {"bricks-outside", n(s.bricksOutside)}, {"depth-windows", n(s.windows)},
                                   {"splats-in-flight", n(s.splatsInFlight)}});
     }
+    if (s.footprintSamples > 0) {
+        out.insert(out.end(), {{"footprint-samples", n(s.footprintSamples)},
+                                  {"footprint-samples-by-level", n(s.footprintSamplesAtLevel[0]) + "," + n(s.footprintSamplesAtLevel[1]) + "," +
+                                                                     n(s.footprintSamplesAtLevel[2]) + "," + n(s.footprintSamplesAtLevel[3])}});
+    }
     if (s.lightRays > 0) out.insert(out.end(), {{"light-rays", n(s.lightRays)}, {"light-rays-marched", n(s.lightRaysMarched)}});
     if (s.supersample > 1) {
         out.insert(out.end(), {{"supersampled", std::to_string(s.supersample)},
@@ -648,6 +661,7 @@ std::vector<Attributes> RenderOptions::resolvedOptions(const GridSource& grid, c
              {"renormalize", choiceName(rs.splat.renormalize, kOnOff)}, {"taper", choiceName(rs.splat.taper, kOnOff)}, {"exp", choiceName(rs.splat.expEvaluation, kExpEvaluations)},
              {"precision", choiceName(rs.splat.doublePrecision, kPrecisions)}, {"slab", fmt(rs.splat.slab)},
              {"tile-spacing", std::to_string(rs.splat.tileKernelSpacing)}, {"refine", std::to_string(rs.splat.refine)}, {"refine-emission", std::to_string(rs.splat.refineEmission)}, {"lod", fmt(rs.splat.lodPixels)}, {"lod-error", fmt(rs.splat.lodError)},
+             {"image-lod", imageLodName(rs.splat.imageLod)},
              {"supersample", std::to_string(rs.splat.supersample)}, {"supersample-span", fmt(rs.splat.supersampleSpan)},
              {"threads", std::to_string(rs.threads)}, {"simd", choiceName(rs.simd, kOnOff)}, {"cull", choiceName(rs.cull, kOnOff)}})
         method.emplace_back(k, v);

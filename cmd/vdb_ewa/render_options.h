@@ -119,6 +119,7 @@ private:
     mutable std::optional<std::vector<Light>> mEnvironmentFill; ///< --environment's lights, once read
     std::optional<double> mEmissionIntensity, mKelvinScale, mKelvinOffset, mBlackbodyIntensity;
     std::optional<double> mFov, mFocal, mAperture, mFrame, mNear, mFar, mGain, mCutoff, mShadowStep, mStep, mLod, mLodError, mSupersampleSpan;
+    std::string mImageLod;
     std::optional<double> mKernelSigma, mSurfaceSigma, mLowpass, mCutoffRadius, mSlab;
     int mThreads = 0;
     std::string mSimd;

@@ -47,6 +47,9 @@ struct RenderStats
     std::uint64_t screenTilesOpaque = 0;   ///< tiles that turned opaque before their last splat
     std::uint64_t splatTilePairsSkipped = 0; ///< pairs skipped because their tile was opaque
     std::uint64_t footprintSamples = 0; ///< fog volumes: footprint weights evaluated (pixels inside a cut-off)
+    /// Of them, those at each image level (SplatOptions::imageLod): every pixel, every 2nd, 4th
+    /// and 8th pixel of a screen tile.
+    std::uint64_t footprintSamplesAtLevel[4] = {0, 0, 0, 0};
     std::uint64_t slabComposites = 0;   ///< fog volumes: (pixel, slab) samples composited
     bool streamed = false;            ///< fog volumes: the streamed frame ran (RenderSettings::cull)
     int supersample = 1;              ///< fog volumes: sub-pixels a pixel side the frame was composited at (SplatOptions::supersample)

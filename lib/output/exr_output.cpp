@@ -106,6 +106,7 @@ Imf::Header makeHeader(int width, int height, const ExrOptions& options)
 {
     Imf::Header header(width, height);
     header.compression() = imfCompression(options.compression);
+    header.zipCompressionLevel() = options.zipLevel;
     if (options.chromaticities) {
         const Chromaticities& c = *options.chromaticities;
         auto v = [](const Vec2d& p) { return Imath::V2f(float(p.x), float(p.y)); };

@@ -44,6 +44,10 @@ private:
     float mValues[kSize + 1];
 };
 
+/// Image-space level of detail's levels of a tile (CompositeOptions::imageLod): level k holds a
+/// sample every 2^k pixels, from every pixel (0) to every 8th (3).
+constexpr int kImageLevels = 4;
+
 /// A light as the compositor shades with it: its light map, and its colour x scattering
 /// albedo per channel (OpticalModel::lightScale), per unit scattering weight.
 struct CompositeLight
@@ -60,6 +64,12 @@ struct CompositeOptions
     /// Footprints less this, their value at the cut-off, with SplatOptions::taper (0: truncated).
     float taperEdge = 0.0f;
     const ExpTable* table = nullptr;
+    /// Image-space level of detail (SplatOptions::imageLod, docs/equations.md#image-space-level-of-detail):
+    /// a splat is accumulated at the coarsest of a tile's levels (kImageLevels) whose samples
+    /// its narrowest standard deviation spans at least this many times, and each level is
+    /// reconstructed bilinearly onto the pixels when its slab is composited. 0: every splat at
+    /// every pixel.
+    float imageLod = 0.0f;
     SlabGrid slabs;
     PassRequest passes;
     PassLayout layout; ///< where the shadow and emission passes' source terms are (SplatSet::passSources)
@@ -105,6 +115,9 @@ struct TileDeep
 struct TileCounters
 {
     std::uint64_t skipped = 0, samples = 0, composites = 0;
+    /// Of the samples, those of each image level (CompositeOptions::imageLod): every pixel, then
+    /// every 2nd, 4th and 8th.
+    std::uint64_t levelSamples[kImageLevels] = {};
 };
 
 /// Where a streamed frame's tiles write what they finish: the frame's pixels and passes, each

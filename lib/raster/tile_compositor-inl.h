@@ -45,6 +45,8 @@ public:
         std::vector<float> tau, emission, scatter, passEmission, moment, moment2, shift, layerTau;
         std::vector<Dirty> dirty;
         std::vector<LightRays> rays;
+        /// The coarser image levels' rings (imageLod), level k at k - 1 (lent with the tile's).
+        std::vector<Ring> levels;
     };
 
     /// @a ringSize: slab accumulators in the ring, a power of two above the largest span of the
@@ -100,6 +102,8 @@ public:
             mLayerTau = std::move(spare->layerTau);
             mDirty = std::move(spare->dirty);
             mRays = std::move(spare->rays);
+            mLevelSpares = std::move(spare->levels);
+            spare->levels.clear();
             spare->size = 0;
         } else {
             TileCompositor fresh(*this, ringSize);
@@ -153,6 +157,9 @@ public:
     void park(Ring* spare = nullptr)
     {
         if (mRingSize == 0) return;
+        // The coarser levels' slabs reconstructed into the tile's first: spilled with them.
+        for (const std::int64_t slab : mPending) foldLevels(slab, mDirty[slot(slab)]);
+        parkLevels(spare && spare->size == 0 ? spare : nullptr);
         // An opaque tile's pending slabs can change nothing (every pixel has stopped): dropped.
         const bool keep = !opaque();
         mSpilledDirty.clear();
@@ -189,11 +196,19 @@ public:
         mMask = -1;
     }
 
-    /// The footprint weights evaluated (pixels inside a cut-off, each spread into every slab
-    /// its kernel overlaps) and the (pixel, slab) samples composited: the work the roofline
-    /// benchmark's rates are measured in (bench/roofline).
-    std::uint64_t samples() const { return mSamples; }
-    std::uint64_t composites() const { return mComposites; }
+    /// The tile's counters, with @a skipped pairs skipped: the footprint weights evaluated
+    /// (samples inside a cut-off, each spread into every slab its kernel overlaps), per image
+    /// level, and the (pixel, slab) samples composited: the work the roofline benchmark's rates
+    /// are measured in (bench/roofline).
+    TileCounters counters(std::uint64_t skipped) const
+    {
+        TileCounters c{skipped, 0, mComposites, {}};
+        for (int k = 0; k < kImageLevels; ++k) {
+            c.levelSamples[k] = mLevelSamples[k];
+            c.samples += mLevelSamples[k];
+        }
+        return c;
+    }
 
     /// Add splat @a s's footprint values exp(-r/2) (Sec. 7.1, r = d^T Q d) on tile row @a y, pixels
     /// x0..x1 (inside its cut-off ellipse, cut to the row's live pixels), to every slab it
@@ -217,6 +232,26 @@ public:
         const int ly0 = std::max(s.y0 - mY0, 0), ly1 = std::min(s.y1 - mY0, mH - 1);
         if (lx0 > lx1 || ly0 > ly1) return;
         for (int k = 0; k < int(s.slabCount); ++k) markDirty(s.firstSlab + k, lx0, ly0, lx1, ly1);
+        const int level = levelOf(s);
+        if (level == 0) {
+            mLevelSamples[0] += accumulate(s, shares, moments, passSources, shift, lx0, ly0, lx1, ly1);
+            return;
+        }
+        // Image-space level of detail: at the level's samples, reconstructed onto the pixels
+        // when the slab is composited (foldLevels).
+        TileCompositor& coarse = levelFor(level);
+        const Splat at = levelSplat(s, level);
+        if (at.x0 > at.x1 || at.y0 > at.y1) return;
+        for (int k = 0; k < int(s.slabCount); ++k) coarse.markDirty(s.firstSlab + k, at.x0, at.y0, at.x1, at.y1);
+        mLevelSamples[level] += coarse.accumulate(at, shares, moments, passSources, shift, at.x0, at.y0, at.x1, at.y1);
+    }
+
+    /// Add @a s's footprint (add's) at the tile's samples (lx0..lx1, ly0..ly1) inside its
+    /// cut-off ellipse; the number of samples added.
+    std::uint64_t accumulate(const Splat& s, const float* shares, const float* moments, const float* passSources, const float* shift,
+        int lx0, int ly0, int lx1, int ly1)
+    {
+        std::uint64_t samples = 0;
         const float kx = float(std::exp(-double(s.qa)));
         // Row spans of the ellipse d^T Q d < cutoff (Sec. 7.1), solved for dx in float with
         // det Q formed in double (no cancellation), once per splat.
@@ -237,8 +272,9 @@ public:
             const int lxb = std::min({lx1, int(std::floor(xLast)) - mX0, mRowLast[ly]});
             if (lxa > lxb) continue;
             addRow(s, shares, moments, passSources, shift, ly, lxa, lxb, kx);
-            mSamples += std::uint64_t(lxb - lxa + 1);
+            samples += std::uint64_t(lxb - lxa + 1);
         }
+        return samples;
     }
 
     /// Every accumulator plane a splat's row feeds and its factor, for @a add(plane, factor):
@@ -339,12 +375,185 @@ private:
     template <typename F>
     void forEachSlotPlane(F&& f)
     {
-        const std::pair<std::vector<float>*, std::size_t> planes[] = {{&mTau, C * kTilePixels}, {&mEmission, C * kTilePixels},
-            {&mScatter, C * kTilePixels}, {&mPassEmission, std::size_t(mPassCount) * C * kTilePixels}, {&mMoment, kTilePixels},
-            {&mMoment2, kTilePixels}, {&mShift, shiftFloats()}, {&mLayerTau, std::size_t(mLayers) * C * kTilePixels}};
-        for (const auto& [plane, floats] : planes) {
+        for (const auto& [plane, floats] : slotPlanes()) {
             if (!plane->empty() && floats > 0) f(*plane, floats);
         }
+    }
+
+    /// Every ring array and the floats one slot holds, in use or not, in the same order for
+    /// every tile and level of a frame.
+    std::array<std::pair<std::vector<float>*, std::size_t>, 8> slotPlanes()
+    {
+        return {{{&mTau, C * kTilePixels}, {&mEmission, C * kTilePixels}, {&mScatter, C * kTilePixels},
+            {&mPassEmission, std::size_t(mPassCount) * C * kTilePixels}, {&mMoment, kTilePixels}, {&mMoment2, kTilePixels},
+            {&mShift, shiftFloats()}, {&mLayerTau, std::size_t(mLayers) * C * kTilePixels}}};
+    }
+
+    /// An image level's accumulator (levelFor): level @a level's samples of @a fine's tile, one
+    /// outside it on every side (levelSplat), with no ring yet.
+    struct LevelTag
+    {
+    };
+    TileCompositor(const TileCompositor& fine, LevelTag, int level)
+        : mX0(0), mY0(0), mW(kTileSize / (1 << level) + 2), mH(mW), mCutoff(fine.mCutoff), mExp(fine.mExp), mTable(fine.mTable),
+          mOptions(fine.mOptions), mPassCount(fine.mPassCount), mLayers(fine.mLayers)
+    {
+        for (int y = 0; y < kTileSize; ++y) {
+            mRowFirst[y] = y < mH ? 0 : kTileSize;
+            mRowLast[y] = y < mH ? mW - 1 : -1;
+        }
+    }
+
+    /// The image level splat @a s is accumulated at (CompositeOptions::imageLod): the coarsest
+    /// whose samples, 2^level pixels apart, its narrowest standard deviation spans at least
+    /// imageLod times (0: every pixel).
+    int levelOf(const Splat& s) const
+    {
+        if (!(mOptions.imageLod > 0.0f)) return 0;
+        // Q = Sigma^-1 (Eq. 33): the narrowest standard deviation is 1 / sqrt(Q's largest eigenvalue).
+        const double mean = 0.5 * (double(s.qa) + double(s.qc)), half = 0.5 * (double(s.qa) - double(s.qc));
+        const double sigma = 1.0 / std::sqrt(mean + std::sqrt(half * half + double(s.qb) * double(s.qb)));
+        int level = 0;
+        while (level + 1 < kImageLevels && sigma >= double(mOptions.imageLod) * double(1 << (level + 1))) ++level;
+        return level;
+    }
+
+    /// @a s in image level @a level's sample coordinates: the level's sample (i, j) lies at the
+    /// tile's pixel coordinates ((i - 1/2) h, (j - 1/2) h), h = 2^level, as a pixel's centre at
+    /// (i + 1/2, j + 1/2); its box: the samples whose centres lie in its cut-off box.
+    Splat levelSplat(const Splat& s, int level) const
+    {
+        const double h = double(1 << level);
+        Splat at = s;
+        at.cx = float((double(s.cx) - mX0) / h + 1.0);
+        at.cy = float((double(s.cy) - mY0) / h + 1.0);
+        at.qa = float(double(s.qa) * h * h);
+        at.qb = float(double(s.qb) * h * h);
+        at.qc = float(double(s.qc) * h * h);
+        const int last = kTileSize / (1 << level) + 1;
+        const double det = double(at.qa) * double(at.qc) - double(at.qb) * double(at.qb);
+        // Half-widths of the ellipse d^T Q d = cutoff's box (huge or degenerate: the level).
+        const double rx = det > 0.0 ? std::sqrt(double(s.cutoff) * double(at.qc) / det) : double(last + 1);
+        const double ry = det > 0.0 ? std::sqrt(double(s.cutoff) * double(at.qa) / det) : double(last + 1);
+        const auto first = [&](double c, double r) { return int(std::clamp(std::ceil(c - r - 0.5), 0.0, double(last) + 1.0)); };
+        const auto final = [&](double c, double r) { return int(std::clamp(std::floor(c + r - 0.5), -1.0, double(last))); };
+        at.x0 = first(at.cx, rx);
+        at.x1 = final(at.cx, rx);
+        at.y0 = first(at.cy, ry);
+        at.y1 = final(at.cy, ry);
+        return at;
+    }
+
+    /// Image level @a level's accumulator, with a ring as large as the tile's.
+    TileCompositor& levelFor(int level)
+    {
+        std::unique_ptr<TileCompositor>& coarse = mLevels[std::size_t(level - 1)];
+        if (!coarse) coarse.reset(new TileCompositor(*this, LevelTag{}, level));
+        coarse->ensureRing(mRingSize, std::size_t(level - 1) < mLevelSpares.size() ? &mLevelSpares[std::size_t(level - 1)] : nullptr);
+        return *coarse;
+    }
+
+    /// The bilinear taps of a tile's pixels in image level @a level: pixel x reads samples
+    /// index[x] and index[x] + 1 with weights 1 - frac[x] and frac[x] (the pixel's centre,
+    /// (x + 1/2) / h + 1 in sample coordinates, between the samples' centres); weight[i][x]:
+    /// sample i's weight at pixel x (0 but at those two), so that a row's pixels are a sum of
+    /// whole-row multiply-adds, one a sample (vectorised).
+    struct LevelTaps
+    {
+        int index[kTileSize];
+        float frac[kTileSize];
+        alignas(64) float weight[kTileSize][kTileSize];
+    };
+    static const LevelTaps& levelTaps(int level)
+    {
+        static const std::array<LevelTaps, kImageLevels> taps = [] {
+            std::array<LevelTaps, kImageLevels> t{};
+            for (int k = 0; k < kImageLevels; ++k)
+                for (int x = 0; x < kTileSize; ++x) {
+                    LevelTaps& l = t[std::size_t(k)];
+                    const double u = (double(x) + 0.5) / double(1 << k) + 0.5;
+                    l.index[x] = int(std::floor(u));
+                    l.frac[x] = float(u - std::floor(u));
+                    l.weight[l.index[x]][x] = 1.0f - l.frac[x];
+                    l.weight[l.index[x] + 1][x] = l.frac[x];
+                }
+            return t;
+        }();
+        return taps[std::size_t(level)];
+    }
+
+    /// Image-space level of detail: what the coarser levels hold of @a slab, reconstructed
+    /// bilinearly at the tile's pixels and added to its planes, the levels' cleared. Every
+    /// plane is a sum of footprints x constants, so this is each footprint reconstructed from
+    /// its samples (docs/equations.md#image-space-level-of-detail). @a d (the slab's dirty
+    /// box, on) grows to the pixels that read a sample it holds.
+    void foldLevels(std::int64_t slab, Dirty& d)
+    {
+        for (int level = 1; level < kImageLevels; ++level) {
+            TileCompositor* coarse = mLevels[std::size_t(level - 1)].get();
+            if (!coarse || coarse->mRingSize == 0) continue;
+            Dirty& from = coarse->mDirty[coarse->slot(slab)];
+            if (!from.on || from.slab != slab) continue;
+            const LevelTaps& taps = levelTaps(level);
+            const auto reads = [&](int x, int a, int b) { return taps.index[x] + 1 >= a && taps.index[x] <= b; };
+            int x0 = mW, x1 = -1, y0 = mH, y1 = -1;
+            for (int x = 0; x < mW; ++x) {
+                if (reads(x, from.x0, from.x1)) x0 = std::min(x0, x), x1 = std::max(x1, x);
+            }
+            for (int y = 0; y < mH; ++y) {
+                if (reads(y, from.y0, from.y1)) y0 = std::min(y0, y), y1 = std::max(y1, y);
+            }
+            const auto fine = slotPlanes();
+            const auto planes = coarse->slotPlanes();
+            for (std::size_t i = 0; i < planes.size(); ++i) {
+                const std::size_t floats = planes[i].second;
+                if (planes[i].first->empty() || floats == 0) continue;
+                for (std::size_t q = 0; q < floats; q += kTilePixels) {
+                    float* source = planes[i].first->data() + coarse->slot(slab) * floats + q;
+                    float* target = fine[i].first->data() + slot(slab) * floats + q;
+                    // Along the dirty rows of samples (each a sum of whole-row multiply-adds,
+                    // one a dirty sample), then down to each pixel row between two of them.
+                    alignas(64) float rows[kTileSize + 1][kTileSize];
+                    for (int i = std::max(from.y0 - 1, 0); i <= from.y1 + 1; ++i) std::fill_n(rows[i], kTileSize, 0.0f);
+                    for (int i = from.y0; i <= from.y1; ++i) {
+                        const float* samples = source + i * kTileSize;
+                        for (int j = from.x0; j <= from.x1; ++j) {
+                            const float v = samples[j];
+                            for (int x = 0; x < kTileSize; ++x) rows[i][x] += v * taps.weight[j][x];
+                        }
+                    }
+                    for (int y = y0; y <= y1; ++y) {
+                        const float* a = rows[taps.index[y]];
+                        const float* b = rows[taps.index[y] + 1];
+                        const float fy = taps.frac[y];
+                        for (int x = x0; x <= x1; ++x) target[y * kTileSize + x] += a[x] + fy * (b[x] - a[x]);
+                    }
+                    for (int y = from.y0; y <= from.y1; ++y) std::fill_n(source + y * kTileSize + from.x0, from.x1 - from.x0 + 1, 0.0f);
+                }
+            }
+            if (x0 <= x1 && y0 <= y1) {
+                d.x0 = std::min(d.x0, x0);
+                d.y0 = std::min(d.y0, y0);
+                d.x1 = std::max(d.x1, x1);
+                d.y1 = std::max(d.y1, y1);
+            }
+            from.on = false;
+            const auto pending = std::find(coarse->mPending.begin(), coarse->mPending.end(), slab);
+            if (pending != coarse->mPending.end()) coarse->mPending.erase(pending);
+        }
+    }
+
+    /// The image levels' rings let go (their slabs folded: park), into @a spare's levels if
+    /// given, else to the allocator; with the rings lent with the tile's and not taken.
+    void parkLevels(Ring* spare)
+    {
+        if (spare) spare->levels.resize(kImageLevels - 1);
+        for (std::size_t k = 0; k + 1 < kImageLevels; ++k) {
+            Ring* to = spare ? &spare->levels[k] : nullptr;
+            if (mLevels[k] && mLevels[k]->mRingSize > 0) mLevels[k]->park(to);
+            else if (to && k < mLevelSpares.size() && mLevelSpares[k].size > 0) *to = std::move(mLevelSpares[k]);
+        }
+        mLevelSpares.clear();
     }
 
     /// An empty ring of @a ringSize slots for @a other's options (ensureRing).
@@ -673,6 +882,7 @@ private:
     void flush(std::int64_t slab)
     {
         Dirty& d = mDirty[slot(slab)];
+        foldLevels(slab, d);
         if (!mLayerT.empty()) foldLayers(slab, d);
         if (!mOptions.lights.empty()) ensureLight(slab, d);
         for (int ly = d.y0; ly <= d.y1; ++ly) flushRow(slab, ly, d.x0, d.x1);
@@ -1009,7 +1219,10 @@ private:
         }
     }
 
-    std::uint64_t mSamples = 0, mComposites = 0; ///< samples(), composites()
+    std::uint64_t mLevelSamples[kImageLevels] = {}, mComposites = 0; ///< counters()
+    /// The coarser image levels' accumulators (imageLod), level k at k - 1; null until used.
+    std::array<std::unique_ptr<TileCompositor>, kImageLevels - 1> mLevels;
+    std::vector<Ring> mLevelSpares; ///< the levels' rings lent with the tile's (Ring::levels)
     int mX0, mY0, mW, mH;
     int mRingSize = 0;
     std::int64_t mMask = -1;
@@ -1161,7 +1374,7 @@ private:
         if (!tile) tile = makeTile(t, 0);
         if (tile->pending()) tile->ensureRing(1); // the spilled slabs back in a ring
         tile->finish(*mOutput.frame, *mOutput.depthScale, mOutput.deep->empty() ? nullptr : &(*mOutput.deep)[std::size_t(t)]);
-        (*mOutput.counters)[std::size_t(t)] = {mSkipped[std::size_t(t)], tile->samples(), tile->composites()};
+        (*mOutput.counters)[std::size_t(t)] = tile->counters(mSkipped[std::size_t(t)]);
         tile.reset();
         mWritten[std::size_t(t)] = 1;
     }
@@ -1222,7 +1435,7 @@ void TileSweepCompositor<C>::composite(const SplatSet& set, const TileBins& bins
                     set.shifts.empty() ? nullptr : set.shifts.data() + 3 * std::size_t(order[done]));
             }
             tile.finish(frame, depthScale, deep.empty() ? nullptr : &deep[std::size_t(t)]);
-            counters[std::size_t(t)] = {count - done, tile.samples(), tile.composites()};
+            counters[std::size_t(t)] = tile.counters(count - done);
             advance(progress);
         }
     });
