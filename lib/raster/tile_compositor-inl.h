@@ -457,7 +457,7 @@ private:
     /// index[x] and index[x] + 1 with weights 1 - frac[x] and frac[x] (the pixel's centre,
     /// (x + 1/2) / h + 1 in sample coordinates, between the samples' centres); weight[i][x]:
     /// sample i's weight at pixel x (0 but at those two), so that a row's pixels are a sum of
-    /// whole-row multiply-adds, one a sample (vectorised).
+    /// whole-row multiply-adds, one a sample (vectorised). Levels 1 and up.
     struct LevelTaps
     {
         int index[kTileSize];
@@ -468,7 +468,7 @@ private:
     {
         static const std::array<LevelTaps, kImageLevels> taps = [] {
             std::array<LevelTaps, kImageLevels> t{};
-            for (int k = 0; k < kImageLevels; ++k)
+            for (int k = 1; k < kImageLevels; ++k) // level 0 is the pixels: no taps
                 for (int x = 0; x < kTileSize; ++x) {
                     LevelTaps& l = t[std::size_t(k)];
                     const double u = (double(x) + 0.5) / double(1 << k) + 0.5;
