@@ -7,6 +7,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <type_traits>
 #include <sstream>
 #include <tuple>
 #include <utility>
@@ -76,7 +77,7 @@ void addPartStats(RenderStats& stats, RenderStats&& part, bool first)
              {&stats.bricksExpanded, total.bricksExpanded}, {&stats.bricksHidden, total.bricksHidden}, {&stats.windows, total.windows},
              {&stats.lightRaysMarched, total.lightRaysMarched}, {&stats.kernelsCulled, total.kernelsCulled}})
         *sum += add;
-    for (int k = 0; k < 4; ++k) stats.footprintSamplesAtLevel[k] += total.footprintSamplesAtLevel[k];
+    for (int k = 0; k < kImageLevels; ++k) stats.footprintSamplesAtLevel[k] += total.footprintSamplesAtLevel[k];
 }
 
 Frame assembleChannels(Frame (&channels)[3])
@@ -105,7 +106,8 @@ void addRasterStats(const RasterStats& raster, RenderStats& stats)
     stats.screenTilesOpaque = raster.tilesOpaque;
     stats.splatTilePairsSkipped = raster.pairsSkipped;
     stats.footprintSamples = raster.footprintSamples;
-    for (int k = 0; k < 4; ++k) stats.footprintSamplesAtLevel[k] = raster.levelSamples[k];
+    static_assert(std::extent_v<decltype(RenderStats::footprintSamplesAtLevel)> == kImageLevels, "RenderStats: one count per image level");
+    for (int k = 0; k < kImageLevels; ++k) stats.footprintSamplesAtLevel[k] = raster.levelSamples[k];
     stats.slabComposites = raster.slabComposites;
     stats.rasterBackend = raster.backend;
 }

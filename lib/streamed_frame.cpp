@@ -268,7 +268,7 @@ void Renderer::renderStreamedFogVolume(const GridSource::Impl& g, const Camera& 
         rasterStats.splatTilePairs += own.splatTilePairs;
         rasterStats.pairsSkipped += own.pairsSkipped;
         rasterStats.footprintSamples += own.footprintSamples;
-        for (int k = 0; k < 4; ++k) rasterStats.levelSamples[k] += own.levelSamples[k];
+        for (int k = 0; k < detail::kImageLevels; ++k) rasterStats.levelSamples[k] += own.levelSamples[k];
         rasterStats.slabComposites += own.slabComposites;
         if (v == 0) {
             rasterStats.tiles = own.tiles;

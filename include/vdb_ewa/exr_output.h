@@ -26,8 +26,8 @@ struct ExrOptions
     ExrPixelType colorType = ExrPixelType::Half;   ///< R, G, B, A and the colour passes; Z is always float
     ExrCompression compression = ExrCompression::Zip;
     /// zlib's level for zip and zips, 1 (fastest) to 9 (smallest). 1 by default: a 1080p frame
-    /// with its float Z writes in about half the time of OpenEXR's default 4, about 15 to 30 %
-    /// larger (docs/performance.md#the-fixed-costs-of-a-frame).
+    /// with its float Z writes in about 0.7x the time of OpenEXR's default 4, about 10 % larger
+    /// (docs/performance.md#writing-the-file).
     int zipLevel = 1;
     std::optional<Chromaticities> chromaticities;   ///< of the colour space the file holds
     const Camera* camera = nullptr;                 ///< worldToCamera, worldToNDC, screen window

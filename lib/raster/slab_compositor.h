@@ -44,10 +44,6 @@ private:
     float mValues[kSize + 1];
 };
 
-/// Image-space level of detail's levels of a tile (CompositeOptions::imageLod): level k holds a
-/// sample every 2^k pixels, from every pixel (0) to every 8th (3).
-constexpr int kImageLevels = 4;
-
 /// A light as the compositor shades with it: its light map, and its colour x scattering
 /// albedo per channel (OpticalModel::lightScale), per unit scattering weight.
 struct CompositeLight

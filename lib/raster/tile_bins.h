@@ -17,6 +17,9 @@ namespace detail {
 
 constexpr int kTileSize = 16;
 constexpr int kTilePixels = kTileSize * kTileSize;
+/// Image-space level of detail's levels of a tile (CompositeOptions::imageLod): level k holds a
+/// sample every 2^k pixels, from every pixel (0) to every 8th (3).
+constexpr int kImageLevels = 4;
 
 struct TileBins
 {

@@ -505,12 +505,12 @@ private:
             }
             const auto fine = slotPlanes();
             const auto planes = coarse->slotPlanes();
-            for (std::size_t i = 0; i < planes.size(); ++i) {
-                const std::size_t floats = planes[i].second;
-                if (planes[i].first->empty() || floats == 0) continue;
+            for (std::size_t plane = 0; plane < planes.size(); ++plane) {
+                const std::size_t floats = planes[plane].second;
+                if (planes[plane].first->empty() || floats == 0) continue;
                 for (std::size_t q = 0; q < floats; q += kTilePixels) {
-                    float* source = planes[i].first->data() + coarse->slot(slab) * floats + q;
-                    float* target = fine[i].first->data() + slot(slab) * floats + q;
+                    float* source = planes[plane].first->data() + coarse->slot(slab) * floats + q;
+                    float* target = fine[plane].first->data() + slot(slab) * floats + q;
                     // Along the dirty rows of samples (each a sum of whole-row multiply-adds,
                     // one a dirty sample), then down to each pixel row between two of them.
                     alignas(64) float rows[kTileSize + 1][kTileSize];

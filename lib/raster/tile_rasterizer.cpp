@@ -101,8 +101,8 @@ FrameCompositing::FrameCompositing(const Camera& camera, const RenderSettings& s
 {
     options.cutoff = float(settings.cutoff);
     options.exp = settings.splat.expEvaluation;
-    // exp(-r/2) at r = s.cutoff, in the float arithmetic the splats' cut-off is kept in.
     options.imageLod = float(settings.splat.imageLod);
+    // exp(-r/2) at r = s.cutoff, in the float arithmetic the splats' cut-off is kept in.
     if (settings.splat.taper) options.taperEdge = std::exp(-0.5f * float(settings.splat.cutoffRadius * settings.splat.cutoffRadius));
     options.table = &table;
     options.slabs = slabs;

@@ -20,7 +20,7 @@ struct RasterStats
     std::uint64_t tilesOpaque = 0;  ///< tiles that turned opaque before their last splat
     std::uint64_t pairsSkipped = 0; ///< pairs skipped in those tiles
     std::uint64_t footprintSamples = 0; ///< footprint weights evaluated (pixels inside a cut-off)
-    std::uint64_t levelSamples[4] = {}; ///< of them, at each image level (TileCounters::levelSamples)
+    std::uint64_t levelSamples[kImageLevels] = {}; ///< of them, at each image level (TileCounters::levelSamples)
     std::uint64_t slabComposites = 0;   ///< (pixel, slab) samples composited
     const char* backend = "scalar";     ///< the slab compositor: "scalar" or the SIMD target's name
 };
