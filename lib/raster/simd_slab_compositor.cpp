@@ -267,20 +267,30 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
         }
         hn::Store(m, d, mass);
         hn::Store(t2, d, t2After);
-        // 2. Per lane: pixels with a surface to composite, or whose ray stops inside the slab,
-        // take flushPixel's path; the others are composited below, lit per slab sample.
+        // 2. Per lane: pixels with a surface to composite take flushPixel's path, and so do those
+        // whose ray stops inside the slab where shutter layers, extra passes or deep samples
+        // follow it; the others are composited below, lit per slab sample, those whose ray
+        // stops inside the slab with the part in front of the crossing (cut: its fraction,
+        // terminationFraction, 1 for the others) as flushPixel composites it.
         alignas(64) float composite[kLanes], lit[C][kLanes], litColoured[C][kLanes], emission[C][kLanes], tBefore[C][kLanes], meanBefore[kLanes];
-        alignas(64) float lighted[kLanes];
-        bool anyLighted = false;
+        alignas(64) float lighted[kLanes], cut[kLanes];
+        const bool cutHere = layers == 0 && mPassCount == 0 && !mOptions.passes.deep;
+        bool anyLighted = false, anyCut = false;
         for (int i = 0; i < kLanes; ++i) {
             const int x = first + i, q = p + i;
             composite[i] = lighted[i] = 0.0f;
+            cut[i] = 1.0f;
             if (x < x0 || x > x1) continue;
-            if (mSurfacePending[q] || (mAlive[q] && mass[i] > 0.0f && t2After[i] * float(3 / C) < mCutoff)) {
+            const bool stops = mAlive[q] && mass[i] > 0.0f && t2After[i] * float(3 / C) < mCutoff;
+            if (mSurfacePending[q] || (stops && !cutHere)) {
                 flushPixel(slab, q);
             } else if (mAlive[q]) {
                 composite[i] = 1.0f;
                 ++mComposites;
+                if (stops) {
+                    cut[i] = terminationFraction(slab, base, q);
+                    anyCut = anyCut || cut[i] < 1.0f;
+                }
                 if (passes) {
                     for (int c = 0; c < C; ++c) tBefore[c][i] = mT[c * kTilePixels + q];
                     meanBefore[i] = meanT(q);
@@ -307,16 +317,29 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
             u1 = hn::IfThenElseZero(lightedLanes, hn::Min(hn::Add(mean, half), one));
         }
         // Per channel, once for every light: the optical depth, the scattering weight, and the
-        // emission as the source's start.
-        Floats tau[C], weight[C], source[C], litSum[C], colouredSum[C];
+        // emission as the source's start. Lanes whose ray stops inside the slab keep the part
+        // in front of the crossing (flushPixel): tau, emission and absorption of that part, the
+        // light (looked up across the whole slab's layer) kept in proportion to the absorption.
+        Floats tau[C], lightDepth[C], weight[C], source[C], litSum[C], colouredSum[C], kept[C];
+        const Floats cutLanes = hn::Load(d, cut);
+        const auto cutMask = hn::Lt(cutLanes, one);
         for (int c = 0; c < C; ++c) {
             const std::size_t i = base + std::size_t(c) * kTilePixels + std::size_t(p);
-            tau[c] = hn::LoadU(d, &mTau[i]);
+            lightDepth[c] = tau[c] = hn::LoadU(d, &mTau[i]);
+            kept[c] = one;
+            if (anyCut) {
+                const Floats whole = hn::Load(d, absorbed[c]);
+                tau[c] = hn::Mul(tau[c], cutLanes);
+                const Floats front = absorbedOf(tau[c]);
+                const auto absorbing = hn::Gt(whole, zero);
+                kept[c] = hn::IfThenElse(cutMask, hn::IfThenElseZero(absorbing, hn::Div(front, hn::IfThenElse(absorbing, whole, one))), one);
+                hn::Store(front, d, absorbed[c]);
+            }
             weight[c] = hn::Max(hn::LoadU(d, mScatter.empty() ? &mTau[i] : &mScatter[i]), zero);
             Floats emitted = zero, em = zero;
             if (!mEmission.empty()) {
                 // Halo kernels (--prefilter) weigh negative: a slab's sums stay >= 0.
-                em = hn::Max(hn::LoadU(d, &mEmission[i]), zero);
+                em = hn::Mul(hn::Max(hn::LoadU(d, &mEmission[i]), zero), cutLanes);
                 emitted = hn::IfThenElse(hn::Gt(tau[c], hn::Set(d, 1e-7f)), hn::Mul(hn::Div(em, tau[c]), hn::Load(d, absorbed[c])), em);
             }
             hn::Store(em, d, emission[c]);
@@ -435,8 +458,12 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
                 source[c] = hn::Add(source[c], colouredSum[c]);
             }
         } else if (anyLighted) {
-            lightLanes(tau, weight, 0, litSum, colouredSum);
-            for (int c = 0; c < C; ++c) source[c] = hn::Add(source[c], colouredSum[c]);
+            lightLanes(lightDepth, weight, 0, litSum, colouredSum);
+            for (int c = 0; c < C; ++c) {
+                litSum[c] = hn::Mul(litSum[c], kept[c]);
+                colouredSum[c] = hn::Mul(colouredSum[c], kept[c]);
+                source[c] = hn::Add(source[c], colouredSum[c]);
+            }
         }
         const auto chosen = hn::Ne(hn::Load(d, composite), zero);
         Floats t2Now = zero;
@@ -490,7 +517,7 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
                 }
                 flushPasses(slab, p + i, meanBefore[i], e, l, coloured);
             }
-            if (t2Lanes[i] * float(3 / C) < mCutoff) terminate(p + i);
+            if (cut[i] < 1.0f || t2Lanes[i] * float(3 / C) < mCutoff) terminate(p + i);
         }
         for (int c = 0; c < C; ++c) {
             const std::size_t i = base + std::size_t(c) * kTilePixels + std::size_t(p);
