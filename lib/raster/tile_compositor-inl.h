@@ -897,6 +897,29 @@ private:
     {
         // The whole frame's maps are marched already: no pass over the pixels for them.
         if (std::none_of(mOptions.lights.begin(), mOptions.lights.end(), [](const CompositeLight& l) { return l.map->onDemand(); })) return;
+        const double z = mOptions.slabs.start(slab), thickness = mOptions.slabs.thickness;
+        // Light @a light's lookups by the pixels (x0..x1, y0..y1) between fractions u0 and u1
+        // of the slab, and where their moved material came from (within maxShift).
+        const auto box = [&](const CompositeLight& light, int x0, int y0, int x1, int y1, float u0, float u1, Vec3d& lo, Vec3d& hi) {
+            lookupBox(*mOptions.camera, *light.map, mX0 + x0, mY0 + y0, mX0 + x1, mY0 + y1, z + double(u0) * thickness, z + double(u1) * thickness, lo, hi);
+            if (mShift.empty()) return;
+            Vec3d pad(0.0);
+            for (int k = 0; k < 3; ++k) {
+                Vec3d axis(0.0);
+                axis[k] = mOptions.maxShift;
+                pad += glm::abs(light.map->direction(axis));
+            }
+            lo -= pad;
+            hi += pad;
+        };
+        // Most slabs read rays marched already, by an earlier slab or a neighbouring tile: the
+        // box of the whole dirty box and the whole slab says so without a pass over the pixels.
+        const bool marched = std::all_of(mOptions.lights.begin(), mOptions.lights.end(), [&](const CompositeLight& light) {
+            Vec3d lo, hi;
+            box(light, d.x0, d.y0, d.x1, d.y1, 0.0f, 1.0f, lo, hi);
+            return light.map->marchedIn(lo, hi);
+        });
+        if (marched) return;
         int x0 = kTileSize, x1 = -1, y0 = kTileSize, y1 = -1;
         float u0 = 1.0f, u1 = 0.0f;
         const std::size_t base = slot(slab) * C * kTilePixels;
@@ -915,21 +938,9 @@ private:
                 u1 = std::max(u1, b);
             }
         if (x0 > x1) return;
-        const double z = mOptions.slabs.start(slab), thickness = mOptions.slabs.thickness;
         for (const CompositeLight& light : mOptions.lights) {
             Vec3d lo, hi;
-            lookupBox(*mOptions.camera, *light.map, mX0 + x0, mY0 + y0, mX0 + x1, mY0 + y1, z + double(u0) * thickness,
-                z + double(u1) * thickness, lo, hi);
-            if (!mShift.empty()) { // where the moved material came from: within maxShift
-                Vec3d pad(0.0);
-                for (int k = 0; k < 3; ++k) {
-                    Vec3d axis(0.0);
-                    axis[k] = mOptions.maxShift;
-                    pad += glm::abs(light.map->direction(axis));
-                }
-                lo -= pad;
-                hi += pad;
-            }
+            box(light, x0, y0, x1, y1, u0, u1, lo, hi);
             light.map->ensureMarched(lo, hi);
         }
     }

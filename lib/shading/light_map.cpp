@@ -259,21 +259,34 @@ LightMap::LightMap(const GridSource::Impl& grid, const RenderSettings& settings,
     for (std::size_t t = 0; t < tiles; ++t) mMarching->state[t].store(1, std::memory_order_relaxed);
 }
 
-void LightMap::ensureMarched(const Vec3d& lo, const Vec3d& hi) const
+template <typename Visit> bool LightMap::forEachTileIn(const Vec3d& lo, const Vec3d& hi, Visit&& visit) const
 {
-    if (!mMarching) return;
-    if (!(hi.x >= 0.0 && hi.y >= 0.0 && lo.x <= double(mNu) && lo.y <= double(mNv))) return; // off the lattice: no density
+    if (!(hi.x >= 0.0 && hi.y >= 0.0 && lo.x <= double(mNu) && lo.y <= double(mNv))) return true; // off the lattice: no density
     // The bilinear lookup reads the rays at floor(u) and floor(u) + 1.
     const auto first = [](double x, int n) { return int(std::clamp(std::floor(x), 0.0, double(n - 1))) / kRayTile; };
     const auto last = [](double x, int n) { return int(std::clamp(std::floor(x) + 1.0, 0.0, double(n - 1))) / kRayTile; };
-    std::unique_ptr<MarchScratch> scratch; // made at the first tile to march
     for (int tv = first(lo.y, mNv); tv <= last(hi.y, mNv); ++tv)
-        for (int tu = first(lo.x, mNu); tu <= last(hi.x, mNu); ++tu) {
-            const std::size_t t = std::size_t(tv) * std::size_t(mTilesU) + std::size_t(tu);
-            if (mMarching->state[t].load(std::memory_order_acquire)) continue;
-            if (!scratch) scratch = std::make_unique<MarchScratch>(*mGrid, mNw, mWeight.size());
-            marchTile(t, *scratch);
-        }
+        for (int tu = first(lo.x, mNu); tu <= last(hi.x, mNu); ++tu)
+            if (!visit(std::size_t(tv) * std::size_t(mTilesU) + std::size_t(tu))) return false;
+    return true;
+}
+
+void LightMap::ensureMarched(const Vec3d& lo, const Vec3d& hi) const
+{
+    if (!mMarching) return;
+    std::unique_ptr<MarchScratch> scratch; // made at the first tile to march
+    forEachTileIn(lo, hi, [&](std::size_t t) {
+        if (mMarching->state[t].load(std::memory_order_acquire)) return true;
+        if (!scratch) scratch = std::make_unique<MarchScratch>(*mGrid, mNw, mWeight.size());
+        marchTile(t, *scratch);
+        return true;
+    });
+}
+
+bool LightMap::marchedIn(const Vec3d& lo, const Vec3d& hi) const
+{
+    if (!mMarching) return true;
+    return forEachTileIn(lo, hi, [&](std::size_t t) { return mMarching->state[t].load(std::memory_order_acquire) != 0; });
 }
 
 void LightMap::marchTile(std::size_t t, MarchScratch& scratch) const

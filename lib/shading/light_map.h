@@ -93,6 +93,9 @@ public:
     /// looks up what the whole map holds. A thread's lookups must lie in boxes it ensured.
     /// Throws Cancelled (the progress given at construction), BudgetError.
     void ensureMarched(const Vec3d& lo, const Vec3d& hi) const;
+    /// Whether every ray that a lookup in the box [@a lo, @a hi] reads is marched already (as
+    /// ensureMarched would leave it): always where the whole map was marched at construction.
+    bool marchedIn(const Vec3d& lo, const Vec3d& hi) const;
     /// Whether lattice ray (@a i, @a j) has been marched (false off the lattice).
     bool marched(int i, int j) const
     {
@@ -159,6 +162,9 @@ public:
     Lattice lattice() const;
 
 private:
+    /// The tiles of rays (tu, tv) holding a ray that a lookup in the box [@a lo, @a hi] reads,
+    /// in order, until @a visit returns false; false then, true otherwise (none: off the lattice).
+    template <typename Visit> bool forEachTileIn(const Vec3d& lo, const Vec3d& hi, Visit&& visit) const;
     /// The lattice's frame: map coordinates of world points, the padded active box's range in
     /// them, and the ray spacing and step (voxel lengths) within the point budget.
     struct LatticeFrame
