@@ -18,9 +18,19 @@ namespace scalar_backend {
 
 #include "raster/tile_compositor-inl.h"
 
+/// Nothing carried between rows: each row steps along itself (addRow).
+template <int C> struct TileCompositor<C>::RowSteps
+{
+};
+
+template <int C> typename TileCompositor<C>::RowSteps TileCompositor<C>::startRows(const Splat&, int, int, int, int) const
+{
+    return {};
+}
+
 template <int C>
 void TileCompositor<C>::addRow(const Splat& s, const float* shares, const float* moments, const float* passSources, const float* shift, int y, int x0,
-    int x1, float k)
+    int x1, float k, RowSteps&)
 {
     const double qa = s.qa, qb = s.qb, qc = s.qc;
     const double dy = double(mY0 + y) + 0.5 - double(s.cy), dx0 = double(mX0 + x0) + 0.5 - double(s.cx);

@@ -192,39 +192,100 @@ inline void logTransmittances(const LightMap::Lattice& map, Floats depth, int ch
     for (int c = 0; c < 3; ++c) logT[c] = hn::Mul(hn::Set(d, -map.extinction[c]), kept);
 }
 
+/// The footprint's weights stepped down the tile: r = d^T Q d is quadratic in y, so at each
+/// pixel exp(-r/2) on the next row is this row's times a ratio m = exp(-(qb dx + qc (dy + 1/2))),
+/// and the next row's ratio is this one's times exp(-qc): Sec. 7.1's forward differencing in
+/// the exponential domain, down the rows as the scalar backend steps along them, two
+/// multiplications a row in place of an exp. Seeded exactly every kSeedRows rows (the products'
+/// rounding stays below 1e-6 relative), and only where r < kMaxStepR over the splat's box in the
+/// tile, so that neither a weight nor a ratio leaves float's range.
+template <int C> struct TileCompositor<C>::RowSteps
+{
+    static constexpr int kVectors = kTileSize / kLanes;
+    static constexpr int kSeedRows = 8;
+    static constexpr double kMaxStepR = 160.0; // exp(-80) = 1.8e-35 > FLT_MIN, exp(80) < FLT_MAX
+    bool on = false;
+    int row = 0, seeded = 0; // the row the weights are at, and the last exact one
+    Floats weight[kVectors], ratio[kVectors], step;
+};
+
+template <int C>
+typename TileCompositor<C>::RowSteps TileCompositor<C>::startRows(const Splat& s, int lx0, int ly0, int lx1, int ly1) const
+{
+    RowSteps steps;
+    // A footprint a few rows tall, and not the exp table's (whose values are not exp's).
+    if (mExp == ExpEvaluation::Table || ly1 - ly0 < 2) return steps;
+    const double qa = s.qa, qb = s.qb, qc = s.qc;
+    double most = 0.0; // r is convex: its largest over the box is at a corner
+    for (int corner = 0; corner < 4; ++corner) {
+        const double dx = double(mX0 + ((corner & 1) ? lx1 : lx0)) + 0.5 - double(s.cx);
+        const double dy = double(mY0 + ((corner & 2) ? ly1 : ly0)) + 0.5 - double(s.cy);
+        most = std::max(most, qa * dx * dx + 2.0 * qb * dx * dy + qc * dy * dy);
+    }
+    steps.on = most < RowSteps::kMaxStepR;
+    steps.row = steps.seeded = ly0 - RowSteps::kSeedRows; // seeded at the first row
+    steps.step = hn::Set(FloatTag(), float(std::exp(-qc)));
+    return steps;
+}
+
 template <int C>
 void TileCompositor<C>::addRow(const Splat& s, const float* shares, const float* moments, const float* passSources, const float* shift, int y, int x0,
-    int x1, float)
+    int x1, float, RowSteps& steps)
 {
     const FloatTag d;
     // Whole vectors of the row, from the one holding x0: lanes outside x0..x1 weigh 0.
     const int first = x0 & ~(kLanes - 1);
     const int vectors = (x1 - first) / kLanes + 1;
-    // r = qa dx^2 + 2 qb dx dy + qc dy^2 = qa (dx - e)^2 + h, e = -qb dy / qa, h = det Q dy^2 / qa:
-    // the square completed in dx, once per row in double, leaves two terms >= 0 (no cancellation
-    // in float for thin, tilted footprints). exp per lane: no serial chain along the row.
     const double qa = s.qa, qb = s.qb, qc = s.qc;
-    const double dy = double(mY0 + y) + 0.5 - double(s.cy);
-    const double e0 = double(mX0 + first) + 0.5 - double(s.cx) + qb * dy / qa;
-    const double h = std::max((qa * qc - qb * qb) / qa * dy * dy, 0.0);
-    const Floats vqa = hn::Set(d, float(qa)), vh = hn::Set(d, float(h)), minusHalf = hn::Set(d, -0.5f);
+    const Floats minusHalf = hn::Set(d, -0.5f);
+    // exp(-r/2) on tile row @a row at the @a count vectors from tile column @a from: r =
+    // qa dx^2 + 2 qb dx dy + qc dy^2 = qa (dx - e)^2 + h, e = -qb dy / qa, h = det Q dy^2 / qa,
+    // the square completed in dx, once per row in double, leaves two terms >= 0 (no
+    // cancellation in float for thin, tilted footprints). exp per lane: no serial chain.
+    const auto exactRow = [&](int row, int from, int count, Floats* out) {
+        const double dy = double(mY0 + row) + 0.5 - double(s.cy);
+        const double e0 = double(mX0 + from) + 0.5 - double(s.cx) + qb * dy / qa;
+        const double h = std::max((qa * qc - qb * qb) / qa * dy * dy, 0.0);
+        const Floats vqa = hn::Set(d, float(qa)), vh = hn::Set(d, float(h));
+        for (int v = 0; v < count; ++v) {
+            const Floats e = hn::Add(hn::Iota(d, float(v * kLanes)), hn::Set(d, float(e0)));
+            const Floats r = hn::MulAdd(hn::Mul(vqa, e), e, vh);
+            if (mExp == ExpEvaluation::Table) {
+                alignas(64) float lanes[kLanes];
+                hn::Store(r, d, lanes);
+                for (float& l : lanes) l = mTable->lookup(l);
+                out[v] = hn::Load(d, lanes);
+            } else {
+                out[v] = hn::Exp(d, hn::Mul(minusHalf, r));
+            }
+        }
+    };
+    Floats raw[kTileSize / kLanes];
+    if (steps.on) {
+        if (y - steps.seeded >= RowSteps::kSeedRows) {
+            // Exact again: the weights and the ratios to the next row, for the whole tile row.
+            exactRow(y, 0, RowSteps::kVectors, steps.weight);
+            const double dy = double(mY0 + y) + 0.5 - double(s.cy);
+            for (int v = 0; v < RowSteps::kVectors; ++v) {
+                const double dx0 = double(mX0 + v * kLanes) + 0.5 - double(s.cx);
+                const Floats exponent = hn::MulAdd(hn::Set(d, float(-qb)), hn::Iota(d, 0.0f), hn::Set(d, float(-(qb * dx0 + qc * (dy + 0.5)))));
+                steps.ratio[v] = hn::Exp(d, exponent);
+            }
+            steps.row = steps.seeded = y;
+        }
+        for (; steps.row < y; ++steps.row) {
+            for (int v = 0; v < RowSteps::kVectors; ++v) {
+                steps.weight[v] = hn::Mul(steps.weight[v], steps.ratio[v]);
+                steps.ratio[v] = hn::Mul(steps.ratio[v], steps.step);
+            }
+        }
+        for (int v = 0; v < vectors; ++v) raw[v] = steps.weight[first / kLanes + v];
+    } else {
+        exactRow(y, first, vectors, raw);
+    }
     const Floats edge = hn::Set(d, mOptions.taperEdge); // SplatOptions::taper
     Floats weights[kTileSize / kLanes];
-    for (int v = 0; v < vectors; ++v) {
-        const int x = first + v * kLanes;
-        const Floats e = hn::Add(hn::Iota(d, float(v * kLanes)), hn::Set(d, float(e0)));
-        const Floats r = hn::MulAdd(hn::Mul(vqa, e), e, vh);
-        Floats w;
-        if (mExp == ExpEvaluation::Table) {
-            alignas(64) float lanes[kLanes];
-            hn::Store(r, d, lanes);
-            for (float& l : lanes) l = mTable->lookup(l);
-            w = hn::Load(d, lanes);
-        } else {
-            w = hn::Exp(d, hn::Mul(minusHalf, r));
-        }
-        weights[v] = hn::IfThenElseZero(lanesIn(x, x0, x1), hn::Max(hn::Sub(w, edge), hn::Zero(d)));
-    }
+    for (int v = 0; v < vectors; ++v) weights[v] = hn::IfThenElseZero(lanesIn(first + v * kLanes, x0, x1), hn::Max(hn::Sub(raw[v], edge), hn::Zero(d)));
     forEachPlane(s, shares, moments, passSources, shift, y * kTileSize + first, [&](float* plane, float factor) {
         const Floats f = hn::Set(d, factor);
         for (int v = 0; v < vectors; ++v) {

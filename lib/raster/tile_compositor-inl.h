@@ -210,13 +210,19 @@ public:
         return c;
     }
 
+    /// What a backend carries from one footprint row to the next (the SIMD one: the weights
+    /// stepped down the rows), made for splat @a s's rows ly0..ly1, columns lx0..lx1 of the
+    /// tile. Defined by each backend.
+    struct RowSteps;
+    RowSteps startRows(const Splat& s, int lx0, int ly0, int lx1, int ly1) const;
+
     /// Add splat @a s's footprint values exp(-r/2) (Sec. 7.1, r = d^T Q d) on tile row @a y, pixels
     /// x0..x1 (inside its cut-off ellipse, cut to the row's live pixels), to every slab it
     /// overlaps (forEachPlane); what terminated pixels inside the span receive is never
     /// composited. @a k: exp(-qa), for a backend that steps
     /// along the row. Defined by each backend.
     void addRow(const Splat& s, const float* shares, const float* moments, const float* passSources, const float* shift, int y, int x0,
-        int x1, float k);
+        int x1, float k, RowSteps& steps);
 
     /// @a passSources: the splat's extra source terms (mPassCount x RGB), or null if none.
     /// @a moments: the position moments of each share in its slab (SplatSet::shareMoments).
@@ -258,6 +264,7 @@ public:
         const float invQa = float(1.0 / double(s.qa));
         const float detQ = float(double(s.qa) * double(s.qc) - double(s.qb) * double(s.qb));
         const float qaCutoff = float(double(s.qa) * double(s.cutoff));
+        RowSteps steps = startRows(s, lx0, ly0, lx1, ly1);
         for (int ly = ly0; ly <= ly1; ++ly) {
             const float dyf = float(mY0 + ly) + 0.5f - s.cy;
             const float disc = qaCutoff - detQ * dyf * dyf;
@@ -271,7 +278,7 @@ public:
             const int lxa = std::max({lx0, int(std::ceil(xFirst)) - mX0, mRowFirst[ly]});
             const int lxb = std::min({lx1, int(std::floor(xLast)) - mX0, mRowLast[ly]});
             if (lxa > lxb) continue;
-            addRow(s, shares, moments, passSources, shift, ly, lxa, lxb, kx);
+            addRow(s, shares, moments, passSources, shift, ly, lxa, lxb, kx, steps);
             samples += std::uint64_t(lxb - lxa + 1);
         }
         return samples;
