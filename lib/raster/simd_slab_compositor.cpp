@@ -329,13 +329,13 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
         hn::Store(m, d, mass);
         hn::Store(t2, d, t2After);
         // 2. Per lane: pixels with a surface to composite take flushPixel's path, and so do those
-        // whose ray stops inside the slab where shutter layers, extra passes or deep samples
-        // follow it; the others are composited below, lit per slab sample, those whose ray
-        // stops inside the slab with the part in front of the crossing (cut: its fraction,
-        // terminationFraction, 1 for the others) as flushPixel composites it.
+        // whose ray stops inside the slab under shutter layers; the others are composited
+        // below, lit per slab sample, those whose ray stops inside the slab with the part in
+        // front of the crossing (cut: its fraction, terminationFraction, 1 for the others) as
+        // flushPixel composites it.
         alignas(64) float composite[kLanes], lit[C][kLanes], litColoured[C][kLanes], emission[C][kLanes], tBefore[C][kLanes], meanBefore[kLanes];
         alignas(64) float lighted[kLanes], cut[kLanes];
-        const bool cutHere = layers == 0 && mPassCount == 0 && !mOptions.passes.deep;
+        const bool cutHere = layers == 0;
         bool anyLighted = false, anyCut = false;
         for (int i = 0; i < kLanes; ++i) {
             const int x = first + i, q = p + i;
@@ -569,6 +569,13 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
         for (int i = 0; i < kLanes; ++i) {
             if (composite[i] == 0.0f) continue;
             if (passes) {
+                if (cut[i] < 1.0f) {
+                    // The passes' sources and depth of the part in front of the crossing.
+                    for (int c = 0; c < C; ++c) {
+                        mTau[base + std::size_t(c) * kTilePixels + std::size_t(p + i)] *= cut[i];
+                        for (int k = 0; k < mPassCount; ++k) mPassEmission[passIndex(slab, k, c) + std::size_t(p + i)] *= cut[i];
+                    }
+                }
                 float e[C], l[C], coloured[C];
                 for (int c = 0; c < C; ++c) {
                     mTBefore[c] = tBefore[c][i];
