@@ -213,8 +213,9 @@ template <int C>
 typename TileCompositor<C>::RowSteps TileCompositor<C>::startRows(const Splat& s, int lx0, int ly0, int lx1, int ly1) const
 {
     RowSteps steps;
-    // A footprint a few rows tall, and not the exp table's (whose values are not exp's).
-    if (mExp == ExpEvaluation::Table || ly1 - ly0 < 2) return steps;
+    // --exp incremental (forward differencing; exact and table evaluate every sample), on a
+    // footprint a few rows tall.
+    if (mExp != ExpEvaluation::Incremental || ly1 - ly0 < 2) return steps;
     const double qa = s.qa, qb = s.qb, qc = s.qc;
     double most = 0.0; // r is convex: its largest over the box is at a corner
     for (int corner = 0; corner < 4; ++corner) {
