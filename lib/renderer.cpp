@@ -91,8 +91,10 @@ IsoSurface isoSurface(const RenderSettings& settings, const GridSource::Impl& gr
     }
     detail::SurfaceStats stats;
     IsoSurface out;
-    out.layer = detail::rasterizeSurfaceLayer(surfaces, camera, settings, stats, &progress, &budget, &lit);
-    if (passes.shadow) out.shadow = detail::rasterizeSurfaceLayer(surfaces, camera, settings, stats, &progress, &budget, &shadow);
+    out.layer = detail::rasterizeSurfaceLayer(detail::projectSurfaceSplats(surfaces, camera, settings, &lit), camera, settings, stats, &progress, &budget);
+    if (passes.shadow) {
+        out.shadow = detail::rasterizeSurfaceLayer(detail::projectSurfaceSplats(surfaces, camera, settings, &shadow), camera, settings, stats, &progress, &budget);
+    }
     const float opacity = float(std::clamp(settings.surface.isoOpacity, 0.0, 1.0));
     for (detail::SurfaceLayer* layer : {&out.layer, &out.shadow}) {
         for (float& v : layer->rgba) v *= opacity;
@@ -153,8 +155,10 @@ void Renderer::renderLevelSet(const GridSource::Impl& grid, const Camera& camera
         detail::extractSurfaceKernels(grid, detail::levelSetRequest(mSettings, camera, grid.voxelLength, lattice), &progress);
     stats.kernelSeconds = timer.lap();
     progress.stage(60, 100);
+    const detail::SurfaceSplatSet splats = detail::projectSurfaceSplats(surfaces, camera, mSettings);
+    stats.projectSeconds = timer.lap();
     detail::SurfaceStats surfaceStats;
-    frame = detail::rasterizeSurfaces(surfaces, camera, mSettings, passes, surfaceStats, &progress, &budget);
+    frame = detail::rasterizeSurfaces(splats, camera, mSettings, passes, surfaceStats, &progress, &budget);
     stats.rasterSeconds = timer.lap();
     stats.activeVoxels = surfaces.activeVoxels;
     stats.kernels = surfaces.kernels.size();

@@ -1,7 +1,7 @@
 /// @file disc_coverage_test.cpp
-/// @brief A surface kernel's disc seen through the camera (raster/disc_coverage.h) against
+/// @brief A surface kernel's disc seen through the camera (projection/disc_coverage.h) against
 ///        the ray-plane intersection it replaces.
-#include "raster/raster.h"
+#include "projection/projection.h"
 
 #include <gtest/gtest.h>
 

@@ -377,8 +377,8 @@ TEST(Extremes, MemoryBudgetStopsEachStageBeforeItAllocates)
     detail::SurfaceStats surfaceStats;
     const detail::MemoryBudget small(65536.0, "sphere");
     const std::string surfacePairs = message([&] {
-        detail::rasterizeSurfaces(surfaces, Camera(lookAtCamera(Vec3d(0.0, 0.0, 3.0), Vec3d(0.0), 512, 512), Vec3d(0.0)), s, {},
-            surfaceStats, nullptr, &small);
+        const Camera near(lookAtCamera(Vec3d(0.0, 0.0, 3.0), Vec3d(0.0), 512, 512), Vec3d(0.0));
+        detail::rasterizeSurfaces(detail::projectSurfaceSplats(surfaces, near, s), near, s, {}, surfaceStats, nullptr, &small);
     });
     EXPECT_NE(surfacePairs.find("splat-tile pairs need"), std::string::npos) << surfacePairs;
 }

@@ -161,7 +161,7 @@ TEST(Progress, EveryStageAdvancesExactlyTheUnitsItDeclares)
     expectComplete("surface kernels (one per leaf node)", surface.grid->tree().leafCount());
     detail::SurfaceStats surfaceStats;
     const Camera sphereView(orthoDownZ(0.0, 0.0, 5.0, 3.0, 150), Vec3d(0.0));
-    detail::rasterizeSurfaces(surfaces, sphereView, settings, {}, surfaceStats, &progress);
+    detail::rasterizeSurfaces(detail::projectSurfaceSplats(surfaces, sphereView, settings), sphereView, settings, {}, surfaceStats, &progress);
     EXPECT_GT(progress.units(), 1u);
     expectComplete("surface z-buffer (one per screen tile)", progress.units());
 }

@@ -298,8 +298,8 @@ TEST(SurfaceCoverage, RelatingOnlyTheDrawnKernelsLeavesTheImageUnchanged)
             std::size_t skipped = every.kernels.size() - drawn.kernels.size(); // in leaves out of view
             for (const detail::SurfaceKernel& k : drawn.kernels) skipped += k.area == 0.0;
             detail::SurfaceStats a, b;
-            const Frame fa = detail::rasterizeSurfaces(every, camera, matte(), {}, a);
-            const Frame fb = detail::rasterizeSurfaces(drawn, camera, matte(), {}, b);
+            const Frame fa = detail::rasterizeSurfaces(detail::projectSurfaceSplats(every, camera, matte()), camera, matte(), {}, a);
+            const Frame fb = detail::rasterizeSurfaces(detail::projectSurfaceSplats(drawn, camera, matte()), camera, matte(), {}, b);
             std::printf("%s, %s: %zu of %zu kernels not built or not related\n", scene.name, view.name, skipped, every.kernels.size());
             EXPECT_GT(skipped, every.kernels.size() / 4) << scene.name << ", " << view.name;
             EXPECT_EQ(a.splats, b.splats);

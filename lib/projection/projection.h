@@ -6,6 +6,7 @@
 #pragma once
 
 #include "projection/brick_bounds.h"
+#include "projection/disc_coverage.h"
 #include "projection/splat_projection.h"
 #include "projection/splat_window.h"
 #include "projection/surface_projection.h"

@@ -3,8 +3,11 @@
 ///        rasteriser (level sets and fog --iso surfaces).
 #pragma once
 
+#include "projection/disc_coverage.h"
 #include "projection/splat_projection.h"
 #include "source/source.h"
+#include "support/huge_page_allocator.h"
+#include "support/rgb.h"
 
 #include <vector>
 
@@ -33,6 +36,40 @@ SurfaceRequest levelSetRequest(const RenderSettings& settings, const Camera& cam
 /// The footprint (Eq. 35) of a surface kernel of tangential std. deviation @a sigma with
 /// camera-space centre @a t and @a normal (as facesEye gives them). False if it does not project.
 bool projectSurface(const Vec3d& t, const Vec3d& normal, double sigma, const ProjectionParams& params, Footprint& fp);
+
+/// A projected, shaded surface kernel.
+struct SurfaceSplat
+{
+    float cx, cy;          ///< centre, raster
+    float qa, qb, qc;      ///< conic, 1/pixels^2
+    float cutoff;          ///< the filtered footprint: weights where d^T Q d < cutoff
+    float weight;          ///< area x footprint peak
+    float colour[3];       ///< shaded colour
+    double depth;          ///< camera depth of the centre
+    DiscCoverage disc;     ///< the kernel's disc in its tangent plane, seen from the camera
+    double depthRange;     ///< plane depths along a ray are clamped to depth +- this: the disc
+                           ///< and two pixels' width (the filtered footprint reaches that far)
+    int x0, y0, x1, y1;
+};
+
+/// What the surface rasteriser receives (raster/surface_rasterizer.h): a surface's splats,
+/// projected and shaded, and what its z-buffer needs of the kernels.
+struct SurfaceSplatSet
+{
+    /// One per kernel facing the eye, in the kernels' order; those outside the frame have an
+    /// empty pixel box (x1 < x0). Only the kernels facing the eye take memory.
+    LargeArray<SurfaceSplat> splats;
+    std::size_t kernels = 0; ///< the surface's kernels, facing the eye or not
+    double spacing = 0.0;    ///< SurfaceSet::spacing: the unit of the depth layers' tolerance
+};
+
+/// The surface splats (Eq. 35) of @a set through @a camera: each kernel facing the eye
+/// projected with the filtered footprint's cut-off at kSurfaceCutoffRadius sigma (at most
+/// --cutoff-radius), its disc seen through the camera (disc_coverage.h), and shaded with
+/// settings.surface.shader, or coloured @a colours[i] (index-aligned with the kernels: fog
+/// --iso surfaces lit by the light) where given.
+SurfaceSplatSet projectSurfaceSplats(const SurfaceSet& set, const Camera& camera, const RenderSettings& settings,
+    const std::vector<Rgb>* colours = nullptr);
 
 } // namespace detail
 } // namespace vdb_ewa

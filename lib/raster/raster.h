@@ -6,7 +6,6 @@
 ///        (docs/architecture.md).
 #pragma once
 
-#include "raster/disc_coverage.h"
 #include "raster/light_on_demand.h"
 #include "raster/slab_compositor.h"
 #include "raster/surface_rasterizer.h"

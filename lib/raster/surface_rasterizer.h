@@ -1,14 +1,14 @@
 /// @file surface_rasterizer.h
-/// @brief Surface kernels -> image: screen-space surface splats (Eq. 35), shaded per splat,
-///        composited per 16x16 tile with a z-buffer and a depth tolerance, colour normalised
-///        by the accumulated weights (Zwicker et al. 2002, Sec. 7.2).
+/// @brief Surface splats -> image: screen-space surface splats (Eq. 35, projected and shaded
+///        by projection/surface_projection.h), composited per 16x16 tile with a z-buffer and a
+///        depth tolerance, colour normalised by the accumulated weights (Zwicker et al. 2002,
+///        Sec. 7.2).
 #pragma once
 
+#include "projection/projection.h"
 #include "raster/surface_layer.h"
-#include "source/source.h"
 #include "support/memory_budget.h"
 #include "support/progress.h"
-#include "support/rgb.h"
 
 #include <vdb_ewa/camera.h>
 #include <vdb_ewa/frame.h>
@@ -24,27 +24,27 @@ struct SurfaceStats
     std::uint64_t splatTilePairs = 0;
 };
 
-/// Back-facing kernels are culled. Per pixel, its (splat, pixel) pairs in depth order (the
+/// The splats of @a surfaces (back-facing kernels culled by projectSurfaceSplats). Per pixel,
+/// its (splat, pixel) pairs in depth order (the
 /// tangent plane's depth along the pixel's ray), in up to 4 layers front to back: a layer's
 /// front is the nearest pair whose disc covers one of the pixel's 4x4 subsamples not yet
 /// covered (raster/disc_coverage.h), and the pairs within settings.surface.tolerance lattice
-/// steps (SurfaceSet::spacing) of it join it. Weight w = area x footprint; a layer's colour = sum w c / sum w over
+/// steps (SurfaceSplatSet::spacing) of it join it. Weight w = area x footprint; a layer's colour = sum w c / sum w over
 /// its pairs on the kept side of their crease clips, spread over the subsamples it newly
 /// covers; alpha = covered subsamples / 16. Deterministic (ties by kernel order). Z, where
 /// alpha >= 0.5: the front layer's weighted mean depth. Passes: depth and transmittance
 /// (1 - alpha); the others are volume passes (docs/equations.md#surface-coverage).
 /// @a progress: one unit per screen tile; throws Cancelled. @a budget: the splat-tile pairs are
 /// counted against it before they are stored (BudgetError).
-Frame rasterizeSurfaces(const SurfaceSet& surfaces, const Camera& camera, const RenderSettings& settings,
+Frame rasterizeSurfaces(const SurfaceSplatSet& surfaces, const Camera& camera, const RenderSettings& settings,
     const PassRequest& passes, SurfaceStats& stats, Progress* progress = nullptr,
     const MemoryBudget* budget = nullptr);
 
 /// The same surface as a layer: premultiplied colour, coverage alpha and the front layer's
-/// camera depth per pixel. @a colours: each kernel's colour (index-aligned with the kernels),
-/// used instead of settings.surface.shader (fog --iso surfaces, lit by the light); null: shaded.
-SurfaceLayer rasterizeSurfaceLayer(const SurfaceSet& surfaces, const Camera& camera, const RenderSettings& settings,
-    SurfaceStats& stats, Progress* progress = nullptr, const MemoryBudget* budget = nullptr,
-    const std::vector<Rgb>* colours = nullptr);
+/// camera depth per pixel (the splats' colours as projectSurfaceSplats shaded them: fog --iso
+/// surfaces are coloured by the light there).
+SurfaceLayer rasterizeSurfaceLayer(const SurfaceSplatSet& surfaces, const Camera& camera, const RenderSettings& settings,
+    SurfaceStats& stats, Progress* progress = nullptr, const MemoryBudget* budget = nullptr);
 
 } // namespace detail
 } // namespace vdb_ewa

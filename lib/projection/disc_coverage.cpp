@@ -1,5 +1,5 @@
 /// @file disc_coverage.cpp
-#include "raster/disc_coverage.h"
+#include "projection/disc_coverage.h"
 
 #include <algorithm>
 #include <cmath>
