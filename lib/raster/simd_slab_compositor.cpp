@@ -59,6 +59,15 @@ inline hn::Mask<FloatTag> lanesIn(int first, int x0, int x1)
     return hn::And(hn::Ge(x, hn::Set(d, float(x0))), hn::Le(x, hn::Set(d, float(x1))));
 }
 
+/// The lanes of the vector at tile pixel p whose byte flag (TileCompositor::mAlive,
+/// mSurfacePending) at @a flags is set.
+inline hn::Mask<FloatTag> byteLanes(const std::uint8_t* flags)
+{
+    const hn::RebindToSigned<FloatTag> di;
+    const hn::Rebind<std::uint8_t, decltype(di)> du8;
+    return hn::RebindMask(FloatTag(), hn::Ne(hn::PromoteTo(di, hn::LoadU(du8, flags)), hn::Zero(di)));
+}
+
 /// 1 - exp(-tau), 0 where tau <= 0 (slabAbsorbed).
 inline Floats absorbedOf(Floats tau)
 {
@@ -303,6 +312,11 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
     const FloatTag d;
     const std::size_t base = slot(slab) * C * kTilePixels;
     const Floats zero = hn::Zero(d), one = hn::Set(d, 1.0f);
+    // meanT at the lanes from tile pixel @a at, in its order of operations.
+    const auto meanOf = [&](int at) {
+        return hn::Div(hn::Add(hn::Add(hn::LoadU(d, &mT[at]), hn::LoadU(d, &mT[channel(1) * kTilePixels + at])), hn::LoadU(d, &mT[channel(2) * kTilePixels + at])),
+            hn::Set(d, 3.0f));
+    };
     for (int first = x0 & ~(kLanes - 1); first <= x1; first += kLanes) {
         const int p = y * kTileSize + first;
         // 1. Per channel 1 - exp(-tau), the slab's mass and |T|^2 behind the whole slab.
@@ -334,40 +348,43 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
         // below, lit per slab sample, those whose ray stops inside the slab with the part in
         // front of the crossing (cut: its fraction, terminationFraction, 1 for the others) as
         // flushPixel composites it.
-        alignas(64) float composite[kLanes], lit[C][kLanes], litColoured[C][kLanes], emission[C][kLanes], tBefore[C][kLanes], meanBefore[kLanes];
-        alignas(64) float lighted[kLanes], cut[kLanes];
+        alignas(64) float lit[C][kLanes], litColoured[C][kLanes], emission[C][kLanes], tBefore[C][kLanes], meanBefore[kLanes];
+        alignas(64) float lighted[kLanes], cut[kLanes], lanes[kLanes];
         const bool cutHere = layers == 0;
-        bool anyLighted = false, anyCut = false;
-        for (int i = 0; i < kLanes; ++i) {
-            const int x = first + i, q = p + i;
-            composite[i] = lighted[i] = 0.0f;
-            cut[i] = 1.0f;
-            if (x < x0 || x > x1) continue;
-            const bool stops = mAlive[q] && mass[i] > 0.0f && t2After[i] * float(3 / C) < mCutoff;
-            if (mSurfacePending[q] || (stops && !cutHere)) {
-                flushPixel(slab, q);
-            } else if (mAlive[q]) {
-                composite[i] = 1.0f;
-                ++mComposites;
-                if (stops) {
-                    cut[i] = terminationFraction(slab, base, q);
-                    anyCut = anyCut || cut[i] < 1.0f;
-                }
-                if (passes) {
-                    for (int c = 0; c < C; ++c) tBefore[c][i] = mT[c * kTilePixels + q];
-                    meanBefore[i] = meanT(q);
-                }
-                if (mOptions.lit() && mass[i] > 0.0f) {
-                    lighted[i] = 1.0f;
-                    anyLighted = true;
-                }
+        const auto inRange = lanesIn(first, x0, x1);
+        const auto alive = byteLanes(mAlive + p);
+        const auto massive = hn::Gt(hn::Load(d, mass), zero);
+        const auto stops = hn::And(hn::And(alive, massive), hn::Lt(hn::Mul(hn::Load(d, t2After), hn::Set(d, float(3 / C))), hn::Set(d, mCutoff)));
+        const auto pending = byteLanes(mSurfacePending + p);
+        const auto alone = hn::And(inRange, cutHere ? pending : hn::Or(pending, stops));
+        if (!hn::AllFalse(d, alone)) {
+            hn::Store(hn::IfThenElseZero(alone, one), d, lanes);
+            for (int i = 0; i < kLanes; ++i)
+                if (lanes[i] != 0.0f) flushPixel(slab, p + i);
+        }
+        const auto chosen = hn::AndNot(alone, hn::And(inRange, alive));
+        mComposites += std::uint64_t(hn::CountTrue(d, chosen));
+        hn::Store(one, d, cut);
+        bool anyCut = false;
+        if (cutHere && !hn::AllFalse(d, hn::And(chosen, stops))) {
+            hn::Store(hn::IfThenElseZero(hn::And(chosen, stops), one), d, lanes);
+            for (int i = 0; i < kLanes; ++i) {
+                if (lanes[i] == 0.0f) continue;
+                cut[i] = terminationFraction(slab, base, p + i);
+                anyCut = anyCut || cut[i] < 1.0f;
             }
         }
+        if (passes) {
+            for (int c = 0; c < C; ++c) hn::Store(hn::LoadU(d, &mT[c * kTilePixels + p]), d, tBefore[c]);
+            hn::Store(meanOf(p), d, meanBefore);
+        }
+        const auto lightedLanes = mOptions.lit() ? hn::And(chosen, massive) : hn::Lt(one, zero);
+        const bool anyLighted = !hn::AllFalse(d, lightedLanes);
+        hn::Store(hn::IfThenElseZero(lightedLanes, one), d, lighted);
         // 3. The light on those lanes' layers (lightSlab: the slab's mass with the mean and
         // variance of its position, lit at its front and back from each light's map, lightAt),
         // times the scattering weight (the lights summed: lit per unit colour, the source with
         // each light's colour), then the exact front-to-back update (compositeSlab).
-        const auto lightedLanes = hn::Ne(hn::Load(d, lighted), zero);
         Floats u0 = zero, u1 = zero;
         if (anyLighted) {
             const std::size_t m = slot(slab) * kTilePixels + std::size_t(p);
@@ -527,7 +544,6 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
                 source[c] = hn::Add(source[c], colouredSum[c]);
             }
         }
-        const auto chosen = hn::Ne(hn::Load(d, composite), zero);
         Floats t2Now = zero;
         for (int c = 0; c < C; ++c) {
             const Floats a = hn::Load(d, absorbed[c]);
@@ -565,28 +581,41 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
         // 5. The passes' share (Z, deep sample, extra sources: flushPasses), vdb_render's ray
         // termination (|T|^2 < cutoff), and the slab's accumulators cleared (lanes outside
         // x0..x1 hold zeros: nothing outside the dirty box was added).
-        alignas(64) float t2Lanes[kLanes];
-        hn::Store(t2Now, d, t2Lanes);
-        for (int i = 0; i < kLanes; ++i) {
-            if (composite[i] == 0.0f) continue;
-            if (passes) {
-                if (cut[i] < 1.0f) {
-                    // The passes' sources and depth of the part in front of the crossing.
+        // Per lane only where something happens: the passes (Z only where the mean alpha crosses
+        // 0.5 in this slab, flushPasses' test; every composited lane with extra passes or deep
+        // samples) and the rays that stop (vdb_render's |T|^2 < cutoff, or cut inside the slab).
+        const auto ends = hn::And(chosen, hn::Or(hn::Lt(hn::Load(d, cut), one), hn::Lt(hn::Mul(t2Now, hn::Set(d, float(3 / C))), hn::Set(d, mCutoff))));
+        auto perLane = ends;
+        if (passes) {
+            const bool everyLane = mPassCount > 0 || mOptions.passes.deep;
+            const auto crosses = hn::And(hn::And(hn::Gt(hn::Load(d, meanBefore), hn::Set(d, 0.5f)), hn::Le(meanOf(p), hn::Set(d, 0.5f))), hn::IsInf(hn::LoadU(d, &mZ[p])));
+            perLane = hn::Or(perLane, hn::And(chosen, everyLane ? chosen : crosses));
+        }
+        if (!hn::AllFalse(d, perLane)) {
+            alignas(64) float endsLanes[kLanes];
+            hn::Store(hn::IfThenElseZero(perLane, one), d, lanes);
+            hn::Store(hn::IfThenElseZero(ends, one), d, endsLanes);
+            for (int i = 0; i < kLanes; ++i) {
+                if (lanes[i] == 0.0f) continue;
+                if (passes) {
+                    float e[C], l[C], coloured[C];
                     for (int c = 0; c < C; ++c) {
-                        mTau[base + std::size_t(c) * kTilePixels + std::size_t(p + i)] *= cut[i];
-                        for (int k = 0; k < mPassCount; ++k) mPassEmission[passIndex(slab, k, c) + std::size_t(p + i)] *= cut[i];
+                        mTBefore[c] = tBefore[c][i];
+                        e[c] = emission[c][i];
+                        l[c] = lit[c][i];
+                        coloured[c] = litColoured[c][i];
                     }
+                    if (cut[i] < 1.0f) {
+                        // The passes' sources and depth of the part in front of the crossing.
+                        for (int c = 0; c < C; ++c) {
+                            mTau[base + std::size_t(c) * kTilePixels + std::size_t(p + i)] *= cut[i];
+                            for (int k = 0; k < mPassCount; ++k) mPassEmission[passIndex(slab, k, c) + std::size_t(p + i)] *= cut[i];
+                        }
+                    }
+                    flushPasses(slab, p + i, meanBefore[i], e, l, coloured);
                 }
-                float e[C], l[C], coloured[C];
-                for (int c = 0; c < C; ++c) {
-                    mTBefore[c] = tBefore[c][i];
-                    e[c] = emission[c][i];
-                    l[c] = lit[c][i];
-                    coloured[c] = litColoured[c][i];
-                }
-                flushPasses(slab, p + i, meanBefore[i], e, l, coloured);
+                if (endsLanes[i] != 0.0f) terminate(p + i);
             }
-            if (cut[i] < 1.0f || t2Lanes[i] * float(3 / C) < mCutoff) terminate(p + i);
         }
         for (int c = 0; c < C; ++c) {
             const std::size_t i = base + std::size_t(c) * kTilePixels + std::size_t(p);
