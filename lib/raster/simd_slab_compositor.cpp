@@ -366,30 +366,12 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
         mComposites += std::uint64_t(hn::CountTrue(d, chosen));
         hn::Store(one, d, cut);
         bool anyCut = false;
-        const auto cutting = hn::And(chosen, stops);
-        if (cutHere && !hn::AllFalse(d, cutting)) {
-            if constexpr (C == 1) {
-                // terminationFraction's one exact Newton step with one channel: |T(u)|^2 =
-                // 3 T^2 exp(-u beta), beta = 2 tau, reaches the cutoff at
-                // u = (ln 3 T^2 - ln cutoff) / beta, where it is at or above it in front and below
-                // it behind (1 elsewhere; 0 for a step below 1e-9, as the scalar path).
-                const Floats t = hn::LoadU(d, &mT[p]);
-                const Floats beta = hn::Mul(hn::Set(d, 2.0f), hn::Max(hn::LoadU(d, &mTau[base + std::size_t(p)]), zero));
-                const Floats front = hn::Mul(hn::Set(d, 3.0f), hn::Mul(t, t));
-                const Floats back = hn::Mul(front, hn::Exp(d, hn::Neg(beta)));
-                const Floats cutoff = hn::Set(d, mCutoff);
-                const auto crosses = hn::And(hn::Lt(back, cutoff), hn::Ge(front, cutoff));
-                const Floats step = hn::Div(hn::Sub(hn::Log(d, front), hn::Set(d, std::log(mCutoff))), hn::IfThenElse(crosses, beta, one));
-                const Floats u = hn::IfThenElse(crosses, hn::IfThenElseZero(hn::Gt(step, hn::Set(d, 1e-9f)), hn::Min(step, one)), one);
-                hn::Store(hn::IfThenElse(cutting, u, one), d, cut);
-                anyCut = !hn::AllFalse(d, hn::And(cutting, hn::Lt(u, one)));
-            } else {
-                hn::Store(hn::IfThenElseZero(cutting, one), d, lanes);
-                for (int i = 0; i < kLanes; ++i) {
-                    if (lanes[i] == 0.0f) continue;
-                    cut[i] = terminationFraction(slab, base, p + i);
-                    anyCut = anyCut || cut[i] < 1.0f;
-                }
+        if (cutHere && !hn::AllFalse(d, hn::And(chosen, stops))) {
+            hn::Store(hn::IfThenElseZero(hn::And(chosen, stops), one), d, lanes);
+            for (int i = 0; i < kLanes; ++i) {
+                if (lanes[i] == 0.0f) continue;
+                cut[i] = terminationFraction(slab, base, p + i);
+                anyCut = anyCut || cut[i] < 1.0f;
             }
         }
         if (passes) {
