@@ -605,13 +605,7 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
                         l[c] = lit[c][i];
                         coloured[c] = litColoured[c][i];
                     }
-                    if (cut[i] < 1.0f) {
-                        // The passes' sources and depth of the part in front of the crossing.
-                        for (int c = 0; c < C; ++c) {
-                            mTau[base + std::size_t(c) * kTilePixels + std::size_t(p + i)] *= cut[i];
-                            for (int k = 0; k < mPassCount; ++k) mPassEmission[passIndex(slab, k, c) + std::size_t(p + i)] *= cut[i];
-                        }
-                    }
+                    if (cut[i] < 1.0f) keepFront(slab, p + i, cut[i]); // the passes' sources and depth
                     flushPasses(slab, p + i, meanBefore[i], e, l, coloured);
                 }
                 if (endsLanes[i] != 0.0f) terminate(p + i);

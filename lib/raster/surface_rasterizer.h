@@ -25,8 +25,8 @@ struct SurfaceStats
 };
 
 /// The splats of @a surfaces (back-facing kernels culled by projectSurfaceSplats). Per pixel,
-/// its (splat, pixel) pairs in depth order (the
-/// tangent plane's depth along the pixel's ray), in up to 4 layers front to back: a layer's
+/// its (splat, pixel) pairs in depth order (the tangent plane's depth along the pixel's ray),
+/// in up to 4 layers front to back: a layer's
 /// front is the nearest pair whose disc covers one of the pixel's 4x4 subsamples not yet
 /// covered (projection/disc_coverage.h), and the pairs within settings.surface.tolerance lattice
 /// steps (SurfaceSplatSet::spacing) of it join it. Weight w = area x footprint; a layer's colour = sum w c / sum w over

@@ -1039,9 +1039,9 @@ private:
         }
         const float u = mass > 0.0f && t2After * float(3 / C) < mCutoff ? terminationFraction(slab, base, p) : 1.0f;
         if (u < 1.0f) {
+            keepFront(slab, p, u);
             for (int c = 0; c < C; ++c) {
                 const std::size_t i = base + c * kTilePixels + std::size_t(p);
-                mTau[i] *= u;
                 const float before = absorbed[c];
                 absorbed[c] = slabAbsorbed(mTau[i]);
                 emission[c] *= u;
@@ -1051,8 +1051,6 @@ private:
                 const float kept = before > 0.0f ? absorbed[c] / before : 0.0f;
                 lit[c] *= kept;
                 lighted[c] *= kept;
-                for (int k = 0; k < mPassCount; ++k) mPassEmission[passIndex(slab, k, c) + std::size_t(p)] *= u;
-                for (int k = 0; k < (mLayerTau.empty() ? 0 : mLayers); ++k) mLayerTau[layerIndex(slab, k, c) + std::size_t(p)] *= u;
             }
         }
         float t2 = 0.0f; // |T|^2 over R, G, B
@@ -1066,6 +1064,17 @@ private:
         if (passes) flushPasses(slab, p, meanBefore, emission, lit, lighted);
         ++mComposites;
         if (u < 1.0f || t2 * float(3 / C) < mCutoff) terminate(p);
+    }
+
+    /// Pixel p's ray stops at fraction @a u of @a slab: its optical depth, the passes' sources
+    /// and the shutter layers' optical depths keep the part in front of the crossing.
+    void keepFront(std::int64_t slab, int p, float u)
+    {
+        for (int c = 0; c < C; ++c) {
+            mTau[slot(slab) * C * kTilePixels + std::size_t(c) * kTilePixels + std::size_t(p)] *= u;
+            for (int k = 0; k < mPassCount; ++k) mPassEmission[passIndex(slab, k, c) + std::size_t(p)] *= u;
+            for (int k = 0; k < (mLayerTau.empty() ? 0 : mLayers); ++k) mLayerTau[layerIndex(slab, k, c) + std::size_t(p)] *= u;
+        }
     }
 
     /// Pixel p's surface is still to be composited and lies in front of @a slab's middle.
