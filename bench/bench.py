@@ -22,6 +22,11 @@
                                                          where DIR holds a tradeoff run's references)
   bench/bench.py surfaces [--res 1920x1080] [--shader diffuse] [--repeat 3]
                                                          level sets: surface splats against vdb_render
+  bench/bench.py imagelod-scale [--res 480x270] [--px 0.1,3,20]
+                                                         issue 54: --image-lod's levels at both ends of
+                                                         scale, thin and thick, against off
+  bench/bench.py draft [--res 1920x1080] [--repeat 3]   issue 54: --quality draft against default and
+                                                         vdb_render's defaults, interleaved
   bench/bench.py roofline [--res 1920x1080] [--quality draft,default] [--build DIR]
                                                          issue 17: the rasteriser's achieved rate against
                                                          the peak of its inner loop (bench/roofline)
@@ -80,6 +85,7 @@ scripts/install-deps.sh --bench; run with /usr/bin/python3).
 Machines are noisy: compare ratios, not seconds.
 """
 import argparse
+import math
 import os
 import re
 import statistics
@@ -491,6 +497,33 @@ vdb.write({path!r}, grids=[grid])
     return path
 
 
+def interleaved(cmds, repeat):
+    """Run each of @a cmds (name -> command) once a round for @a repeat rounds: each one's wall
+    times and CPU times (its children's user + system) per round, and its last stdout."""
+    wall = {k: [] for k in cmds}
+    cpu = {k: [] for k in cmds}
+    outs = {}
+    for _ in range(repeat):
+        for k, c in cmds.items():
+            before = os.times()
+            dt, outs[k] = run(c)
+            after = os.times()
+            wall[k].append(dt)
+            cpu[k].append(after.children_user + after.children_system - before.children_user - before.children_system)
+    return wall, cpu, outs
+
+
+def views(tmp, res, keep):
+    """(label, path, camera, the options that frame it at @a res) for each scene @a keep(label)
+    accepts and the generated dense block (written into @a tmp), from the README camera and the
+    default one (vdb_render's framing)."""
+    scenes = [s for s in SCENES if os.path.exists(s[1]) and keep(s[0])]
+    scenes.append(("dense block (generated)", dense_block(tmp), DENSE_BLOCK_CAMERA))
+    for label, path, cam in scenes:
+        for camera, cargs in (("README", cam.split()), ("default", [])):
+            yield label, path, camera, ["-res", res, *cargs]
+
+
 def cmd_cull(args):
     """The streamed frame: --cull on against --cull off (the whole frame) and vdb_render's
     defaults, interleaved round by round, from each scene's README camera and from the default
@@ -502,34 +535,49 @@ def cmd_cull(args):
     print("| scene | camera | vdb_render (s) | cull off (s) | cull on (s) | on vs off | on vs vdb_render | bricks expanded / hidden / outside "
           "| kernels on / off | light rays marched on | stages on: kernels, shadows, project, rasterise | peak MB on / off | PSNR on vs off (dB) |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
-    scenes = [s for s in SCENES if os.path.exists(s[1]) and "grids/" not in s[0]]
-    scenes.append(("dense block (generated)", dense_block(tmp), DENSE_BLOCK_CAMERA))
-    for label, path, cam in scenes:
-        for camera, cargs in (("README", cam.split()), ("default", [])):
-            common = ["-res", args.res, *cargs]
-            cmds = {"vdb_render": ["vdb_render", path, os.path.join(tmp, "v.exr"), *common],
-                    "off": [*EWA_RENDER, path, os.path.join(tmp, "off.exr"), *common, "--cull", "off", "-v"],
-                    "on": [*EWA_RENDER, path, os.path.join(tmp, "on.exr"), *common, "--cull", "on", "-v"]}
-            times = {k: [] for k in cmds}
-            outs = {}
-            for _ in range(args.repeat):
-                for k, c in cmds.items():
-                    dt, out = run(c)
-                    times[k].append(dt)
-                    outs[k] = out
-            med = {k: statistics.median(v) for k, v in times.items()}
-            m = re.search(r"(\d+) bricks in \d+ depth windows?, (\d+) expanded, (\d+) hidden behind opaque tiles, (\d+) outside", outs["on"])
-            bricks = f"{m.group(2)} / {m.group(3)} / {m.group(4)} of {m.group(1)}" if m else "not streamed"
-            kernels = [re.search(r"; (\d+) kernels \(", outs[k]).group(1) for k in ("on", "off")]
-            lm = re.search(r"light on demand: (\d+) of (\d+) light-map rays marched", outs["on"])
-            light = f"{int(lm.group(1)) / int(lm.group(2)):.0%} of {lm.group(2)}" if lm else "all"
-            peaks = [re.search(r"peak memory (\d+) MB", outs[k]).group(1) for k in ("on", "off")]
-            st = stages(outs["on"])
-            psnr = diff(os.path.join(tmp, "on.exr"), os.path.join(tmp, "off.exr"))[1]
-            print(f"| {label} | {camera} | {med['vdb_render']:.2f} | {med['off']:.2f} | {med['on']:.2f} | {med['off'] / med['on']:.2f}x | "
-                  f"{med['vdb_render'] / med['on']:.1f}x | {bricks} | {kernels[0]} / {kernels[1]} | {light} | {st.get('kernels', nan):.3f}, "
-                  f"{st.get('shadows', nan):.3f}, {st.get('project', nan):.3f}, {st.get('rasterise', nan):.3f} | {peaks[0]} / {peaks[1]} | "
-                  f"{psnr:.1f} |", flush=True)
+    for label, path, camera, common in views(tmp, args.res, lambda label: "grids/" not in label):
+        cmds = {"vdb_render": ["vdb_render", path, os.path.join(tmp, "v.exr"), *common],
+                "off": [*EWA_RENDER, path, os.path.join(tmp, "off.exr"), *common, "--cull", "off", "-v"],
+                "on": [*EWA_RENDER, path, os.path.join(tmp, "on.exr"), *common, "--cull", "on", "-v"]}
+        times, _, outs = interleaved(cmds, args.repeat)
+        med = {k: statistics.median(v) for k, v in times.items()}
+        m = re.search(r"(\d+) bricks in \d+ depth windows?, (\d+) expanded, (\d+) hidden behind opaque tiles, (\d+) outside", outs["on"])
+        bricks = f"{m.group(2)} / {m.group(3)} / {m.group(4)} of {m.group(1)}" if m else "not streamed"
+        kernels = [re.search(r"; (\d+) kernels \(", outs[k]).group(1) for k in ("on", "off")]
+        lm = re.search(r"light on demand: (\d+) of (\d+) light-map rays marched", outs["on"])
+        light = f"{int(lm.group(1)) / int(lm.group(2)):.0%} of {lm.group(2)}" if lm else "all"
+        peaks = [re.search(r"peak memory (\d+) MB", outs[k]).group(1) for k in ("on", "off")]
+        st = stages(outs["on"])
+        psnr = diff(os.path.join(tmp, "on.exr"), os.path.join(tmp, "off.exr"))[1]
+        print(f"| {label} | {camera} | {med['vdb_render']:.2f} | {med['off']:.2f} | {med['on']:.2f} | {med['off'] / med['on']:.2f}x | "
+              f"{med['vdb_render'] / med['on']:.1f}x | {bricks} | {kernels[0]} / {kernels[1]} | {light} | {st.get('kernels', nan):.3f}, "
+              f"{st.get('shadows', nan):.3f}, {st.get('project', nan):.3f}, {st.get('rasterise', nan):.3f} | {peaks[0]} / {peaks[1]} | "
+              f"{psnr:.1f} |", flush=True)
+
+
+def cmd_draft(args):
+    """Issue 54's draft: `--quality draft` against `default` and vdb_render's defaults,
+    interleaved round by round, float EXRs (vdb_render's file type), from each scene's README
+    camera and the default camera; medians, and draft / default as the median of each round's
+    ratio (wall and CPU time)."""
+    tmp = tempfile.mkdtemp(prefix="vdb_ewa_draft_")
+    print(f"# --quality draft against default and vdb_render's defaults, {args.res}, median of {args.repeat} interleaved rounds, "
+          f"{os.cpu_count()} cores")
+    print("| scene | camera | vdb_render (s) | default (s) | draft (s) | draft / default (wall) | draft / default (CPU) "
+          "| default against vdb_render | draft against vdb_render | draft stages: kernels, shadows, project, rasterise, write |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for label, path, camera, common in views(tmp, args.res, lambda label: "tiles" not in label):
+        cmds = {"vdb_render": ["vdb_render", path, os.path.join(tmp, "v.exr"), *common],
+                "default": [*EWA_RENDER, path, os.path.join(tmp, "default.exr"), *common, "-v"],
+                "draft": [*EWA_RENDER, path, os.path.join(tmp, "draft.exr"), *common, "--quality", "draft", "-v"]}
+        wall, cpu, outs = interleaved(cmds, args.repeat)
+        med = {k: statistics.median(v) for k, v in wall.items()}
+        ratio = statistics.median([a / b for a, b in zip(wall["draft"], wall["default"])])
+        cpu_ratio = statistics.median([a / b for a, b in zip(cpu["draft"], cpu["default"])])
+        st = stages(outs["draft"])
+        print(f"| {label} | {camera} | {med['vdb_render']:.2f} | {med['default']:.2f} | {med['draft']:.2f} | {ratio:.2f}x | {cpu_ratio:.2f}x "
+              f"| {med['vdb_render'] / med['default']:.1f}x | {med['vdb_render'] / med['draft']:.1f}x | "
+              + ", ".join(f"{st.get(k, nan):.3f}" for k in ("kernels", "shadows", "project", "rasterise", "write")) + " |", flush=True)
 
 
 def with_velocity(src, folder, label, spin, rise):
@@ -726,6 +774,17 @@ SCALE_SETTINGS = [("default --supersample 1", ["--supersample", "1"]), ("draft",
                   ("default", []), ("high", ["--quality", "high"]), ("final", ["--quality", "final"])]
 
 
+def scale_camera(res, voxel, target, direction, px):
+    """The camera options at @a res looking at @a target from @a direction, at the distance
+    where a voxel of @a voxel world units spans @a px pixels (vdb_render's default 50 mm lens)."""
+    w = int(res.split("x")[0])
+    focal = w * 50.0 / 41.2136  # pixels: vdb_render's default 50 mm lens on a 41.2136 mm film back
+    n = sum(d * d for d in direction) ** 0.5
+    dist = voxel * focal / px
+    eye = ",".join(f"{t + d / n * dist:.6g}" for t, d in zip(target, direction))
+    return ["-res", res, "-translate", eye, "-lookat", ",".join(f"{t:.6g}" for t in target)]
+
+
 def scale_metrics(out, ref):
     """(PSNR over RGB, peak 1; brightness: sum of RGB over the reference's; alpha IoU at 0.05)
     over the reference's footprint: its pixels of alpha above 1e-3 and 2 more around, so that
@@ -761,8 +820,6 @@ def cmd_scale(args):
     shared assets, seen from the README camera's direction at the distance where a voxel spans
     PX pixels; two media: vdb_render's model, and a thick one with physical shadows. Time of
     each setting against vdb_render's defaults on the same camera, in the same run."""
-    w, h = (int(x) for x in args.res.split("x"))
-    focal = w * 50.0 / 41.2136  # pixels: vdb_render's default 50 mm lens on a 41.2136 mm film back
     tmp = tempfile.mkdtemp(prefix="vdb_ewa_scale_")
     print(f"# {args.res}: median of {args.repeat} runs a setting, {os.cpu_count()} cores; reference: --method raymarch "
           "--step 0.25 --shadowstep 0.375 --pixel-samples 16 (256 below half a pixel a voxel, 1024 below a fifth); figures over the reference's footprint")
@@ -772,11 +829,8 @@ def cmd_scale(args):
     for label, path, voxel, target, direction in SCALE_SCENES:
         if (wanted and label.split()[0] not in wanted) or not os.path.exists(path):
             continue
-        n = sum(d * d for d in direction) ** 0.5
         for px in (float(p) for p in args.px.split(",")):
-            dist = voxel * focal / px
-            eye = ",".join(f"{t + d / n * dist:.6g}" for t, d in zip(target, direction))
-            camera = ["-res", args.res, "-translate", eye, "-lookat", ",".join(f"{t:.6g}" for t in target)]
+            camera = scale_camera(args.res, voxel, target, direction, px)
             for medium, model in SCALE_MEDIA:
                 if args.media != "all" and ("thick" if "thick" in medium else "thin") not in args.media.split(","):
                     continue
@@ -880,15 +934,16 @@ def cmd_python(args):
 
 def cmd_imagelod(args):
     """Image-space level of detail (--image-lod): each scene at --image-lod off and each asked
-    value, interleaved round by round; the footprint samples at each level (-v), the median
-    frame time and CPU time against off in the same rounds, and the PSNR against off."""
+    value (a trailing "c": with --image-lod-composite on), interleaved round by round; the
+    footprint samples and slab composites at each level (-v), the median frame time and CPU
+    time against off in the same rounds, and the PSNR against off."""
     tmp = tempfile.mkdtemp(prefix="vdb_ewa_imagelod_")
     values = args.values.split(",")
     print(f"# --image-lod against off, {args.res}, default preset, median of {args.repeat} interleaved rounds, "
           f"{os.cpu_count()} cores")
-    print("| scene | camera | --image-lod | footprint samples (M): every pixel / 2nd / 4th / 8th | frame (s) | against off "
-          "| CPU against off | PSNR against off (dB) |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("| scene | camera | --image-lod | footprint samples (M): every pixel / 2nd / 4th / 8th "
+          "| slab composites (M): every pixel / 2nd / 4th / 8th | frame (s) | against off | CPU against off | PSNR against off (dB) |")
+    print("|---|---|---|---|---|---|---|---|---|")
     scenes = [(l, f, c) for (l, f, c) in SCENES if os.path.exists(f) and "tiles" not in l]
     scenes.append(("dense block (generated)", dense_block(tmp), DENSE_BLOCK_CAMERA))
     for label, path, cam in scenes:
@@ -898,25 +953,65 @@ def cmd_imagelod(args):
             settings = ["off", *values]
             wall = {v: [] for v in settings}
             cpu = {v: [] for v in settings}
-            counts = {}
+            counts, composites = {}, {}
             for _ in range(args.repeat):
                 for v in settings:
                     out = os.path.join(tmp, f"{v}.exr")
+                    lod = ["--image-lod", v[:-1], "--image-lod-composite", "on"] if v.endswith("c") else ["--image-lod", v, "--image-lod-composite", "off"]
                     before = os.times()
-                    dt, stdout = run([*EWA_RENDER, path, out, "-res", args.res, *cargs, "--image-lod", v, "-v"])
+                    dt, stdout = run([*EWA_RENDER, path, out, "-res", args.res, *cargs, *lod, "-v"])
                     after = os.times()
                     wall[v].append(dt)
                     cpu[v].append(after.children_user + after.children_system - before.children_user - before.children_system)
                     m = re.search(r"(\d+) footprint samples(?: \((\d+) at every pixel, (\d+) every 2nd, (\d+) every 4th, (\d+) every 8th)?", stdout)
                     total = int(m.group(1))
                     counts[v] = [int(g) for g in m.groups()[1:]] if m.group(2) else [total, 0, 0, 0]
+                    m = re.search(r"(\d+) slab composites(?: \((\d+) at every pixel, (\d+) every 2nd, (\d+) every 4th, (\d+) every 8th)?", stdout)
+                    composites[v] = [int(g) for g in m.groups()[1:]] if m.group(2) else [int(m.group(1)), 0, 0, 0]
             for v in settings:
                 psnr = "" if v == "off" else f"{diff(os.path.join(tmp, f'{v}.exr'), os.path.join(tmp, 'off.exr'))[1]:.1f}"
                 ratio = statistics.median([a / b for a, b in zip(wall[v], wall["off"])])
                 cpu_ratio = statistics.median([a / b for a, b in zip(cpu[v], cpu["off"])])
                 levels = " / ".join(f"{c / 1e6:.1f}" for c in counts[v])
-                print(f"| {label} | {camera} | {v} | {levels} | {statistics.median(wall[v]):.2f} | {ratio:.2f}x | {cpu_ratio:.2f}x "
-                      f"| {psnr} |", flush=True)
+                composited = " / ".join(f"{c / 1e6:.2f}" for c in composites[v])
+                print(f"| {label} | {camera} | {v} | {levels} | {composited} | {statistics.median(wall[v]):.2f} | {ratio:.2f}x "
+                      f"| {cpu_ratio:.2f}x | {psnr} |", flush=True)
+
+
+def cmd_imagelod_scale(args):
+    """Issue 54: image-space level of detail at both ends of scale. Each SCALE_SCENES scene from
+    its README camera's direction at the distance where a voxel spans PX pixels, in both media
+    (vdb_render's model; thick with physical shadows), at `default` with `--image-lod off`
+    and with --image-lod 4, 2 and 1 (composited at the levels, --image-lod-composite on): the
+    composites at each level (-v), and PSNR and brightness (sum of RGB) against off. Where no
+    footprint is wide enough the image is off's bit for bit."""
+    tmp = tempfile.mkdtemp(prefix="vdb_ewa_imagelod_scale_")
+    print(f"# {args.res}, default preset; each --image-lod N composited at the levels, against --image-lod off")
+    print("| scene | medium | voxel (px) | --image-lod | slab composites (M): every pixel / 2nd / 4th / 8th | PSNR against off (dB) | brightness against off |")
+    print("|---|---|---|---|---|---|---|")
+    import numpy as np
+    import OpenImageIO as oiio
+    def rgb(path):
+        return oiio.ImageBuf(path).get_pixels(oiio.FLOAT)[..., :3].astype(np.float64)
+    for label, path, voxel, target, direction in SCALE_SCENES:
+        if not os.path.exists(path) or label.startswith("pig"):
+            continue
+        for px in (float(p) for p in args.px.split(",")):
+            camera = scale_camera(args.res, voxel, target, direction, px)
+            for medium, model in SCALE_MEDIA:
+                off = os.path.join(tmp, "off.exr")
+                run([*EWA_RENDER, path, off, *camera, *model, "--image-lod", "off"])
+                ref = rgb(off)
+                for v in args.values.split(","):
+                    out = os.path.join(tmp, "lod.exr")
+                    _, stdout = run([*EWA_RENDER, path, out, *camera, *model, "--image-lod", v, "--image-lod-composite", "on", "-v"])
+                    m = re.search(r"(\d+) slab composites(?: \((\d+) at every pixel, (\d+) every 2nd, (\d+) every 4th, (\d+) every 8th)?", stdout)
+                    levels = [int(g) for g in m.groups()[1:]] if m.group(2) else [int(m.group(1)), 0, 0, 0]
+                    img = rgb(out)
+                    mse = float(np.mean((img - ref) ** 2))
+                    psnr = "identical" if mse == 0.0 else f"{10 * math.log10(1.0 / mse):.1f}"
+                    bright = img.sum() / max(ref.sum(), 1e-30)
+                    print(f"| {label} | {medium} | {px:g} | {v} | {' / '.join(f'{c / 1e6:.2f}' for c in levels)} | {psnr} | {bright:.4f} |", flush=True)
 
 
 def cmd_output(args):
@@ -1320,6 +1415,13 @@ def main():
     sy.add_argument("--res", default="960x540")
     sy.add_argument("--repeat", type=int, default=7)
     sy.add_argument("--write", action="store_true", help="the Python process writes the EXR too, as the CLI does")
+    sis = sub.add_parser("imagelod-scale")
+    sis.add_argument("--res", default="480x270")
+    sis.add_argument("--px", default="0.1,3,20")
+    sis.add_argument("--values", default="4,2,1")
+    sd = sub.add_parser("draft")
+    sd.add_argument("--res", default="1920x1080")
+    sd.add_argument("--repeat", type=int, default=3)
     sc = sub.add_parser("cull")
     sc.add_argument("--res", default="1920x1080")
     sc.add_argument("--repeat", type=int, default=3)
@@ -1342,7 +1444,7 @@ def main():
     svo.add_argument("--keep", default="", help="folder that keeps the moved cloud and the reference between runs")
     si = sub.add_parser("imagelod")
     si.add_argument("--res", default="1920x1080")
-    si.add_argument("--values", default="4,2")
+    si.add_argument("--values", default="4,2,4c,2c,1c")
     si.add_argument("--repeat", type=int, default=3)
     so = sub.add_parser("output")
     so.add_argument("--scene", default="smoke")
@@ -1395,7 +1497,7 @@ def main():
     sp2.add_argument("--res", default="960x540", help="the resolution of a ladder table")
     a = ap.parse_args()
     {"speed": cmd_speed, "sigma": cmd_sigma, "tradeoff": cmd_tradeoff, "targets": cmd_targets,
-     "output": cmd_output, "imagelod": cmd_imagelod, "surfaces": cmd_surfaces, "holes": cmd_holes, "plot": cmd_plot, "ladder": cmd_ladder,
+     "output": cmd_output, "imagelod": cmd_imagelod, "draft": cmd_draft, "imagelod-scale": cmd_imagelod_scale, "surfaces": cmd_surfaces, "holes": cmd_holes, "plot": cmd_plot, "ladder": cmd_ladder,
      "analytic": cmd_analytic, "roofline": cmd_roofline, "scaling": cmd_scaling,
      "stability": cmd_stability, "python": cmd_python, "cull": cmd_cull, "blur": cmd_blur, "lights": cmd_lights, "volumes": cmd_volumes, "scale": cmd_scale, "tiles": cmd_tiles}[a.cmd](a)
 

@@ -78,6 +78,7 @@ void addPartStats(RenderStats& stats, RenderStats&& part, bool first)
              {&stats.lightRaysMarched, total.lightRaysMarched}, {&stats.kernelsCulled, total.kernelsCulled}})
         *sum += add;
     for (int k = 0; k < kImageLevels; ++k) stats.footprintSamplesAtLevel[k] += total.footprintSamplesAtLevel[k];
+    for (int k = 0; k < kImageLevels; ++k) stats.slabCompositesAtLevel[k] += total.slabCompositesAtLevel[k];
 }
 
 Frame assembleChannels(Frame (&channels)[3])
@@ -109,6 +110,8 @@ void addRasterStats(const RasterStats& raster, RenderStats& stats)
     static_assert(std::extent_v<decltype(RenderStats::footprintSamplesAtLevel)> == kImageLevels, "RenderStats: one count per image level");
     for (int k = 0; k < kImageLevels; ++k) stats.footprintSamplesAtLevel[k] = raster.levelSamples[k];
     stats.slabComposites = raster.slabComposites;
+    static_assert(std::extent_v<decltype(RenderStats::slabCompositesAtLevel)> == kImageLevels, "RenderStats: one count per image level");
+    for (int k = 0; k < kImageLevels; ++k) stats.slabCompositesAtLevel[k] = raster.levelComposites[k];
     stats.rasterBackend = raster.backend;
 }
 

@@ -134,6 +134,7 @@ RenderSettings RenderSettings::preset(Quality quality)
         s.lensSamples = 1;
         s.splat.supersample = 16;
         s.splat.supersampleSpan = 1.0;
+        s.splat.imageLod = 1.0;
         break;
     case Quality::Default:
         break;
@@ -144,6 +145,8 @@ RenderSettings RenderSettings::preset(Quality quality)
         s.splat.tileKernelSpacing = 2;
         s.splat.expEvaluation = ExpEvaluation::Exact;
         s.splat.lodPixels = 0.0;
+        s.splat.imageLod = 0.0;
+        s.splat.imageLodComposite = false;
         s.splat.refineEmission = 4;
         s.motionBlur.samples = 4;
         s.motionBlur.layers = 1;

@@ -270,6 +270,7 @@ void Renderer::renderStreamedFogVolume(const GridSource::Impl& g, const Camera& 
         rasterStats.footprintSamples += own.footprintSamples;
         for (int k = 0; k < detail::kImageLevels; ++k) rasterStats.levelSamples[k] += own.levelSamples[k];
         rasterStats.slabComposites += own.slabComposites;
+        for (int k = 0; k < detail::kImageLevels; ++k) rasterStats.levelComposites[k] += own.levelComposites[k];
         if (v == 0) {
             rasterStats.tiles = own.tiles;
             rasterStats.tilesOpaque = own.tilesOpaque;

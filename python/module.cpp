@@ -125,6 +125,7 @@ py::dict statsOf(const RenderStats& s)
     d["splat_tile_pairs_skipped"] = s.splatTilePairsSkipped;
     d["footprint_samples"] = s.footprintSamples;
     d["footprint_samples_by_level"] = py::make_tuple(s.footprintSamplesAtLevel[0], s.footprintSamplesAtLevel[1], s.footprintSamplesAtLevel[2], s.footprintSamplesAtLevel[3]);
+    d["slab_composites_by_level"] = py::make_tuple(s.slabCompositesAtLevel[0], s.slabCompositesAtLevel[1], s.slabCompositesAtLevel[2], s.slabCompositesAtLevel[3]);
     d["streamed"] = s.streamed;
     d["bricks"] = s.bricks;
     d["bricks_expanded"] = s.bricksExpanded;

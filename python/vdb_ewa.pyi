@@ -129,6 +129,7 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
            lod: Optional[Number] = None,
            lod_error: Optional[Number] = None,
            image_lod: OptionValue = None,
+           image_lod_composite: OptionValue = None,
            supersample: Optional[int] = None,
            supersample_span: Optional[Number] = None,
            iso: Optional[Number] = None,
@@ -300,9 +301,16 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
         spacing its narrowest standard deviation spans at least this many times, and interpolated
         bilinearly onto the pixels when its slab is composited (at most 1/(4 n^2) of a footprint's peak
         off; docs/equations.md#image-space-level-of-detail); wide footprints (voxels seen large, a
-        camera inside the volume) cost a third to a 16th of the samples (not yet of the time:
-        docs/performance.md#image-space-level-of-detail); off = every footprint at every pixel (default:
-        off in every preset)
+        camera inside the volume) cost a third to a 16th of the samples, and with --image-lod-composite
+        of the composites (docs/performance.md#image-space-level-of-detail); off = every footprint at
+        every pixel (default: 4, draft 1, high and final off)
+    image_lod_composite (--image-lod-composite): on: with --image-lod, a screen tile whose footprints so
+        far all lie at a coarser sample grid is also lit and composited there (the light lookups, the
+        exact update and termination at every 2nd, 4th or 8th pixel), and its colour, transmittance and
+        passes interpolated bilinearly onto the pixels when it is finished or a narrower footprint
+        arrives (docs/equations.md#compositing-at-a-coarser-level); frames with deep output, --iso
+        surfaces or shutter layers composite at every pixel; off: every tile composited at its pixels
+        (default: on, high and final off; no effect while --image-lod is off)
     supersample (--supersample): fog volumes: where the voxels look smaller than --supersample-span
         pixels, the pixels the volume covers are composited in S x S sub-pixels and averaged (a box
         filter, as a camera averages a pixel; one footprint a pixel wide averages optical depth instead,

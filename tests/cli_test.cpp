@@ -115,8 +115,11 @@ TEST_F(Cli, RendersAnExr)
     EXPECT_GT(counter("peak-memory-mb"), 5.0);
     EXPECT_GT(counter("footprint-samples"), 0.0);
     EXPECT_EQ(file.spec.get_string_attribute("vdb_ewa/footprint-samples-by-level"),
-        std::string(file.spec.get_string_attribute("vdb_ewa/footprint-samples")) + ",0,0,0"); // --image-lod off: every pixel
-    EXPECT_EQ(file.spec.get_string_attribute("vdb_ewa/image-lod"), "off");
+        std::string(file.spec.get_string_attribute("vdb_ewa/footprint-samples")) + ",0,0,0"); // footprints narrower than --image-lod 4's
+    EXPECT_EQ(file.spec.get_string_attribute("vdb_ewa/slab-composites-by-level"),
+        std::string(file.spec.get_string_attribute("vdb_ewa/slab-composites")) + ",0,0,0");
+    EXPECT_EQ(file.spec.get_string_attribute("vdb_ewa/image-lod"), "4");
+    EXPECT_EQ(file.spec.get_string_attribute("vdb_ewa/image-lod-composite"), "on");
     EXPECT_EQ(file.spec.get_string_attribute("vdb_ewa/zip-level"), "1");
     EXPECT_NEAR(counter("peak-bytes-per-active-voxel"), counter("peak-memory-mb") * 1e6 / voxels, 0.01 * counter("peak-bytes-per-active-voxel") + 0.1);
 }

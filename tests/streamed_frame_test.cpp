@@ -324,7 +324,7 @@ TEST(StreamedFrame, LightOnDemandMarchesEveryRayALookupReads)
             const double z0 = all.slabs.start(sp.firstSlab), z1 = all.slabs.start(sp.firstSlab + std::int64_t(sp.slabCount));
             const detail::LightMap map(fog, s, 0, nullptr, detail::kLightMapPointBudget, true);
             Vec3d lo, hi;
-            detail::lookupBox(camera, map, sp.x0, sp.y0, sp.x1, sp.y1, z0, z1, lo, hi);
+            detail::lookupBox(camera, map, sp.x0 + 0.5, sp.y0 + 0.5, sp.x1 + 0.5, sp.y1 + 0.5, z0, z1, lo, hi);
             map.ensureMarched(lo, hi);
             ASSERT_LT(map.raysMarched(), map.rays() / 4) << "splat " << n;
             for (int y = sp.y0; y <= sp.y1; y += std::max(1, (sp.y1 - sp.y0) / 4))

@@ -58,6 +58,16 @@ std::string levelSamples(const RenderStats& s)
            " every 4th, " + std::to_string(at[3]) + " every 8th by --image-lod)";
 }
 
+/// " (at every pixel A, every 2nd B, ...)": the slab composites of each image level
+/// (--image-lod-composite), when any tile was composited at a coarser level than the pixels.
+std::string levelComposites(const RenderStats& s)
+{
+    const std::uint64_t* at = s.slabCompositesAtLevel;
+    if (at[1] + at[2] + at[3] == 0) return "";
+    return " (" + std::to_string(at[0]) + " at every pixel, " + std::to_string(at[1]) + " every 2nd, " + std::to_string(at[2]) +
+           " every 4th, " + std::to_string(at[3]) + " every 8th by --image-lod-composite)";
+}
+
 class RenderCommand : public Command
 {
 public:
@@ -352,7 +362,7 @@ private:
                   << s.kernelsCulled << " kernels culled, " << s.splats << " splatted into " << s.splatTilePairs
                   << " (splat, tile) pairs; " << s.screenTilesOpaque << " of " << s.screenTiles
                   << " screen tiles turned opaque early, skipping " << s.splatTilePairsSkipped << " pairs; "
-                  << s.footprintSamples << " footprint samples" << levelSamples(s) << ", " << s.slabComposites << " slab composites (" << s.rasterBackend << " rasteriser)";
+                  << s.footprintSamples << " footprint samples" << levelSamples(s) << ", " << s.slabComposites << " slab composites" << levelComposites(s) << " (" << s.rasterBackend << " rasteriser)";
         if (s.streamed) {
             out << "; streamed front to back: " << counted(s.bricks, "brick") << " in " << counted(s.windows, "depth window") << ", "
                 << s.bricksExpanded << " expanded, " << s.bricksHidden << " hidden behind opaque tiles, " << s.bricksOutside << " outside the frame, "

@@ -155,8 +155,14 @@ void RenderOptions::add(CLI::App* app)
         "pixel of its screen tile, the coarsest whose spacing its narrowest standard deviation spans at least this many times, and "
         "interpolated bilinearly onto the pixels when its slab is composited (at most 1/(4 n^2) of a footprint's peak off; "
         "docs/equations.md#image-space-level-of-detail); wide footprints (voxels seen large, a camera inside the volume) cost a "
-        "third to a 16th of the samples (not yet of the time: docs/performance.md#image-space-level-of-detail); off = every "
-        "footprint at every pixel (default: " + imageLodName(rs.splat.imageLod) + " in every preset)");
+        "third to a 16th of the samples, and with --image-lod-composite of the composites (docs/performance.md#image-space-level-of-detail); "
+        "off = every footprint at every pixel (default: " + imageLodName(rs.splat.imageLod) + ", draft 1, high and final off)");
+    mApp->add_option("--image-lod-composite", mImageLodComposite,
+        "on: with --image-lod, a screen tile whose footprints so far all lie at a coarser sample grid is also lit and composited "
+        "there (the light lookups, the exact update and termination at every 2nd, 4th or 8th pixel), and its colour, "
+        "transmittance and passes interpolated bilinearly onto the pixels when it is finished or a narrower footprint arrives "
+        "(docs/equations.md#compositing-at-a-coarser-level); frames with deep output, --iso surfaces or shutter layers composite "
+        "at every pixel; off: every tile composited at its pixels (default: on, high and final off; no effect while --image-lod is off)");
     mApp->add_option("--supersample", mSupersample,
         "fog volumes: where the voxels look smaller than --supersample-span pixels, the pixels the volume covers are composited "
         "in S x S sub-pixels and averaged (a box filter, as a camera averages a pixel; one footprint a pixel wide averages optical "
@@ -416,6 +422,7 @@ void RenderOptions::resolve(std::optional<int> frame, CameraSettings& cam, Rende
     if (mLod) rs.splat.lodPixels = *mLod;
     if (mLodError) rs.splat.lodError = *mLodError;
     if (!mImageLod.empty()) rs.splat.imageLod = parseImageLod(mImageLod);
+    if (!mImageLodComposite.empty()) rs.splat.imageLodComposite = parseChoice("image-lod-composite", mImageLodComposite, kOnOff);
     if (mSupersample) rs.splat.supersample = *mSupersample;
     if (mSupersampleSpan) rs.splat.supersampleSpan = *mSupersampleSpan;
     if (mIsovalue) rs.surface.isovalue = *mIsovalue;
@@ -553,7 +560,10 @@ Attributes RenderOptions::statsAttributes(const RenderStats& s)
     if (s.footprintSamples > 0) {
         out.insert(out.end(), {{"footprint-samples", n(s.footprintSamples)},
                                   {"footprint-samples-by-level", n(s.footprintSamplesAtLevel[0]) + "," + n(s.footprintSamplesAtLevel[1]) + "," +
-                                                                     n(s.footprintSamplesAtLevel[2]) + "," + n(s.footprintSamplesAtLevel[3])}});
+                                                                     n(s.footprintSamplesAtLevel[2]) + "," + n(s.footprintSamplesAtLevel[3])},
+                                  {"slab-composites", n(s.slabComposites)},
+                                  {"slab-composites-by-level", n(s.slabCompositesAtLevel[0]) + "," + n(s.slabCompositesAtLevel[1]) + "," +
+                                                                   n(s.slabCompositesAtLevel[2]) + "," + n(s.slabCompositesAtLevel[3])}});
     }
     if (s.lightRays > 0) out.insert(out.end(), {{"light-rays", n(s.lightRays)}, {"light-rays-marched", n(s.lightRaysMarched)}});
     if (s.supersample > 1) {
@@ -661,7 +671,7 @@ std::vector<Attributes> RenderOptions::resolvedOptions(const GridSource& grid, c
              {"renormalize", choiceName(rs.splat.renormalize, kOnOff)}, {"taper", choiceName(rs.splat.taper, kOnOff)}, {"exp", choiceName(rs.splat.expEvaluation, kExpEvaluations)},
              {"precision", choiceName(rs.splat.doublePrecision, kPrecisions)}, {"slab", fmt(rs.splat.slab)},
              {"tile-spacing", std::to_string(rs.splat.tileKernelSpacing)}, {"refine", std::to_string(rs.splat.refine)}, {"refine-emission", std::to_string(rs.splat.refineEmission)}, {"lod", fmt(rs.splat.lodPixels)}, {"lod-error", fmt(rs.splat.lodError)},
-             {"image-lod", imageLodName(rs.splat.imageLod)},
+             {"image-lod", imageLodName(rs.splat.imageLod)}, {"image-lod-composite", choiceName(rs.splat.imageLodComposite, kOnOff)},
              {"supersample", std::to_string(rs.splat.supersample)}, {"supersample-span", fmt(rs.splat.supersampleSpan)},
              {"threads", std::to_string(rs.threads)}, {"simd", choiceName(rs.simd, kOnOff)}, {"cull", choiceName(rs.cull, kOnOff)}})
         method.emplace_back(k, v);

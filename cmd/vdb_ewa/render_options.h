@@ -120,6 +120,7 @@ private:
     std::optional<double> mEmissionIntensity, mKelvinScale, mKelvinOffset, mBlackbodyIntensity;
     std::optional<double> mFov, mFocal, mAperture, mFrame, mNear, mFar, mGain, mCutoff, mShadowStep, mStep, mLod, mLodError, mSupersampleSpan;
     std::string mImageLod;
+    std::string mImageLodComposite;
     std::optional<double> mKernelSigma, mSurfaceSigma, mLowpass, mCutoffRadius, mSlab;
     int mThreads = 0;
     std::string mSimd;

@@ -192,9 +192,17 @@ struct SplatOptions
     /// times, and reconstructed bilinearly onto the pixels when its slab is composited (the
     /// slab's sums are linear: only each footprint's interpolation error changes, at most
     /// 1/(4 n^2) of its peak). 0 = off (every footprint at every pixel); else in [1, 64].
-    /// Off in every preset: it saves footprint samples, not time, on this machine's 16-lane
-    /// rows (docs/performance.md#image-space-level-of-detail).
-    double imageLod = 0.0;
+    /// Presets: draft 1, default 4 (footprints 8 pixels wide and more), high and final 0; with
+    /// imageLodComposite it saves time (docs/performance.md#image-space-level-of-detail).
+    double imageLod = 4.0;
+    /// With imageLod: a screen tile whose footprints so far all lie at a coarser sample grid
+    /// is also composited and lit there (the exact update, the light lookups and termination
+    /// at every 2nd, 4th or 8th pixel), and its colour, transmittance and passes reconstructed
+    /// bilinearly at the pixels when it is finished or a narrower footprint arrives
+    /// (docs/equations.md#compositing-at-a-coarser-level). Frames with deep output, surfaces or
+    /// shutter layers composite at every pixel. No effect while imageLod is 0. Presets: on
+    /// (high and final: off, with imageLod).
+    bool imageLodComposite = true;
 };
 
 /// Surfaces (level-set grids, fog iso-surfaces; docs/equations.md#surface-kernels).

@@ -51,6 +51,9 @@ struct RenderStats
     /// and 8th pixel of a screen tile.
     std::uint64_t footprintSamplesAtLevel[4] = {0, 0, 0, 0};
     std::uint64_t slabComposites = 0;   ///< fog volumes: (pixel, slab) samples composited
+    /// Of them, those at each image level (SplatOptions::imageLodComposite): at the pixels, at
+    /// every 2nd, 4th and 8th pixel of a screen tile.
+    std::uint64_t slabCompositesAtLevel[4] = {0, 0, 0, 0};
     bool streamed = false;            ///< fog volumes: the streamed frame ran (RenderSettings::cull)
     int supersample = 1;              ///< fog volumes: sub-pixels a pixel side the frame was composited at (SplatOptions::supersample)
     int supersampleWindow[4] = {0, 0, 0, 0}; ///< fog volumes, supersampled: the pixels x0, y0, width, height composited so

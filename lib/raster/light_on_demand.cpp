@@ -7,7 +7,7 @@
 namespace vdb_ewa {
 namespace detail {
 
-void lookupBox(const Camera& camera, const LightMap& map, int x0, int y0, int x1, int y1, double z0, double z1, Vec3d& lo, Vec3d& hi)
+void lookupBox(const Camera& camera, const LightMap& map, double x0, double y0, double x1, double y1, double z0, double z1, Vec3d& lo, Vec3d& hi)
 {
     const Mat3d worldFromCamera = glm::transpose(camera.cameraFromWorld());
     const Vec2d centre = camera.principalPoint();
@@ -19,8 +19,8 @@ void lookupBox(const Camera& camera, const LightMap& map, int x0, int y0, int x1
         const Vec3d t = perspective ? Vec3d(plane.x * z, plane.y * z, z) : Vec3d(plane.x, plane.y, z);
         return camera.eye() + worldFromCamera * t;
     };
-    // The rectangle's pixel centres (where the lookups' rays are traced), the slabs' planes.
-    const double x[2] = {double(x0) + 0.5, double(x1) + 0.5}, y[2] = {double(y0) + 0.5, double(y1) + 0.5};
+    // The rectangle's corners (where the lookups' rays are traced), the slabs' planes.
+    const double x[2] = {x0, x1}, y[2] = {y0, y1};
     double z[2] = {z0, z1};
     if (perspective) {
         // A perspective camera's slabs are in distance s along the pixel's ray: there

@@ -16,11 +16,12 @@
 namespace vdb_ewa {
 namespace detail {
 
-/// The box of @a map's coordinates [@a lo, @a hi] holding every point that a lookup on a pixel
-/// ray of the pixels (@a x0..@a x1, @a y0..@a y1) reads at a slab coordinate between @a z0 and
-/// @a z1 (distance along the ray for a perspective @a camera, camera depth for an orthographic
-/// one), with a hundredth of a ray's spacing more for rounding (u, v; w as computed).
-void lookupBox(const Camera& camera, const LightMap& map, int x0, int y0, int x1, int y1, double z0, double z1, Vec3d& lo, Vec3d& hi);
+/// The box of @a map's coordinates [@a lo, @a hi] holding every point that a lookup on a ray
+/// through the raster rectangle with corners (@a x0, @a y0) and (@a x1, @a y1) (the first and
+/// last rays' positions: a pixel x's centre is x + 1/2) reads at a slab coordinate between @a z0
+/// and @a z1 (distance along the ray for a perspective @a camera, camera depth for an
+/// orthographic one), with a hundredth of a ray's spacing more for rounding (u, v; w as computed).
+void lookupBox(const Camera& camera, const LightMap& map, double x0, double y0, double x1, double y1, double z0, double z1, Vec3d& lo, Vec3d& hi);
 
 } // namespace detail
 } // namespace vdb_ewa

@@ -66,6 +66,12 @@ struct CompositeOptions
     /// reconstructed bilinearly onto the pixels when its slab is composited. 0: every splat at
     /// every pixel.
     float imageLod = 0.0f;
+    /// With imageLod (SplatOptions::imageLodComposite): a tile whose splats so far all lie at
+    /// a coarser level than the pixels is composited and lit at that level's samples, and its
+    /// colour, transmittance and passes reconstructed bilinearly at the pixels when it is
+    /// finished or a finer splat arrives (docs/equations.md#compositing-at-a-coarser-level).
+    /// Frames with deep samples, surfaces or shutter layers composite at the pixels.
+    bool imageLodComposite = false;
     SlabGrid slabs;
     PassRequest passes;
     PassLayout layout; ///< where the shadow and emission passes' source terms are (SplatSet::passSources)
@@ -114,6 +120,8 @@ struct TileCounters
     /// Of the samples, those of each image level (CompositeOptions::imageLod): every pixel, then
     /// every 2nd, 4th and 8th.
     std::uint64_t levelSamples[kImageLevels] = {};
+    /// Of the composites, those at each image level (CompositeOptions::imageLodComposite).
+    std::uint64_t levelComposites[kImageLevels] = {};
 };
 
 /// Where a streamed frame's tiles write what they finish: the frame's pixels and passes, each

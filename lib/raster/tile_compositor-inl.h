@@ -52,7 +52,7 @@ public:
     /// @a ringSize: slab accumulators in the ring, a power of two above the largest span of the
     /// splats to come (0: none yet; ensureRing allocates them).
     TileCompositor(int x0, int y0, int w, int h, int ringSize, const CompositeOptions& options)
-        : mX0(x0), mY0(y0), mW(w), mH(h), mCutoff(options.cutoff), mExp(options.exp),
+        : mX0(x0), mY0(y0), mW(w), mH(h), mOriginX(x0), mOriginY(y0), mCutoff(options.cutoff), mExp(options.exp),
           mTable(options.table), mOptions(options), mPassCount(options.layout.count), mLayers(std::max(options.layers, 1)),
           mPassC(std::size_t(mPassCount) * C * kTilePixels, 0.0f)
     {
@@ -79,13 +79,60 @@ public:
         }
     }
 
-    bool opaque() const { return mAliveCount == 0; }
+    /// Every pixel's ray has stopped (at a coarser level: every sample's, so every pixel's
+    /// interpolated |T|^2 is below the cutoff too).
+    bool opaque() const { return mCompositeLevel > 0 ? mLevels[std::size_t(mCompositeLevel - 1)]->mAliveCount == 0 : mAliveCount == 0; }
+
+    /// Image-space level of detail, compositing at a level (CompositeOptions::imageLodComposite):
+    /// before the tile's first splat, the level it is composited at: the coarsest that each of
+    /// the @a count splats @a order lists (the first window's, in a streamed frame) is
+    /// accumulated at (levelOf), 0 (the pixels) where the frame cannot be composited at a
+    /// level. A later, narrower splat takes the tile to its pixels (leaveLevel).
+    void planLevel(const SplatSet& set, const std::uint32_t* order, std::size_t count)
+    {
+        if (mCompositeLevel >= 0 || count == 0) return;
+        const bool composable = mOptions.imageLodComposite && mOptions.imageLod > 0.0f && !mOptions.surface && !mOptions.passes.deep && mLayers == 1;
+        int level = composable ? kImageLevels - 1 : 0;
+        for (std::size_t i = 0; i < count && level > 0; ++i) level = std::min(level, levelOf(set.splats[order[i]]));
+        mCompositeLevel = level;
+        if (level > 0) levelFor(level); // (the tile has its ring: ensureRing)
+    }
 
     /// Give the tile a ring of at least @a ringSize slots (a power of two): @a spare's if it is
     /// large enough (a ring lent by a parked tile), else a new one; the pending slabs' planes,
     /// in the ring or spilled by park(), are put in their slots (streamed frames: a later
     /// window's splats may span more slabs than the earlier ones').
     void ensureRing(int ringSize, Ring* spare = nullptr)
+    {
+        ensureOwnRing(ringSize, spare);
+        // Composited at a coarser level: that level's ring too, its spilled slabs in their slots.
+        if (mCompositeLevel > 0) levelFor(mCompositeLevel);
+    }
+
+    /// Composite every pending slab in front of @a slab: no splat to come reaches one.
+    void flushUpTo(std::int64_t slab)
+    {
+        if (mCompositeLevel > 0) {
+            mLevels[std::size_t(mCompositeLevel - 1)]->flushUpTo(slab);
+            return;
+        }
+        if (!mRaysTraced && !mPending.empty() && mPending.front() < slab) traceRays(); // a parked tile's rays went
+        flushBefore(slab);
+    }
+
+    /// The first slab holding contributions not yet composited (none: the largest slab).
+    std::int64_t firstPending() const
+    {
+        if (mCompositeLevel > 0) return mLevels[std::size_t(mCompositeLevel - 1)]->firstPending();
+        return mPending.empty() ? std::numeric_limits<std::int64_t>::max() : mPending.front(); // kept in order (flushBefore)
+    }
+
+    /// Some slab holds contributions not yet composited.
+    bool pending() const { return mCompositeLevel > 0 ? mLevels[std::size_t(mCompositeLevel - 1)]->pending() : !mPending.empty(); }
+
+private:
+    /// ensureRing's: the tile's own ring.
+    void ensureOwnRing(int ringSize, Ring* spare)
     {
         ringSize = std::max(ringSize, mSpilledRing);
         if (ringSize <= mRingSize) return;
@@ -134,22 +181,7 @@ public:
         mSpilledRing = 0;
     }
 
-    /// Composite every pending slab in front of @a slab: no splat to come reaches one.
-    void flushUpTo(std::int64_t slab)
-    {
-        if (!mRaysTraced && !mPending.empty() && mPending.front() < slab) traceRays(); // a parked tile's rays went
-        flushBefore(slab);
-    }
-
-    /// The first slab holding contributions not yet composited (none: the largest slab).
-    std::int64_t firstPending() const
-    {
-        return mPending.empty() ? std::numeric_limits<std::int64_t>::max() : mPending.front(); // kept in order (flushBefore)
-    }
-
-    /// Some slab holds contributions not yet composited.
-    bool pending() const { return !mPending.empty(); }
-
+public:
     /// Let the ring and the light rays go until the next splat (a streamed frame keeps its
     /// tiles between windows; a parked tile holds its pixels and the planes of its pending
     /// slabs, spilled; an opaque one its pixels only). @a spare (if given, and empty):
@@ -202,10 +234,14 @@ public:
     /// are measured in (bench/roofline).
     TileCounters counters(std::uint64_t skipped) const
     {
-        TileCounters c{skipped, 0, mComposites, {}};
+        TileCounters c{skipped, 0, mComposites, {}, {}};
+        c.levelComposites[0] = mComposites;
         for (int k = 0; k < kImageLevels; ++k) {
             c.levelSamples[k] = mLevelSamples[k];
             c.samples += mLevelSamples[k];
+            if (k == 0 || !mLevels[std::size_t(k - 1)]) continue;
+            c.levelComposites[k] = mLevels[std::size_t(k - 1)]->mComposites;
+            c.composites += c.levelComposites[k];
         }
         return c;
     }
@@ -230,6 +266,13 @@ public:
     /// null (it stood still).
     void add(const Splat& s, const float* shares, const float* moments, const float* passSources, const float* shift)
     {
+        if (mCompositeLevel > 0) {
+            if (levelOf(s) >= mCompositeLevel) {
+                addAtLevel(s, shares, moments, passSources, shift);
+                return;
+            }
+            leaveLevel(); // a narrower footprint: the pixels from here on
+        }
         if (!mRaysTraced) traceRays();
         // Slabs in front of this splat's first one can receive nothing more: flush them.
         flushBefore(s.firstSlab);
@@ -343,6 +386,10 @@ public:
     /// depth per unit of distance along each pixel's ray (frame order).
     void finish(Frame& frame, const std::vector<float>& depthScale, TileDeep* deep)
     {
+        if (mCompositeLevel > 0) {
+            mLevels[std::size_t(mCompositeLevel - 1)]->flushUpTo(std::numeric_limits<std::int64_t>::max());
+            leaveLevel(); // the level's colour, transmittance and passes onto the pixels
+        }
         flushUpTo(std::numeric_limits<std::int64_t>::max());
         // Surfaces behind every slab of their pixel.
         for (int p = 0; p < kTilePixels; ++p) {
@@ -401,14 +448,106 @@ private:
     struct LevelTag
     {
     };
+    /// Its samples' centres lie at the frame's pixel coordinates fine.x0 + (i - 1/2) h (sampleX),
+    /// where it composites when the tile is composited at the level (mCompositeLevel).
     TileCompositor(const TileCompositor& fine, LevelTag, int level)
-        : mX0(0), mY0(0), mW(kTileSize / (1 << level) + 2), mH(mW), mCutoff(fine.mCutoff), mExp(fine.mExp), mTable(fine.mTable),
-          mOptions(fine.mOptions), mPassCount(fine.mPassCount), mLayers(fine.mLayers)
+        : mX0(0), mY0(0), mW(kTileSize / (1 << level) + 2), mH(mW), mOriginX(double(fine.mX0) - double(1 << level)),
+          mOriginY(double(fine.mY0) - double(1 << level)), mSpacing(double(1 << level)), mCutoff(fine.mCutoff), mExp(fine.mExp),
+          mTable(fine.mTable), mOptions(fine.mOptions), mPassCount(fine.mPassCount), mLayers(fine.mLayers),
+          mPassC(std::size_t(mPassCount) * C * kTilePixels, 0.0f)
     {
+        std::fill(std::begin(mT), std::end(mT), 1.0f);
+        std::fill(std::begin(mC), std::end(mC), 0.0f);
+        std::fill(std::begin(mZ), std::end(mZ), std::numeric_limits<float>::infinity());
+        std::fill(std::begin(mSurfacePending), std::end(mSurfacePending), 0);
+        std::fill(std::begin(mDeepBack), std::end(mDeepBack), -std::numeric_limits<float>::infinity());
+        receiveEverywhere();
+    }
+
+    /// Every sample live, every row whole: a level's state before it composites, and while it
+    /// only accumulates (each sample feeds pixels, whichever have stopped).
+    void receiveEverywhere()
+    {
+        std::fill(std::begin(mAlive), std::end(mAlive), 0);
         for (int y = 0; y < kTileSize; ++y) {
             mRowFirst[y] = y < mH ? 0 : kTileSize;
             mRowLast[y] = y < mH ? mW - 1 : -1;
+            for (int x = 0; x < mW && y < mH; ++x) mAlive[y * kTileSize + x] = 1;
         }
+        mAliveCount = mW * mH;
+    }
+
+    /// The frame's pixel coordinates of sample column @a x's centre (a pixel's: x0 + x + 1/2).
+    double sampleX(int x) const { return mOriginX + mSpacing * (double(x) + 0.5); }
+    /// The same for sample row @a y.
+    double sampleY(int y) const { return mOriginY + mSpacing * (double(y) + 0.5); }
+
+    /// add() at the level the tile is composited at (mCompositeLevel): the level composites
+    /// in front of @a s's first slab, then takes @a s's footprint at its samples.
+    void addAtLevel(const Splat& s, const float* shares, const float* moments, const float* passSources, const float* shift)
+    {
+        const int level = mCompositeLevel;
+        TileCompositor& coarse = levelFor(level);
+        if (!coarse.mRaysTraced) coarse.traceRays();
+        coarse.flushBefore(s.firstSlab);
+        const Splat at = levelSplat(s, level);
+        if (at.x0 > at.x1 || at.y0 > at.y1) return;
+        for (int k = 0; k < int(s.slabCount); ++k) coarse.markDirty(s.firstSlab + k, at.x0, at.y0, at.x1, at.y1);
+        mLevelSamples[level] += coarse.accumulate(at, shares, moments, passSources, shift, at.x0, at.y0, at.x1, at.y1);
+    }
+
+    /// A tile composited at a coarser level goes on at its pixels: their colour, transmittance,
+    /// passes and Z reconstructed bilinearly from the level's samples (the level's taps, as
+    /// foldLevels'); a pixel stops where all the samples it reads have. The level accumulates
+    /// from here on, its pending slabs folded into the pixels when composited
+    /// (docs/equations.md#compositing-at-a-coarser-level).
+    void leaveLevel()
+    {
+        const int level = mCompositeLevel;
+        mCompositeLevel = 0;
+        TileCompositor& coarse = *mLevels[std::size_t(level - 1)];
+        const LevelTaps& taps = levelTaps(level);
+        mAliveCount = 0;
+        for (int y = 0; y < mH; ++y)
+            for (int x = 0; x < mW; ++x) {
+                const int p = y * kTileSize + x;
+                // The four samples pixel p reads (row-major from the top left) and their weights.
+                const int i = taps.index[y] * kTileSize + taps.index[x];
+                const int q[4] = {i, i + 1, i + kTileSize, i + kTileSize + 1};
+                const float fx = taps.frac[x], fy = taps.frac[y];
+                const float w[4] = {(1.0f - fx) * (1.0f - fy), fx * (1.0f - fy), (1.0f - fx) * fy, fx * fy};
+                const auto at = [&](const float* plane) {
+                    const float top = plane[q[0]] + fx * (plane[q[1]] - plane[q[0]]);
+                    const float bottom = plane[q[2]] + fx * (plane[q[3]] - plane[q[2]]);
+                    return top + fy * (bottom - top);
+                };
+                for (int c = 0; c < C; ++c) {
+                    mT[c * kTilePixels + p] = at(coarse.mT + c * kTilePixels);
+                    mC[c * kTilePixels + p] = at(coarse.mC + c * kTilePixels);
+                }
+                for (int k = 0; k < mPassCount * C; ++k) mPassC[std::size_t(k) * kTilePixels + std::size_t(p)] = at(&coarse.mPassC[std::size_t(k) * kTilePixels]);
+                // Z: where the pixel's alpha has crossed 0.5, the mean of the samples' crossings.
+                float z = 0.0f, zw = 0.0f;
+                bool alive = false;
+                for (int j = 0; j < 4; ++j) {
+                    if (!(w[j] > 0.0f)) continue;
+                    alive = alive || coarse.mAlive[q[j]];
+                    if (std::isfinite(coarse.mZ[q[j]])) z += w[j] * coarse.mZ[q[j]], zw += w[j];
+                }
+                mZ[p] = zw > 0.0f && meanT(p) <= 0.5f ? z / zw : std::numeric_limits<float>::infinity();
+                mAlive[p] = alive;
+                mAliveCount += alive;
+            }
+        for (int y = 0; y < mH; ++y) {
+            mRowFirst[y] = 0;
+            mRowLast[y] = mW - 1;
+            while (mRowFirst[y] <= mRowLast[y] && !mAlive[y * kTileSize + mRowFirst[y]]) ++mRowFirst[y];
+            while (mRowLast[y] >= mRowFirst[y] && !mAlive[y * kTileSize + mRowLast[y]]) --mRowLast[y];
+        }
+        // The level's pending slabs: folded into the pixels' when composited (flush), into
+        // boxes foldLevels grows.
+        for (const std::int64_t slab : coarse.mPending) markDirty(slab, mW, mH, -1, -1);
+        coarse.receiveEverywhere();
     }
 
     /// The image level splat @a s is accumulated at (CompositeOptions::imageLod): the coarsest
@@ -565,7 +704,8 @@ private:
 
     /// An empty ring of @a ringSize slots for @a other's options (ensureRing).
     TileCompositor(const TileCompositor& other, int ringSize)
-        : mX0(other.mX0), mY0(other.mY0), mW(other.mW), mH(other.mH), mMask(ringSize - 1), mCutoff(other.mCutoff),
+        : mX0(other.mX0), mY0(other.mY0), mW(other.mW), mH(other.mH), mOriginX(other.mOriginX), mOriginY(other.mOriginY),
+          mSpacing(other.mSpacing), mMask(ringSize - 1), mCutoff(other.mCutoff),
           mExp(other.mExp), mTable(other.mTable), mOptions(other.mOptions), mPassCount(other.mPassCount), mLayers(other.mLayers),
           mTau(std::size_t(ringSize) * C * kTilePixels, 0.0f),
           mEmission(mOptions.emissive ? std::size_t(ringSize) * C * kTilePixels : 0, 0.0f),
@@ -908,7 +1048,7 @@ private:
         // Light @a light's lookups by the pixels (x0..x1, y0..y1) between fractions u0 and u1
         // of the slab, and where their moved material came from (within maxShift).
         const auto box = [&](const CompositeLight& light, int x0, int y0, int x1, int y1, float u0, float u1, Vec3d& lo, Vec3d& hi) {
-            lookupBox(*mOptions.camera, *light.map, mX0 + x0, mY0 + y0, mX0 + x1, mY0 + y1, z + double(u0) * thickness, z + double(u1) * thickness, lo, hi);
+            lookupBox(*mOptions.camera, *light.map, sampleX(x0), sampleY(y0), sampleX(x1), sampleY(y1), z + double(u0) * thickness, z + double(u1) * thickness, lo, hi);
             if (mShift.empty()) return;
             Vec3d pad(0.0);
             for (int k = 0; k < 3; ++k) {
@@ -1197,7 +1337,7 @@ private:
         for (int ly = 0; ly < mH; ++ly)
             for (int lx = 0; lx < mW; ++lx) {
                 Vec3d origin, dir;
-                camera.worldRay(mX0 + lx + 0.5, mY0 + ly + 0.5, origin, dir);
+                camera.worldRay(sampleX(lx), sampleY(ly), origin, dir);
                 const Vec3d base = camera.projection() == Projection::Perspective ? camera.eye() : origin - camera.near() * dir;
                 if (mOptions.pointLights) {
                     for (int k = 0; k < 3; ++k) {
@@ -1251,6 +1391,12 @@ private:
     std::array<std::unique_ptr<TileCompositor>, kImageLevels - 1> mLevels;
     std::vector<Ring> mLevelSpares; ///< the levels' rings lent with the tile's (Ring::levels)
     int mX0, mY0, mW, mH;
+    /// Where sample (0, 0)'s square starts in the frame's pixel coordinates and the samples'
+    /// spacing (sampleX): the tile's corner and 1 for its pixels, a level's (LevelTag) own.
+    double mOriginX, mOriginY, mSpacing = 1.0;
+    /// The image level the tile is composited at (planLevel): -1 until its first splat, 0 its
+    /// pixels, k > 0 level k's samples (mLevels[k - 1] composites; leaveLevel).
+    int mCompositeLevel = -1;
     int mRingSize = 0;
     std::int64_t mMask = -1;
     /// park()'s copy of the pending slabs' planes (slot by slot, forEachSlotPlane's order), their
@@ -1358,6 +1504,7 @@ public:
                     tile->ensureRing(size, spare);
                 }
                 const std::uint32_t* order = bins.indices.data() + bins.offsets[t];
+                tile->planLevel(set, order, count);
                 std::size_t done = 0;
                 for (; done < count && !tile->opaque(); ++done) {
                     const Splat& s = set.splats[order[done]];
@@ -1446,6 +1593,7 @@ void TileSweepCompositor<C>::composite(const SplatSet& set, const TileBins& bins
             const std::uint32_t* order = bins.indices.data() + bins.offsets[t];
             const std::size_t count = std::size_t(bins.offsets[t + 1] - bins.offsets[t]);
             TileCompositor<C> tile(x0, y0, w, h, ringSizeFor(std::max(bins.maxSpan[std::size_t(t)], 1u)), options);
+            tile.planLevel(set, order, count);
             std::size_t done = 0;
             const std::size_t passFloats = std::size_t(set.passSourceCount) * 3;
             for (; done < count && !tile.opaque(); ++done) {

@@ -102,6 +102,7 @@ FrameCompositing::FrameCompositing(const Camera& camera, const RenderSettings& s
     options.cutoff = float(settings.cutoff);
     options.exp = settings.splat.expEvaluation;
     options.imageLod = float(settings.splat.imageLod);
+    options.imageLodComposite = settings.splat.imageLodComposite;
     // exp(-r/2) at r = s.cutoff, in the float arithmetic the splats' cut-off is kept in.
     if (settings.splat.taper) options.taperEdge = std::exp(-0.5f * float(settings.splat.cutoffRadius * settings.splat.cutoffRadius));
     options.table = &table;
@@ -139,6 +140,7 @@ void addCounters(const std::vector<TileCounters>& counters, RasterStats& stats)
         stats.footprintSamples += c.samples;
         for (int k = 0; k < kImageLevels; ++k) stats.levelSamples[k] += c.levelSamples[k];
         stats.slabComposites += c.composites;
+        for (int k = 0; k < kImageLevels; ++k) stats.levelComposites[k] += c.levelComposites[k];
     }
 }
 

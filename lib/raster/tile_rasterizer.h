@@ -22,6 +22,7 @@ struct RasterStats
     std::uint64_t footprintSamples = 0; ///< footprint weights evaluated (pixels inside a cut-off)
     std::uint64_t levelSamples[kImageLevels] = {}; ///< of them, at each image level (TileCounters::levelSamples)
     std::uint64_t slabComposites = 0;   ///< (pixel, slab) samples composited
+    std::uint64_t levelComposites[kImageLevels] = {}; ///< of them, at each image level (TileCounters::levelComposites)
     const char* backend = "scalar";     ///< the slab compositor: "scalar" or the SIMD target's name
 };
 

@@ -125,16 +125,23 @@ class Module(unittest.TestCase):
                                                                                   "vdb_ewa/peak-bytes-per-active-voxel")}
         self.assertEqual(spec(self.path("cloud_py.exr")), spec(self.path("cloud_cli.exr")))
         self.assertEqual(frame.metadata["vdb_ewa/exr-type"], "float")
-        # The footprint samples at each image level: every pixel without image_lod, the coarser
-        # levels with it, the same counts as the header's.
+        # The footprint samples and slab composites at each image level: every pixel where the
+        # footprints are narrower than image_lod's, the coarser levels where they are wider, the
+        # same counts as the header's.
         stats = frame.stats
         self.assertEqual(stats["footprint_samples_by_level"], (stats["footprint_samples"], 0, 0, 0))
+        self.assertEqual(stats["slab_composites_by_level"][1:], (0, 0, 0))
         near = vdb_ewa.render(self.cloud, res="80x60", translate=(0.3, 0.2, 0.9), image_lod=1)
         by_level = near.stats["footprint_samples_by_level"]
         self.assertGreater(sum(by_level[1:]), 0)
         self.assertEqual(sum(by_level), near.stats["footprint_samples"])
         self.assertEqual(near.metadata["vdb_ewa/footprint-samples-by-level"], ",".join(str(n) for n in by_level))
         self.assertEqual(near.metadata["vdb_ewa/image-lod"], "1")
+        self.assertGreater(sum(near.stats["slab_composites_by_level"][1:]), 0)  # composited at a level too (on)
+        self.assertEqual(near.metadata["vdb_ewa/slab-composites-by-level"], ",".join(str(n) for n in near.stats["slab_composites_by_level"]))
+        apart = vdb_ewa.render(self.cloud, res="80x60", translate=(0.3, 0.2, 0.9), image_lod=1, image_lod_composite="off")
+        self.assertEqual(apart.stats["slab_composites_by_level"][1:], (0, 0, 0))
+        self.assertEqual(apart.metadata["vdb_ewa/image-lod-composite"], "off")
 
     def test_index_to_world_places_a_voxel_where_the_matrix_says(self):
         # One voxel at index (3, 5, 7) of a 2x-scaled grid translated by (10, 20, 30): world (16, 30, 44).
