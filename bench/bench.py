@@ -497,6 +497,13 @@ vdb.write({path!r}, grids=[grid])
     return path
 
 
+def by_level(stdout, noun):
+    """-v's count of @a noun ("footprint samples", "slab composites") at each image level:
+    every pixel, every 2nd, 4th and 8th (all at every pixel where -v names no level)."""
+    m = re.search(rf"(\d+) {noun}(?: \((\d+) at every pixel, (\d+) every 2nd, (\d+) every 4th, (\d+) every 8th)?", stdout)
+    return [int(g) for g in m.groups()[1:]] if m.group(2) else [int(m.group(1)), 0, 0, 0]
+
+
 def interleaved(cmds, repeat):
     """Run each of @a cmds (name -> command) once a round for @a repeat rounds: each one's wall
     times and CPU times (its children's user + system) per round, and its last stdout."""
@@ -944,38 +951,25 @@ def cmd_imagelod(args):
     print("| scene | camera | --image-lod | footprint samples (M): every pixel / 2nd / 4th / 8th "
           "| slab composites (M): every pixel / 2nd / 4th / 8th | frame (s) | against off | CPU against off | PSNR against off (dB) |")
     print("|---|---|---|---|---|---|---|---|---|")
-    scenes = [(l, f, c) for (l, f, c) in SCENES if os.path.exists(f) and "tiles" not in l]
-    scenes.append(("dense block (generated)", dense_block(tmp), DENSE_BLOCK_CAMERA))
-    for label, path, cam in scenes:
-        for camera, cargs in (("README", cam.split()), ("default", [])):
-            if camera == "default" and "fog_tommy" not in label:
-                continue  # the inside of a volume: the one default camera that magnifies
-            settings = ["off", *values]
-            wall = {v: [] for v in settings}
-            cpu = {v: [] for v in settings}
-            counts, composites = {}, {}
-            for _ in range(args.repeat):
-                for v in settings:
-                    out = os.path.join(tmp, f"{v}.exr")
-                    lod = ["--image-lod", v[:-1], "--image-lod-composite", "on"] if v.endswith("c") else ["--image-lod", v, "--image-lod-composite", "off"]
-                    before = os.times()
-                    dt, stdout = run([*EWA_RENDER, path, out, "-res", args.res, *cargs, *lod, "-v"])
-                    after = os.times()
-                    wall[v].append(dt)
-                    cpu[v].append(after.children_user + after.children_system - before.children_user - before.children_system)
-                    m = re.search(r"(\d+) footprint samples(?: \((\d+) at every pixel, (\d+) every 2nd, (\d+) every 4th, (\d+) every 8th)?", stdout)
-                    total = int(m.group(1))
-                    counts[v] = [int(g) for g in m.groups()[1:]] if m.group(2) else [total, 0, 0, 0]
-                    m = re.search(r"(\d+) slab composites(?: \((\d+) at every pixel, (\d+) every 2nd, (\d+) every 4th, (\d+) every 8th)?", stdout)
-                    composites[v] = [int(g) for g in m.groups()[1:]] if m.group(2) else [int(m.group(1)), 0, 0, 0]
-            for v in settings:
-                psnr = "" if v == "off" else f"{diff(os.path.join(tmp, f'{v}.exr'), os.path.join(tmp, 'off.exr'))[1]:.1f}"
-                ratio = statistics.median([a / b for a, b in zip(wall[v], wall["off"])])
-                cpu_ratio = statistics.median([a / b for a, b in zip(cpu[v], cpu["off"])])
-                levels = " / ".join(f"{c / 1e6:.1f}" for c in counts[v])
-                composited = " / ".join(f"{c / 1e6:.2f}" for c in composites[v])
-                print(f"| {label} | {camera} | {v} | {levels} | {composited} | {statistics.median(wall[v]):.2f} | {ratio:.2f}x "
-                      f"| {cpu_ratio:.2f}x | {psnr} |", flush=True)
+    for label, path, camera, common in views(tmp, args.res, lambda label: "tiles" not in label):
+        if camera == "default" and "fog_tommy" not in label:
+            continue  # the inside of a volume: the one default camera that magnifies
+        settings = ["off", *values]
+        cmds = {}
+        for v in settings:
+            lod = ["--image-lod", v[:-1], "--image-lod-composite", "on"] if v.endswith("c") else ["--image-lod", v, "--image-lod-composite", "off"]
+            cmds[v] = [*EWA_RENDER, path, os.path.join(tmp, f"{v}.exr"), *common, *lod, "-v"]
+        wall, cpu, outs = interleaved(cmds, args.repeat)
+        counts = {v: by_level(outs[v], "footprint samples") for v in settings}
+        composites = {v: by_level(outs[v], "slab composites") for v in settings}
+        for v in settings:
+            psnr = "" if v == "off" else f"{diff(os.path.join(tmp, f'{v}.exr'), os.path.join(tmp, 'off.exr'))[1]:.1f}"
+            ratio = statistics.median([a / b for a, b in zip(wall[v], wall["off"])])
+            cpu_ratio = statistics.median([a / b for a, b in zip(cpu[v], cpu["off"])])
+            levels = " / ".join(f"{c / 1e6:.1f}" for c in counts[v])
+            composited = " / ".join(f"{c / 1e6:.2f}" for c in composites[v])
+            print(f"| {label} | {camera} | {v} | {levels} | {composited} | {statistics.median(wall[v]):.2f} | {ratio:.2f}x "
+                  f"| {cpu_ratio:.2f}x | {psnr} |", flush=True)
 
 
 def cmd_imagelod_scale(args):
@@ -1005,8 +999,7 @@ def cmd_imagelod_scale(args):
                 for v in args.values.split(","):
                     out = os.path.join(tmp, "lod.exr")
                     _, stdout = run([*EWA_RENDER, path, out, *camera, *model, "--image-lod", v, "--image-lod-composite", "on", "-v"])
-                    m = re.search(r"(\d+) slab composites(?: \((\d+) at every pixel, (\d+) every 2nd, (\d+) every 4th, (\d+) every 8th)?", stdout)
-                    levels = [int(g) for g in m.groups()[1:]] if m.group(2) else [int(m.group(1)), 0, 0, 0]
+                    levels = by_level(stdout, "slab composites")
                     img = rgb(out)
                     mse = float(np.mean((img - ref) ** 2))
                     psnr = "identical" if mse == 0.0 else f"{10 * math.log10(1.0 / mse):.1f}"

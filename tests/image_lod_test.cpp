@@ -49,6 +49,26 @@ std::vector<bool> backends()
     return simd;
 }
 
+/// A magnified Gaussian per image level at --image-lod 2 (n = 2.5, 2.25, 2.25 samples of every
+/// 2nd, 4th and 8th pixel), and where it lies: off the tiles' and the pixels' grid.
+struct MagnifiedCase
+{
+    double sigma;
+    int level;
+};
+constexpr MagnifiedCase kMagnified[] = {{5.0, 1}, {9.0, 2}, {18.0, 3}};
+constexpr int kMagnifiedSize = 112;
+constexpr float kMagnifiedX = 55.3f, kMagnifiedY = 57.9f;
+
+/// One round splat of @a sigma pixels and peak optical depth @a tau at (kMagnifiedX, kMagnifiedY).
+detail::SplatSet magnifiedGaussian(double sigma, float tau)
+{
+    detail::SplatSet set;
+    set.slabs = {0.0, 1.0};
+    addRoundSplat(set, kMagnifiedX, kMagnifiedY, sigma, tau, 0, kMagnifiedSize, kMagnifiedSize);
+    return set;
+}
+
 } // namespace
 
 // One magnified Gaussian per level (sigma 5, 9 and 18 pixels at --image-lod 2: n = 2.5, 2.25,
@@ -59,20 +79,13 @@ std::vector<bool> backends()
 // (off) is the closed form within 1e-5.
 TEST(ImageLod, AMagnifiedGaussianIsItsClosedFormWithinTheBilinearBound)
 {
-    constexpr int kSize = 112;
+    constexpr int kSize = kMagnifiedSize;
     constexpr float kTau = 0.5f;
-    struct Case
-    {
-        double sigma;
-        int level;
-    };
+    const float cx = kMagnifiedX, cy = kMagnifiedY;
     for (const bool simd : backends()) {
-        for (const Case& c : {Case{5.0, 1}, Case{9.0, 2}, Case{18.0, 3}}) {
+        for (const MagnifiedCase& c : kMagnified) {
             SCOPED_TRACE(std::string(simd ? "SIMD" : "scalar") + ", sigma " + std::to_string(c.sigma));
-            detail::SplatSet set;
-            set.slabs = {0.0, 1.0};
-            const float cx = 55.3f, cy = 57.9f;
-            addRoundSplat(set, cx, cy, c.sigma, kTau, 0, kSize, kSize);
+            const detail::SplatSet set = magnifiedGaussian(c.sigma, kTau);
             detail::RasterStats offStats, lodStats;
             const std::vector<double> off = opticalDepths(composite(set, kSize, kSize, 0.0, simd, offStats));
             const std::vector<double> lod = opticalDepths(composite(set, kSize, kSize, 2.0, simd, lodStats));
@@ -193,20 +206,13 @@ TEST(ImageLod, TheStreamedFrameEqualsTheWholeFrame)
 // cell straddles it). The (pixel, slab) composites fall to the level's (16 / h + 2)^2 a tile.
 TEST(ImageLodComposite, AMagnifiedGaussianIsItsClosedFormWithinTheBilinearBound)
 {
-    constexpr int kSize = 112;
+    constexpr int kSize = kMagnifiedSize;
     constexpr float kTau = 1.5f;
-    struct Case
-    {
-        double sigma;
-        int level;
-    };
+    const float cx = kMagnifiedX, cy = kMagnifiedY;
     for (const bool simd : backends()) {
-        for (const Case& c : {Case{5.0, 1}, Case{9.0, 2}, Case{18.0, 3}}) {
+        for (const MagnifiedCase& c : kMagnified) {
             SCOPED_TRACE(std::string(simd ? "SIMD" : "scalar") + ", sigma " + std::to_string(c.sigma));
-            detail::SplatSet set;
-            set.slabs = {0.0, 1.0};
-            const float cx = 55.3f, cy = 57.9f;
-            addRoundSplat(set, cx, cy, c.sigma, kTau, 0, kSize, kSize);
+            const detail::SplatSet set = magnifiedGaussian(c.sigma, kTau);
             detail::RasterStats offStats, lodStats;
             const Frame off = composite(set, kSize, kSize, 0.0, simd, offStats);
             const Frame lod = composite(set, kSize, kSize, 2.0, simd, lodStats, true);

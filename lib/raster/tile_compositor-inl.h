@@ -57,19 +57,7 @@ public:
           mPassC(std::size_t(mPassCount) * C * kTilePixels, 0.0f)
     {
         ensureRing(ringSize);
-        std::fill(std::begin(mT), std::end(mT), 1.0f);
-        std::fill(std::begin(mC), std::end(mC), 0.0f);
-        std::fill(std::begin(mZ), std::end(mZ), std::numeric_limits<float>::infinity());
-        std::fill(std::begin(mAlive), std::end(mAlive), 0);
-        for (int y = 0; y < h; ++y)
-            for (int x = 0; x < w; ++x) mAlive[y * kTileSize + x] = 1;
-        mAliveCount = w * h;
-        for (int y = 0; y < kTileSize; ++y) {
-            mRowFirst[y] = y < h ? 0 : kTileSize;
-            mRowLast[y] = y < h ? w - 1 : -1;
-        }
-        std::fill(std::begin(mSurfacePending), std::end(mSurfacePending), 0);
-        std::fill(std::begin(mDeepBack), std::end(mDeepBack), -std::numeric_limits<float>::infinity());
+        clearSamples();
         if (options.surface) {
             for (int y = 0; y < h; ++y)
                 for (int x = 0; x < w; ++x) {
@@ -288,11 +276,7 @@ public:
         }
         // Image-space level of detail: at the level's samples, reconstructed onto the pixels
         // when the slab is composited (foldLevels).
-        TileCompositor& coarse = levelFor(level);
-        const Splat at = levelSplat(s, level);
-        if (at.x0 > at.x1 || at.y0 > at.y1) return;
-        for (int k = 0; k < int(s.slabCount); ++k) coarse.markDirty(s.firstSlab + k, at.x0, at.y0, at.x1, at.y1);
-        mLevelSamples[level] += coarse.accumulate(at, shares, moments, passSources, shift, at.x0, at.y0, at.x1, at.y1);
+        accumulateAtLevel(levelFor(level), level, s, shares, moments, passSources, shift);
     }
 
     /// Add @a s's footprint (add's) at the tile's samples (lx0..lx1, ly0..ly1) inside its
@@ -456,6 +440,13 @@ private:
           mTable(fine.mTable), mOptions(fine.mOptions), mPassCount(fine.mPassCount), mLayers(fine.mLayers),
           mPassC(std::size_t(mPassCount) * C * kTilePixels, 0.0f)
     {
+        clearSamples();
+    }
+
+    /// Nothing composited yet at the samples (mW x mH): transmittance 1, no colour, no Z, no
+    /// surface, every sample live.
+    void clearSamples()
+    {
         std::fill(std::begin(mT), std::end(mT), 1.0f);
         std::fill(std::begin(mC), std::end(mC), 0.0f);
         std::fill(std::begin(mZ), std::end(mZ), std::numeric_limits<float>::infinity());
@@ -482,18 +473,25 @@ private:
     /// The same for sample row @a y.
     double sampleY(int y) const { return mOriginY + mSpacing * (double(y) + 0.5); }
 
-    /// add() at the level the tile is composited at (mCompositeLevel): the level composites
-    /// in front of @a s's first slab, then takes @a s's footprint at its samples.
-    void addAtLevel(const Splat& s, const float* shares, const float* moments, const float* passSources, const float* shift)
+    /// Add @a s's footprint (add's) at image level @a level's samples, into @a coarse (that
+    /// level's accumulator, levelFor).
+    void accumulateAtLevel(TileCompositor& coarse, int level, const Splat& s, const float* shares, const float* moments,
+        const float* passSources, const float* shift)
     {
-        const int level = mCompositeLevel;
-        TileCompositor& coarse = levelFor(level);
-        if (!coarse.mRaysTraced) coarse.traceRays();
-        coarse.flushBefore(s.firstSlab);
         const Splat at = levelSplat(s, level);
         if (at.x0 > at.x1 || at.y0 > at.y1) return;
         for (int k = 0; k < int(s.slabCount); ++k) coarse.markDirty(s.firstSlab + k, at.x0, at.y0, at.x1, at.y1);
         mLevelSamples[level] += coarse.accumulate(at, shares, moments, passSources, shift, at.x0, at.y0, at.x1, at.y1);
+    }
+
+    /// add() at the level the tile is composited at (mCompositeLevel): the level composites
+    /// in front of @a s's first slab, then takes @a s's footprint at its samples.
+    void addAtLevel(const Splat& s, const float* shares, const float* moments, const float* passSources, const float* shift)
+    {
+        TileCompositor& coarse = levelFor(mCompositeLevel);
+        if (!coarse.mRaysTraced) coarse.traceRays();
+        coarse.flushBefore(s.firstSlab);
+        accumulateAtLevel(coarse, mCompositeLevel, s, shares, moments, passSources, shift);
     }
 
     /// A tile composited at a coarser level goes on at its pixels: their colour, transmittance,
@@ -541,8 +539,7 @@ private:
         for (int y = 0; y < mH; ++y) {
             mRowFirst[y] = 0;
             mRowLast[y] = mW - 1;
-            while (mRowFirst[y] <= mRowLast[y] && !mAlive[y * kTileSize + mRowFirst[y]]) ++mRowFirst[y];
-            while (mRowLast[y] >= mRowFirst[y] && !mAlive[y * kTileSize + mRowLast[y]]) --mRowLast[y];
+            trimRow(y);
         }
         // The level's pending slabs: folded into the pixels' when composited (flush), into
         // boxes foldLevels grows.
@@ -1362,7 +1359,12 @@ private:
         mAlive[p] = 0;
         --mAliveCount;
         // The row's span of live pixels shrinks from whichever end p was.
-        const int y = p / kTileSize;
+        trimRow(p / kTileSize);
+    }
+
+    /// Row @a y's span of live pixels (mRowFirst, mRowLast) shrunk past stopped ones at its ends.
+    void trimRow(int y)
+    {
         const std::uint8_t* row = mAlive + y * kTileSize;
         while (mRowFirst[y] <= mRowLast[y] && !row[mRowFirst[y]]) ++mRowFirst[y];
         while (mRowLast[y] >= mRowFirst[y] && !row[mRowLast[y]]) --mRowLast[y];
