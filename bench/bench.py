@@ -571,8 +571,8 @@ def cmd_draft(args):
     print(f"# --quality draft against default and vdb_render's defaults, {args.res}, median of {args.repeat} interleaved rounds, "
           f"{os.cpu_count()} cores")
     print("| scene | camera | vdb_render (s) | default (s) | draft (s) | draft / default (wall) | draft / default (CPU) "
-          "| default against vdb_render | draft against vdb_render | draft stages: kernels, shadows, project, rasterise, write |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+          "| default against vdb_render | draft against vdb_render | draft's pixel size | draft stages: kernels, shadows, project, rasterise, write |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     for label, path, camera, common in views(tmp, args.res, lambda label: "tiles" not in label):
         cmds = {"vdb_render": ["vdb_render", path, os.path.join(tmp, "v.exr"), *common],
                 "default": [*EWA_RENDER, path, os.path.join(tmp, "default.exr"), *common, "-v"],
@@ -582,8 +582,10 @@ def cmd_draft(args):
         ratio = statistics.median([a / b for a, b in zip(wall["draft"], wall["default"])])
         cpu_ratio = statistics.median([a / b for a, b in zip(cpu["draft"], cpu["default"])])
         st = stages(outs["draft"])
+        m = re.search(r"one sample a ([0-9.]+)x", outs["draft"])
+        size = f"{float(m.group(1)):.2f}" if m else "1"
         print(f"| {label} | {camera} | {med['vdb_render']:.2f} | {med['default']:.2f} | {med['draft']:.2f} | {ratio:.2f}x | {cpu_ratio:.2f}x "
-              f"| {med['vdb_render'] / med['default']:.1f}x | {med['vdb_render'] / med['draft']:.1f}x | "
+              f"| {med['vdb_render'] / med['default']:.1f}x | {med['vdb_render'] / med['draft']:.1f}x | {size} | "
               + ", ".join(f"{st.get(k, nan):.3f}" for k in ("kernels", "shadows", "project", "rasterise", "write")) + " |", flush=True)
 
 

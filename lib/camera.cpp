@@ -221,6 +221,18 @@ Camera Camera::window(int x0, int y0, int width, int height, int factor) const
     return sub;
 }
 
+Camera Camera::withPixelSize(double size) const
+{
+    if (!(size >= 1.0 && size <= 64.0)) throw ValueError("Camera::withPixelSize: a pixel size of " + std::to_string(size) + " (in [1, 64])");
+    const auto pixels = [size](int n) { return int(std::ceil((double(n) - 0.5) / size + 1.5)); };
+    Camera big = *this;
+    big.mSettings.width = pixels(mSettings.width);
+    big.mSettings.height = pixels(mSettings.height);
+    big.mFocalPixels = mFocalPixels / size;
+    big.mPrincipalPoint = mPrincipalPoint / size + Vec2d(1.0);
+    return big;
+}
+
 Vec2d Camera::rasterFromCamera(const Vec3d& t) const
 {
     if (mSettings.projection == Projection::Perspective) {

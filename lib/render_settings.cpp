@@ -104,6 +104,7 @@ void RenderSettings::validate() const
     if (splat.refineEmission < 1 || splat.refineEmission > 4) fail("--refine-emission must be in [1, 4]");
     if (!(splat.lodPixels >= 0.0 && splat.lodPixels <= 64.0)) fail("--lod must be in [0, 64] pixels");
     if (!(splat.lodError >= 0.0 && splat.lodError <= 1.0)) fail("--lod-error must be in [0, 1] (a difference of transmittance)");
+    if (splat.pixelSize < 1 || splat.pixelSize > 16) fail("--pixel-size must be in [1, 16] pixels");
     if (!(splat.imageLod == 0.0 || (splat.imageLod >= 1.0 && splat.imageLod <= 64.0))) fail("--image-lod must be off (0) or in [1, 64] samples");
     if (!std::isfinite(surface.isovalue)) fail("--isovalue must be finite");
     if (std::isinf(surface.iso)) fail("--iso must be finite");
@@ -135,6 +136,8 @@ RenderSettings RenderSettings::preset(Quality quality)
         s.splat.supersample = 16;
         s.splat.supersampleSpan = 1.0;
         s.splat.imageLod = 1.0;
+        s.splat.pixelSize = 4;
+        s.splat.prefilter = false;
         break;
     case Quality::Default:
         break;

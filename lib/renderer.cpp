@@ -5,6 +5,7 @@
 #include <vdb_ewa/error.h>
 
 #include "frame_parts.h"
+#include "pixel_size.h"
 #include "projection/projection.h"
 #include "raster/raster.h"
 #include "reference/reference.h"
@@ -100,6 +101,14 @@ IsoSurface isoSurface(const RenderSettings& settings, const GridSource::Impl& gr
         for (float& v : layer->rgba) v *= opacity;
     }
     return out;
+}
+
+/// The median voxel's pixels for --pixel-size: @a s's where chooseSupersampling measured it,
+/// else measured here (s's 0 where --pixel-size is off: nothing more is measured).
+double pixelSizeVoxelPixels(const GridSource::Impl& g, const Camera& camera, const RenderSettings& settings, const detail::Supersampling& s)
+{
+    if (settings.splat.pixelSize <= 1) return s.voxelPixels;
+    return s.voxelPixels > 0.0 ? s.voxelPixels : detail::medianVoxelPixels(g, camera, settings);
 }
 
 /// Why the streamed frame cannot render @a g with @a settings yet (the whole frame does), or
@@ -343,7 +352,7 @@ void Renderer::renderGrid(const GridSource::Impl& g, const Camera& camera, const
         // Where the voxels look small, the pixels they cover are composited in sub-pixels and
         // box-filtered back (docs/equations.md#sub-pixel-samples).
         std::vector<std::string> warnings;
-        const detail::Supersampling s = detail::chooseSupersampling(g, camera, mSettings, passes, budgetFor(g, mSettings), warnings);
+        detail::Supersampling s = detail::chooseSupersampling(g, camera, mSettings, passes, budgetFor(g, mSettings), warnings);
         if (s.factor > 1) {
             Frame sub;
             renderSplatted(g, camera.window(s.x0, s.y0, s.width, s.height, s.factor), passes, sub, stats, progress);
@@ -361,12 +370,37 @@ void Renderer::renderGrid(const GridSource::Impl& g, const Camera& camera, const
             stats.supersampleWindow[2] = s.width;
             stats.supersampleWindow[3] = s.height;
         } else {
-            renderSplatted(g, camera, passes, frame, stats, progress);
+            // Voxels seen large: one sample a size x size block of pixels, interpolated back
+            // (docs/equations.md#larger-pixels).
+            s.voxelPixels = pixelSizeVoxelPixels(g, camera, mSettings, s);
+            const detail::PixelSize p = detail::choosePixelSize(mSettings, s.voxelPixels, passes);
+            renderAtPixelSize(g, camera, p.size, passes, frame, stats, progress);
+            if (p.blend > 0.0) {
+                // Near the next size, its frame fades in: no jump as the camera moves.
+                Frame next;
+                RenderStats nextStats;
+                renderAtPixelSize(g, camera, p.size + 1, passes, next, nextStats, progress);
+                detail::mixFrames(frame, next, p.blend);
+                detail::addPartStats(stats, std::move(nextStats), false);
+            }
+            stats.pixelSize = p.size;
         }
         stats.supersample = s.factor;
         stats.voxelPixels = s.voxelPixels;
         stats.warnings.insert(stats.warnings.end(), warnings.begin(), warnings.end());
     }
+}
+
+void Renderer::renderAtPixelSize(const GridSource::Impl& g, const Camera& camera, int size, const PassRequest& passes, Frame& frame,
+    RenderStats& stats, detail::Progress& progress) const
+{
+    if (size <= 1) {
+        renderSplatted(g, camera, passes, frame, stats, progress);
+        return;
+    }
+    Frame big;
+    renderSplatted(g, camera.withPixelSize(size), passes, big, stats, progress);
+    frame = detail::upsampled(std::move(big), size, camera.width(), camera.height(), passes);
 }
 
 void Renderer::renderSplatted(const GridSource::Impl& g, const Camera& camera, const PassRequest& passes, Frame& frame, RenderStats& stats,

@@ -136,6 +136,7 @@ py::dict statsOf(const RenderStats& s)
     d["light_rays"] = s.lightRays;
     d["light_rays_marched"] = s.lightRaysMarched;
     d["supersample"] = s.supersample;
+    d["pixel_size"] = s.pixelSize;
     d["voxel_pixels"] = s.voxelPixels;
     d["peak_resident_bytes"] = s.peakResidentBytes;
     d["raster_backend"] = s.rasterBackend;

@@ -130,6 +130,7 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
            lod_error: Optional[Number] = None,
            image_lod: OptionValue = None,
            image_lod_composite: OptionValue = None,
+           pixel_size: Optional[int] = None,
            supersample: Optional[int] = None,
            supersample_span: Optional[Number] = None,
            iso: Optional[Number] = None,
@@ -268,7 +269,7 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
         incremental)
     prefilter (--prefilter): on: quasi-interpolating kernel weights (the Gaussian sum keeps the
         trilinear field's sharpness; negative halo kernels at its faces); off: each kernel weighs its
-        voxel's value (default: on)
+        voxel's value, softer and cheaper (default: on, draft off)
     renormalize (--renormalize): on: divide footprints by the mass kept inside --cutoff-radius; off:
         keep the truncated mass (default: on)
     taper (--taper): on: footprints are the Gaussian less its value at --cutoff-radius, falling to 0 at
@@ -311,6 +312,15 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
         arrives (docs/equations.md#compositing-at-a-coarser-level); frames with deep output, --iso
         surfaces or shutter layers composite at every pixel; off: every tile composited at its pixels
         (default: on, high and final off; no effect while --image-lod is off)
+    pixel_size (--pixel-size): larger pixels, whole pixels in [1, 16]: a fog volume whose voxels look
+        large is splatted at one sample an n x n block of pixels and interpolated bilinearly back onto
+        the pixels (footprints filtered at the larger pixel: blurrier, never aliased; Z from the nearest
+        larger pixel), n the largest up to this at which the median voxel still spans --supersample-span
+        samples and the larger pixel's filter blurs no more than the kernel's own (n <= --kernel-sigma x
+        the voxel's pixels / sqrt(--lowpass + 1/6): voxels of 4.4 pixels and more at the defaults), the
+        next size's frame fading in near it (no jump as a camera moves; docs/equations.md#larger-
+        pixels); volumes seen smaller, level sets and deep images keep every pixel; 1 = off (default: 1,
+        draft 4)
     supersample (--supersample): fog volumes: where the voxels look smaller than --supersample-span
         pixels, the pixels the volume covers are composited in S x S sub-pixels and averaged (a box
         filter, as a camera averages a pixel; one footprint a pixel wide averages optical depth instead,

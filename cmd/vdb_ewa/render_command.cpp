@@ -374,6 +374,10 @@ private:
                 << s.supersampleWindow[3] << " pixels from (" << s.supersampleWindow[0] << ", " << s.supersampleWindow[1]
                 << ") by --supersample (the median voxel spans " << s.voxelPixels << " pixels)";
         }
+        if (s.pixelSize > 1) {
+            out << "; splatted at one sample a " << s.pixelSize << "x" << s.pixelSize << " block of pixels by --pixel-size (the median voxel spans "
+                << s.voxelPixels << " pixels)";
+        }
         out << "\n"
                   << std::fixed << std::setprecision(3) << "vdb_ewa: timings (s): load " << loadSeconds << ", kernels "
                   << s.kernelSeconds << ", shadows " << s.shadowSeconds << ", project " << s.projectSeconds

@@ -141,7 +141,7 @@ void RenderOptions::add(CLI::App* app)
         "preset of the speed/accuracy knobs: draft, default, high or final (refined kernels); explicit options override it "
         "(values in docs/performance.md) (default: default)");
     mApp->add_option("--exp", mExp, "footprint exp(-r/2): incremental (forward differencing), exact or table (default: incremental)");
-    mApp->add_option("--prefilter", mPrefilter, "on: quasi-interpolating kernel weights (the Gaussian sum keeps the trilinear field's sharpness; negative halo kernels at its faces); off: each kernel weighs its voxel's value (default: on)");
+    mApp->add_option("--prefilter", mPrefilter, "on: quasi-interpolating kernel weights (the Gaussian sum keeps the trilinear field's sharpness; negative halo kernels at its faces); off: each kernel weighs its voxel's value, softer and cheaper (default: on, draft off)");
     mApp->add_option("--renormalize", mRenormalize, "on: divide footprints by the mass kept inside --cutoff-radius; off: keep the truncated mass (default: on)");
     mApp->add_option("--taper", mTaper, "on: footprints are the Gaussian less its value at --cutoff-radius, falling to 0 at their edge (no step to flicker as they move); off: truncated (default: off, draft on)");
     mApp->add_option("--precision", mPrecision, "world-to-camera transform and covariances in double or float (default: double)");
@@ -163,6 +163,15 @@ void RenderOptions::add(CLI::App* app)
         "transmittance and passes interpolated bilinearly onto the pixels when it is finished or a narrower footprint arrives "
         "(docs/equations.md#compositing-at-a-coarser-level); frames with deep output, --iso surfaces or shutter layers composite "
         "at every pixel; off: every tile composited at its pixels (default: on, high and final off; no effect while --image-lod is off)");
+    mApp->add_option("--pixel-size", mPixelSize,
+        "larger pixels, whole pixels in [1, 16]: a fog volume whose voxels look large is splatted at one sample an n x n block "
+        "of pixels and interpolated bilinearly back onto the pixels (footprints filtered at the larger pixel: blurrier, never "
+        "aliased; Z from the nearest larger pixel), n the largest up to this at which the median voxel still spans "
+        "--supersample-span samples and the larger pixel's filter blurs no more than the kernel's own (n <= --kernel-sigma x "
+        "the voxel's pixels / sqrt(--lowpass + 1/6): voxels of 4.4 pixels and more at the defaults), the next size's frame "
+        "fading in near it (no jump as a camera moves; docs/equations.md#larger-pixels); volumes seen smaller, level sets "
+        "and deep images keep every pixel; 1 = off "
+        "(default: " + std::to_string(rs.splat.pixelSize) + ", draft 4)");
     mApp->add_option("--supersample", mSupersample,
         "fog volumes: where the voxels look smaller than --supersample-span pixels, the pixels the volume covers are composited "
         "in S x S sub-pixels and averaged (a box filter, as a camera averages a pixel; one footprint a pixel wide averages optical "
@@ -423,6 +432,7 @@ void RenderOptions::resolve(std::optional<int> frame, CameraSettings& cam, Rende
     if (mLodError) rs.splat.lodError = *mLodError;
     if (!mImageLod.empty()) rs.splat.imageLod = parseImageLod(mImageLod);
     if (!mImageLodComposite.empty()) rs.splat.imageLodComposite = parseChoice("image-lod-composite", mImageLodComposite, kOnOff);
+    if (mPixelSize) rs.splat.pixelSize = *mPixelSize;
     if (mSupersample) rs.splat.supersample = *mSupersample;
     if (mSupersampleSpan) rs.splat.supersampleSpan = *mSupersampleSpan;
     if (mIsovalue) rs.surface.isovalue = *mIsovalue;
@@ -566,6 +576,7 @@ Attributes RenderOptions::statsAttributes(const RenderStats& s)
                                                                    n(s.slabCompositesAtLevel[2]) + "," + n(s.slabCompositesAtLevel[3])}});
     }
     if (s.lightRays > 0) out.insert(out.end(), {{"light-rays", n(s.lightRays)}, {"light-rays-marched", n(s.lightRaysMarched)}});
+    if (s.pixelSize > 1) out.emplace_back("pixel-size-used", std::to_string(s.pixelSize));
     if (s.supersample > 1) {
         out.insert(out.end(), {{"supersampled", std::to_string(s.supersample)},
                                   {"supersampled-window", std::to_string(s.supersampleWindow[0]) + "," + std::to_string(s.supersampleWindow[1]) + "," +
@@ -672,6 +683,7 @@ std::vector<Attributes> RenderOptions::resolvedOptions(const GridSource& grid, c
              {"precision", choiceName(rs.splat.doublePrecision, kPrecisions)}, {"slab", fmt(rs.splat.slab)},
              {"tile-spacing", std::to_string(rs.splat.tileKernelSpacing)}, {"refine", std::to_string(rs.splat.refine)}, {"refine-emission", std::to_string(rs.splat.refineEmission)}, {"lod", fmt(rs.splat.lodPixels)}, {"lod-error", fmt(rs.splat.lodError)},
              {"image-lod", imageLodName(rs.splat.imageLod)}, {"image-lod-composite", choiceName(rs.splat.imageLodComposite, kOnOff)},
+             {"pixel-size", std::to_string(rs.splat.pixelSize)},
              {"supersample", std::to_string(rs.splat.supersample)}, {"supersample-span", fmt(rs.splat.supersampleSpan)},
              {"threads", std::to_string(rs.threads)}, {"simd", choiceName(rs.simd, kOnOff)}, {"cull", choiceName(rs.cull, kOnOff)}})
         method.emplace_back(k, v);

@@ -119,6 +119,16 @@ public:
     /// @throw ValueError if the window is empty, leaves the image, or factor < 1.
     Camera window(int x0, int y0, int width, int height, int factor) const;
 
+    /// Larger pixels (--pixel-size, docs/equations.md#larger-pixels): a camera whose pixels
+    /// are @a size of this camera's a side (@a size >= 1, not necessarily whole), seeing this
+    /// camera's image with one more of its pixels on every side: its pixel i's centre lies at
+    /// this raster's size (i - 1/2), so its first and last centres lie on or beyond this image's
+    /// first and last pixel centres, ceil((width - 1/2) / size + 3/2) x ceil((height - 1/2) /
+    /// size + 3/2) pixels (focal length in pixels divided by @a size, the principal point moved
+    /// to match; the eye and the lens unchanged). Raster position p here is p / size + 1 there.
+    /// @throw ValueError unless 1 <= @a size <= 64.
+    Camera withPixelSize(double size) const;
+
     /// World point -> camera space t.
     Vec3d cameraFromWorldPoint(const Vec3d& pWorld) const
     {

@@ -142,7 +142,7 @@ struct SplatOptions
     double kernelSigma = 0.5;   ///< reconstruction kernel std. deviation in voxels (Eq. 19, V = s^2 I)
     /// Quasi-interpolating kernel weights: voxel kernels weighted so that the Gaussian sum has the
     /// trilinear field's local second moment, with negative halo kernels at the support's faces
-    /// (docs/numerics.md#quasi-interpolation); false: each kernel weighs its voxel's value.
+    /// (docs/numerics.md#quasi-interpolation); false: each kernel weighs its voxel's value. Presets: draft false.
     bool prefilter = true;
     double lowpass = 1.0;       ///< low-pass filter variance in pixels^2 (Eq. 33, V^h = lowpass I)
     AntiAliasing antiAliasing = AntiAliasing::Floor;
@@ -203,6 +203,14 @@ struct SplatOptions
     /// shutter layers composite at every pixel. No effect while imageLod is 0. Presets: on
     /// (high and final: off, with imageLod).
     bool imageLodComposite = true;
+    /// Larger pixels (docs/equations.md#larger-pixels): a fog volume whose voxels look large is
+    /// splatted at one sample an n x n block of pixels (Blender's "Pixel Size"), its footprints
+    /// convolved with the larger pixel's low-pass filter, and interpolated bilinearly back onto
+    /// the pixels; n is the largest up to this at which the median voxel still spans
+    /// supersampleSpan samples and that filter blurs no more than the kernel's own (n <=
+    /// kernelSigma x voxel pixels / sqrt(lowpass + 1/6)); volumes seen smaller keep every pixel.
+    /// 1 = off; in [1, 16]. Presets: draft 4, the others 1.
+    int pixelSize = 1;
 };
 
 /// Surfaces (level-set grids, fog iso-surfaces; docs/equations.md#surface-kernels).

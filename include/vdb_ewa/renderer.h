@@ -58,6 +58,7 @@ struct RenderStats
     int supersample = 1;              ///< fog volumes: sub-pixels a pixel side the frame was composited at (SplatOptions::supersample)
     int supersampleWindow[4] = {0, 0, 0, 0}; ///< fog volumes, supersampled: the pixels x0, y0, width, height composited so
     double voxelPixels = 0;           ///< fog volumes: the active voxels' median screen size, pixels (0: not measured)
+    int pixelSize = 1;                ///< fog volumes: the n x n pixels one sample covered (SplatOptions::pixelSize)
     std::uint64_t bricks = 0;         ///< streamed frame: leaf nodes and active tiles of the grid
     std::uint64_t bricksOutside = 0;  ///< streamed frame: bricks no splat of which reaches the image
     std::uint64_t bricksHidden = 0;   ///< streamed frame: bricks behind opaque screen tiles, never expanded
@@ -118,6 +119,10 @@ private:
         RenderStats& stats, detail::Progress& progress) const;
     VDB_EWA_LOCAL void renderFogVolume(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes, Frame& frame,
         RenderStats& stats, detail::Progress& progress) const;
+    /// Fog volumes by splatting at one sample a @a size x @a size block of pixels, interpolated
+    /// back onto the image's (larger pixels; 1: every pixel).
+    VDB_EWA_LOCAL void renderAtPixelSize(const GridSource::Impl& grid, const Camera& camera, int size, const PassRequest& passes,
+        Frame& frame, RenderStats& stats, detail::Progress& progress) const;
     /// Fog volumes by splatting, at the sub-pixel samples the voxels' screen size asks for
     /// (SplatOptions::supersample): sub-frames or one frame.
     VDB_EWA_LOCAL void renderSplatted(const GridSource::Impl& grid, const Camera& camera, const PassRequest& passes, Frame& frame,
