@@ -353,36 +353,33 @@ void Renderer::renderGrid(const GridSource::Impl& g, const Camera& camera, const
         // box-filtered back (docs/equations.md#sub-pixel-samples).
         std::vector<std::string> warnings;
         detail::Supersampling s = detail::chooseSupersampling(g, camera, mSettings, passes, budgetFor(g, mSettings), warnings);
+        // Near a change of the sampling, the other sampling's frame is mixed in with @a weight
+        // (rendered by @a renderOther): no jump as the camera moves.
+        const auto fadeIn = [&](double weight, const auto& renderOther) {
+            if (!(weight > 0.0)) return;
+            Frame other;
+            RenderStats otherStats;
+            renderOther(other, otherStats);
+            detail::mixFrames(frame, other, weight);
+            detail::addPartStats(stats, std::move(otherStats), false);
+        };
         if (s.factor > 1) {
             Frame sub;
             renderSplatted(g, camera.window(s.x0, s.y0, s.width, s.height, s.factor), passes, sub, stats, progress);
             frame = detail::boxFiltered(sub, s, camera.width(), camera.height(), passes);
-            if (s.blend > 0.0) {
-                // Near the span, 2 x 2 sub-pixels fade into one sample a pixel: no jump as the camera moves.
-                Frame one;
-                RenderStats oneStats;
-                renderSplatted(g, camera, passes, one, oneStats, progress);
-                detail::mixFrames(frame, one, s.blend);
-                detail::addPartStats(stats, std::move(oneStats), false);
-            }
+            // Near the span, 2 x 2 sub-pixels fade into one sample a pixel.
+            fadeIn(s.blend, [&](Frame& one, RenderStats& oneStats) { renderSplatted(g, camera, passes, one, oneStats, progress); });
             stats.supersampleWindow[0] = s.x0;
             stats.supersampleWindow[1] = s.y0;
             stats.supersampleWindow[2] = s.width;
             stats.supersampleWindow[3] = s.height;
         } else {
             // Voxels seen large: one sample a size x size block of pixels, interpolated back
-            // (docs/equations.md#larger-pixels).
+            // (docs/equations.md#larger-pixels); near the next size, its frame fades in.
             s.voxelPixels = pixelSizeVoxelPixels(g, camera, mSettings, s);
             const detail::PixelSize p = detail::choosePixelSize(mSettings, s.voxelPixels, passes);
             renderAtPixelSize(g, camera, p.size, passes, frame, stats, progress);
-            if (p.blend > 0.0) {
-                // Near the next size, its frame fades in: no jump as the camera moves.
-                Frame next;
-                RenderStats nextStats;
-                renderAtPixelSize(g, camera, p.size + 1, passes, next, nextStats, progress);
-                detail::mixFrames(frame, next, p.blend);
-                detail::addPartStats(stats, std::move(nextStats), false);
-            }
+            fadeIn(p.blend, [&](Frame& next, RenderStats& nextStats) { renderAtPixelSize(g, camera, p.size + 1, passes, next, nextStats, progress); });
             stats.pixelSize = p.size;
         }
         stats.supersample = s.factor;

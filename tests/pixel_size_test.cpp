@@ -37,6 +37,23 @@ AlphaMoments alphaMoments(const Image& image)
     return m;
 }
 
+/// The sample cloud (voxels of 0.05) seen from @a distance x (0.25, 0.15, 1) at 160x120.
+Camera cloudCameraAt(const GridSource& cloud, double distance)
+{
+    return Camera(lookAtCamera(Vec3d(0.25, 0.15, 1.0) * distance, Vec3d(0.0), 160, 120), cloud.worldCentre());
+}
+
+/// @a cloud through @a camera at --pixel-size @a pixelSize and --supersample-span @a span, with
+/// --image-lod off (its own interpolation, 72-80 dB, would blur the comparisons).
+Image renderCloud(const GridSource& cloud, const Camera& camera, int pixelSize, double span, RenderStats* stats = nullptr)
+{
+    RenderSettings s;
+    s.splat.pixelSize = pixelSize;
+    s.splat.supersampleSpan = span;
+    s.splat.imageLod = 0.0;
+    return Renderer(s).render(cloud, camera, stats);
+}
+
 } // namespace
 
 // The larger pixels' camera: a world point at raster p here is at p / s + 1 there (one larger
@@ -207,13 +224,9 @@ TEST(PixelSize, VolumesSeenSmallKeepEveryPixel)
 {
     const GridSource cloud = makeSampleGrid(SampleGrid::Cloud, 0.05);
     const auto render = [&](const Camera& camera, int pixelSize, double span, RenderStats* stats = nullptr) {
-        RenderSettings s;
-        s.splat.pixelSize = pixelSize;
-        s.splat.supersampleSpan = span;
-        s.splat.imageLod = 0.0; // its own interpolation (72-80 dB) would blur the comparison
-        return Renderer(s).render(cloud, camera, stats);
+        return renderCloud(cloud, camera, pixelSize, span, stats);
     };
-    const Camera far(lookAtCamera(Vec3d(0.25, 0.15, 1.0) * 6.0, Vec3d(0.0), 160, 120), cloud.worldCentre());
+    const Camera far = cloudCameraAt(cloud, 6.0);
     RenderStats farStats;
     const Image farOne = render(far, 1, 2.0), farFour = render(far, 4, 2.0, &farStats);
     EXPECT_GT(alphaSum(farOne), 100.0);
@@ -221,7 +234,7 @@ TEST(PixelSize, VolumesSeenSmallKeepEveryPixel)
     EXPECT_EQ(farStats.pixelSize, 1);
     EXPECT_EQ(farOne.rgba, farFour.rgba);
 
-    const Camera close(lookAtCamera(Vec3d(0.25, 0.15, 1.0) * 1.5, Vec3d(0.0), 160, 120), cloud.worldCentre());
+    const Camera close = cloudCameraAt(cloud, 1.5);
     RenderStats two, three;
     const Image one = render(close, 1, 2.0), twoImage = render(close, 2, 2.0, &two), threeImage = render(close, 4, 2.0, &three);
     EXPECT_GT(two.voxelPixels, 6.5); // the filter's bound, 0.463 v, allows 3
@@ -241,13 +254,9 @@ TEST(PixelSize, VolumesSeenSmallKeepEveryPixel)
 TEST(PixelSize, TheNextSizeFadesInWithoutAJump)
 {
     const GridSource cloud = makeSampleGrid(SampleGrid::Cloud, 0.05);
-    const Camera close(lookAtCamera(Vec3d(0.25, 0.15, 1.0) * 1.5, Vec3d(0.0), 160, 120), cloud.worldCentre());
+    const Camera close = cloudCameraAt(cloud, 1.5);
     const auto render = [&](int pixelSize, double span, RenderStats* stats = nullptr) {
-        RenderSettings s;
-        s.splat.pixelSize = pixelSize;
-        s.splat.supersampleSpan = span;
-        s.splat.imageLod = 0.0;
-        return Renderer(s).render(cloud, close, stats);
+        return renderCloud(cloud, close, pixelSize, span, stats);
     };
     RenderStats measured;
     render(4, 2.0, &measured);
