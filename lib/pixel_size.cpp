@@ -46,10 +46,11 @@ PixelSize choosePixelSize(const RenderSettings& settings, double voxelPixels, co
 {
     PixelSize p;
     const int most = settings.splat.pixelSize;
-    if (most <= 1 || passes.deep || !(voxelPixels > 0.0)) return p;
+    // Deep samples and --iso surfaces' coverage have no interpolation: every pixel.
+    if (most <= 1 || passes.deep || !std::isnan(settings.surface.iso) || !(voxelPixels > 0.0)) return p;
     const SplatOptions& o = settings.splat;
     const double spanned = voxelPixels / o.supersampleSpan;                                      // Jensen: span samples a voxel
-    const double blurred = o.kernelSigma * voxelPixels / std::sqrt(o.lowpass + kTentVariance);  // the filter within the kernel's
+    const double blurred = o.kernelSigma * voxelPixels * std::sqrt(o.pixelSizeBlur / (o.lowpass + kTentVariance)); // the filter's share of the kernel's variance
     const double bound = std::min(spanned, blurred);                                            // +inf: most
     p.size = int(std::clamp(std::floor(bound), 1.0, double(most)));
     const double fadeFrom = double(p.size + 1) - kPixelSizeBlendShare;

@@ -18,11 +18,12 @@ namespace detail {
 /// The pixel size for a frame whose median active voxel spans @a voxelPixels pixels (v): the
 /// largest whole n <= settings.splat.pixelSize at which the voxel spans supersampleSpan
 /// samples (v / n >= span: no bias of volumes seen small) and the larger pixel's filter, its
-/// low-pass and the bilinear tent, adds no more variance than the kernel's own (n^2 (lowpass +
-/// 1/6) <= (kernelSigma v)^2: the finest detail at most sqrt(2) wider); +inf: the largest; 1
-/// where unmeasured (0), and for a deep image, which has no interpolation. Whole sizes keep
-/// the samples on the same grid of the image from frame to frame (a fractional size would
-/// move them as the voxels' size changes: docs/equations.md#larger-pixels).
+/// low-pass and the bilinear tent, adds at most pixelSizeBlur b of the kernel's variance (n^2
+/// (lowpass + 1/6) <= b (kernelSigma v)^2: the finest detail at most sqrt(1 + b) wider);
+/// +inf: the largest; 1 where unmeasured (0), for a deep image and with --iso surfaces (no
+/// interpolation of samples or coverage). Whole sizes keep the samples on the same grid of
+/// the image from frame to frame (a fractional size would move them as the voxels' size
+/// changes: docs/equations.md#larger-pixels).
 /// blend: where the bound reaches within kPixelSizeBlendShare of the next size (and the next
 /// is allowed), the weight with which the frame at size + 1 is mixed in, rising from 0 to 1
 /// across that share: no jump where a camera's move changes the size (docs/equations.md#larger-pixels).

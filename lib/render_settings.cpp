@@ -105,6 +105,7 @@ void RenderSettings::validate() const
     if (!(splat.lodPixels >= 0.0 && splat.lodPixels <= 64.0)) fail("--lod must be in [0, 64] pixels");
     if (!(splat.lodError >= 0.0 && splat.lodError <= 1.0)) fail("--lod-error must be in [0, 1] (a difference of transmittance)");
     if (splat.pixelSize < 1 || splat.pixelSize > 16) fail("--pixel-size must be in [1, 16] pixels");
+    if (!(splat.pixelSizeBlur > 0.0 && splat.pixelSizeBlur <= 1.0)) fail("--pixel-size-blur must be in (0, 1] (a share of the kernel's variance)");
     if (!(splat.imageLod == 0.0 || (splat.imageLod >= 1.0 && splat.imageLod <= 64.0))) fail("--image-lod must be off (0) or in [1, 64] samples");
     if (!std::isfinite(surface.isovalue)) fail("--isovalue must be finite");
     if (std::isinf(surface.iso)) fail("--iso must be finite");
@@ -136,7 +137,7 @@ RenderSettings RenderSettings::preset(Quality quality)
         s.splat.supersample = 16;
         s.splat.supersampleSpan = 1.0;
         s.splat.imageLod = 1.0;
-        s.splat.pixelSize = 4;
+        s.splat.pixelSizeBlur = 1.0;
         s.splat.prefilter = false;
         break;
     case Quality::Default:
@@ -150,6 +151,7 @@ RenderSettings RenderSettings::preset(Quality quality)
         s.splat.lodPixels = 0.0;
         s.splat.imageLod = 0.0;
         s.splat.imageLodComposite = false;
+        s.splat.pixelSize = 1;
         s.splat.refineEmission = 4;
         s.motionBlur.samples = 4;
         s.motionBlur.layers = 1;

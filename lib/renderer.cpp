@@ -103,12 +103,13 @@ IsoSurface isoSurface(const RenderSettings& settings, const GridSource::Impl& gr
     return out;
 }
 
-/// The median voxel's pixels for --pixel-size: @a s's where chooseSupersampling measured it,
-/// else measured here (s's 0 where --pixel-size is off: nothing more is measured).
+/// The voxels' pixels for --pixel-size: the median of those in view (a node reaching the near
+/// plane is as large as its centre's depth makes it, not infinitely large as for the level of
+/// detail); @a s's where --pixel-size is off (nothing more is measured).
 double pixelSizeVoxelPixels(const GridSource::Impl& g, const Camera& camera, const RenderSettings& settings, const detail::Supersampling& s)
 {
     if (settings.splat.pixelSize <= 1) return s.voxelPixels;
-    return s.voxelPixels > 0.0 ? s.voxelPixels : detail::medianVoxelPixels(g, camera, settings);
+    return detail::voxelPixelsInView(g, camera, 0.5);
 }
 
 /// Why the streamed frame cannot render @a g with @a settings yet (the whole frame does), or

@@ -79,23 +79,11 @@ double tileKernelBudget(int width, int height)
     return std::clamp(kTileKernelsAPixel * double(width) * double(height), kTileKernelsAtLeast, kTileKernelsAtMost);
 }
 
-double medianVoxelPixels(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings)
+namespace {
+
+/// The @a quantile of @a sizes (pixels, active voxels), weighted by their voxels; +inf for none.
+double weightedQuantile(std::vector<std::pair<double, double>>& sizes, double quantile)
 {
-    std::vector<const openvdb::FloatTree::LeafNodeType*> leaves;
-    grid.field->tree().getNodes(leaves);
-    const LevelOfDetail lod(grid, camera, settings);
-    std::vector<std::pair<double, double>> sizes(leaves.size()); // (pixels, active voxels)
-    tbb::parallel_for(std::size_t(0), leaves.size(), [&](std::size_t i) {
-        sizes[i] = {lod.voxelPixels(leaves[i]->origin(), int(openvdb::FloatTree::LeafNodeType::DIM)), double(leaves[i]->onVoxelCount())};
-    });
-    // Active tiles count as their voxels: a dense tile's face is as sharp as a voxel's, and
-    // seen small it covers too much at one sample a pixel as voxels do (a cube of 2^3 tiles of
-    // 128^3 voxels 5 pixels wide: alpha +168 %, +22 % at 8 x 8 sub-pixels). What their kernels
-    // cost with sub-pixels is bounded in chooseSupersampling (tileKernelBudget).
-    forEachActiveTile(*grid.field, [&](const openvdb::CoordBBox& box) {
-        const int dim = box.dim().x();
-        sizes.emplace_back(lod.voxelPixels(box.min(), dim), double(dim) * double(dim) * double(dim));
-    });
     if (sizes.empty()) return kInf;
     std::sort(sizes.begin(), sizes.end());
     double total = 0.0;
@@ -103,9 +91,78 @@ double medianVoxelPixels(const GridSource::Impl& grid, const Camera& camera, con
     double below = 0.0;
     for (const auto& s : sizes) {
         below += s.second;
-        if (below >= 0.5 * total) return std::isnan(s.first) ? kInf : s.first;
+        if (below >= quantile * total) return std::isnan(s.first) ? kInf : s.first;
     }
     return sizes.back().first;
+}
+
+/// (its screen size as @a size(box) gives it, active voxels) of each leaf node and each active
+/// tile of @a grid (a tile counts as its voxels); a leaf's box is its node's, or with
+/// @a activeBox the box of its active voxels.
+template <typename Size>
+std::vector<std::pair<double, double>> nodeSizes(const GridSource::Impl& grid, bool activeBox, const Size& size)
+{
+    std::vector<const openvdb::FloatTree::LeafNodeType*> leaves;
+    grid.field->tree().getNodes(leaves);
+    std::vector<std::pair<double, double>> sizes(leaves.size()); // (pixels, active voxels)
+    tbb::parallel_for(std::size_t(0), leaves.size(), [&](std::size_t i) {
+        openvdb::CoordBBox box = leaves[i]->getNodeBoundingBox();
+        if (activeBox) {
+            box = openvdb::CoordBBox();
+            leaves[i]->evalActiveBoundingBox(box, false);
+        }
+        sizes[i] = {box.empty() ? std::numeric_limits<double>::quiet_NaN() : size(box), double(leaves[i]->onVoxelCount())};
+    });
+    forEachActiveTile(*grid.field, [&](const openvdb::CoordBBox& box) {
+        const double dim = double(box.dim().x());
+        sizes.emplace_back(size(box), dim * dim * dim);
+    });
+    return sizes;
+}
+
+} // namespace
+
+double medianVoxelPixels(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings)
+{
+    const LevelOfDetail lod(grid, camera, settings);
+    // Active tiles count as their voxels: a dense tile's face is as sharp as a voxel's, and
+    // seen small it covers too much at one sample a pixel as voxels do (a cube of 2^3 tiles of
+    // 128^3 voxels 5 pixels wide: alpha +168 %, +22 % at 8 x 8 sub-pixels). What their kernels
+    // cost with sub-pixels is bounded in chooseSupersampling (tileKernelBudget).
+    auto sizes = nodeSizes(grid, false, [&](const openvdb::CoordBBox& box) { return lod.voxelPixels(box.min(), box.dim().x()); });
+    return weightedQuantile(sizes, 0.5);
+}
+
+double voxelPixelsInView(const GridSource::Impl& grid, const Camera& camera, double quantile)
+{
+    if (!grid.grid || !grid.field) return kInf;
+    const auto& xform = grid.grid->transform();
+    const bool perspective = camera.projection() == Projection::Perspective;
+    auto sizes = nodeSizes(grid, true, [&](const openvdb::CoordBBox& box) {
+        const openvdb::Vec3d cIndex = 0.5 * (box.min().asVec3d() + box.max().asVec3d());
+        const double side = double(std::max({box.dim().x(), box.dim().y(), box.dim().z()})); // voxels
+        const Mat3d a = indexToWorldJacobian(xform, cIndex);
+        double axis = 0.0; // world length of the longest index axis
+        for (int i = 0; i < 3; ++i) axis = std::max(axis, glm::length(a[i]));
+        const openvdb::Vec3d w = xform.indexToWorld(cIndex);
+        const Vec3d c = camera.cameraFromWorldPoint(Vec3d(w.x(), w.y(), w.z()));
+        if (perspective && !(c.z > camera.near())) return std::numeric_limits<double>::quiet_NaN(); // behind the near plane
+        const double scale = perspective ? camera.focalPixels() / c.z : camera.focalPixels();
+        // Out of the frame: the node's bounding sphere misses it.
+        const Vec2d p = camera.rasterFromCamera(c);
+        const double reach = 0.5 * std::sqrt(3.0) * side * axis * scale;
+        if (p.x + reach < 0.0 || p.y + reach < 0.0 || p.x - reach > camera.width() || p.y - reach > camera.height()) {
+            return std::numeric_limits<double>::quiet_NaN();
+        }
+        return axis * scale;
+    });
+    sizes.erase(std::remove_if(sizes.begin(), sizes.end(), [](const auto& s) { return std::isnan(s.first); }), sizes.end());
+    double pixels = weightedQuantile(sizes, quantile);
+    // Emission and temperature grids' voxels are detail of the image too: the finer measure.
+    for (const auto* emitter : {grid.emission.get(), grid.temperature.get()}) {
+        if (emitter) pixels = std::min(pixels, voxelPixelsInView(*emitter, camera, quantile));
+    }
+    return pixels;
 }
 
 Supersampling reachedWindow(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings)

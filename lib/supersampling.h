@@ -57,6 +57,16 @@ double tileKernelBudget(int width, int height);
 /// none, or where the median node reaches the near plane).
 double medianVoxelPixels(const GridSource::Impl& grid, const Camera& camera, const RenderSettings& settings);
 
+/// The screen size in pixels of the voxels in view, at @a quantile of them (0.5: the median),
+/// each leaf node (the box of its active voxels) and each active tile weighted by its active
+/// voxels and sized at its box's centre (its longest index axis over that centre's depth);
+/// boxes whose centre lies before the near plane or whose bounding sphere misses the frame
+/// are left out; +inf where none is in view. With emission or temperature grids, the smallest
+/// of their measures and the density's.
+/// Where medianVoxelPixels takes a node reaching the near plane as infinitely large (the level
+/// of detail's safe side), this measures what the frame shows (--pixel-size).
+double voxelPixelsInView(const GridSource::Impl& grid, const Camera& camera, double quantile);
+
 /// The pixels of @a camera's image that the volume's splats can reach: its active box (and its
 /// emission grids'), padded by the widest kernel's reach and motion blur's largest travel,
 /// projected, widened by the low-pass filter's and the lens's reach; the whole image where the

@@ -131,6 +131,7 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
            image_lod: OptionValue = None,
            image_lod_composite: OptionValue = None,
            pixel_size: Optional[int] = None,
+           pixel_size_blur: Optional[Number] = None,
            supersample: Optional[int] = None,
            supersample_span: Optional[Number] = None,
            iso: Optional[Number] = None,
@@ -315,12 +316,16 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
     pixel_size (--pixel-size): larger pixels, whole pixels in [1, 16]: a fog volume whose voxels look
         large is splatted at one sample an n x n block of pixels and interpolated bilinearly back onto
         the pixels (footprints filtered at the larger pixel: blurrier, never aliased; Z from the nearest
-        larger pixel), n the largest up to this at which the median voxel still spans --supersample-span
-        samples and the larger pixel's filter blurs no more than the kernel's own (n <= --kernel-sigma x
-        the voxel's pixels / sqrt(--lowpass + 1/6): voxels of 4.4 pixels and more at the defaults), the
-        next size's frame fading in near it (no jump as a camera moves; docs/equations.md#larger-
-        pixels); volumes seen smaller, level sets and deep images keep every pixel; 1 = off (default: 1,
-        draft 4)
+        larger pixel), n the largest up to this at which the median voxel in view still spans
+        --supersample-span samples and the larger pixel's filter adds at most --pixel-size-blur of the
+        kernel's variance, the next size's frame fading in near it (no jump as a camera moves;
+        docs/equations.md#larger-pixels); volumes seen smaller, level sets, --iso surfaces and deep
+        images keep every pixel; 1 = off (default: 4, draft 4, high and final 1)
+    pixel_size_blur (--pixel-size-blur): with --pixel-size: the variance the larger pixel's filter (its
+        low-pass and the bilinear tent) may add to a voxel's footprint, as a share of the kernel's own,
+        in (0, 1]: n <= --kernel-sigma x the voxel's pixels x sqrt(this / (--lowpass + 1/6)); the finest
+        detail at most sqrt(1 + this) wider: at the defaults 3 % (2x2 pixels a sample from voxels of 17
+        pixels, 4x4 from 35), draft 1: 41 % (from 4.3 and 8.6 pixels) (default: 0.0625, draft 1)
     supersample (--supersample): fog volumes: where the voxels look smaller than --supersample-span
         pixels, the pixels the volume covers are composited in S x S sub-pixels and averaged (a box
         filter, as a camera averages a pixel; one footprint a pixel wide averages optical depth instead,

@@ -120,7 +120,8 @@ TEST_F(Cli, RendersAnExr)
         std::string(file.spec.get_string_attribute("vdb_ewa/slab-composites")) + ",0,0,0");
     EXPECT_EQ(file.spec.get_string_attribute("vdb_ewa/image-lod"), "4");
     EXPECT_EQ(file.spec.get_string_attribute("vdb_ewa/image-lod-composite"), "on");
-    EXPECT_EQ(file.spec.get_string_attribute("vdb_ewa/pixel-size"), "1");
+    EXPECT_EQ(file.spec.get_string_attribute("vdb_ewa/pixel-size"), "4");
+    EXPECT_EQ(file.spec.get_string_attribute("vdb_ewa/pixel-size-blur"), "0.0625");
     EXPECT_FALSE(file.spec.find_attribute("vdb_ewa/pixel-size-used")); // only where larger pixels were used
     EXPECT_EQ(file.spec.get_string_attribute("vdb_ewa/zip-level"), "1");
     EXPECT_NEAR(counter("peak-bytes-per-active-voxel"), counter("peak-memory-mb") * 1e6 / voxels, 0.01 * counter("peak-bytes-per-active-voxel") + 0.1);
@@ -791,7 +792,7 @@ TEST_F(Cli, VerbosePrintsThePresetResolvedWithOverrides)
     const CliRun draft = runCli(mDir, "render " + mGrid + " " + out + " --res 32x32 -translate 0,0,5 --quality draft -v");
     ASSERT_EQ(draft.code, 0) << draft.err;
     for (const char* value : {"--cutoff-radius 2 ", "--slab 4 ", "--shadow-res 2", "--tile-spacing 8 ", "--lod 10 ", "--lod-error 0.25 ", "--taper on ", "--prefilter off ",
-             "--supersample 16 ", "--supersample-span 1 ", "--pixel-size 4 "}) {
+             "--supersample 16 ", "--supersample-span 1 ", "--pixel-size 4 ", "--pixel-size-blur 1 "}) {
         EXPECT_NE(draft.out.find(value), std::string::npos) << value << " in\n" << draft.out;
     }
     const CliRun over = runCli(mDir, "render " + mGrid + " " + out + " --res 32x32 -translate 0,0,5 --quality draft --lod 0 --prefilter on -v");
@@ -799,11 +800,21 @@ TEST_F(Cli, VerbosePrintsThePresetResolvedWithOverrides)
     EXPECT_NE(over.out.find("--lod 0 "), std::string::npos) << over.out;
     EXPECT_NE(over.out.find("--prefilter on "), std::string::npos) << over.out;
     EXPECT_NE(over.out.find("--slab 4 "), std::string::npos) << over.out;
-    // From close by the draft's voxels look large: larger pixels, said in -v and the header.
-    const CliRun close = runCli(mDir, "render " + mGrid + " " + out + " --res 64x48 -translate 0.3,0.2,1.2 --quality draft -v");
+    // From close by (voxels of about 10 pixels in view) the draft's voxels look large: larger
+    // pixels, said in -v and the header.
+    const CliRun close = runCli(mDir, "render " + mGrid + " " + out + " --res 128x96 -translate 0.3,0.2,1.2 --quality draft -v");
     ASSERT_EQ(close.code, 0) << close.err;
     EXPECT_NE(close.out.find("x4 block of pixels by --pixel-size"), std::string::npos) << close.out;
     EXPECT_EQ(readImageFile(out).spec.get_string_attribute("vdb_ewa/pixel-size-used"), "4");
+    // default's share of the kernel's variance (1/16) keeps every pixel there, as does high.
+    for (const char* quality : {"default", "high"}) {
+        const CliRun kept = runCli(mDir, "render " + mGrid + " " + out + " --res 128x96 -translate 0.3,0.2,1.2 --quality " + quality + " -v");
+        ASSERT_EQ(kept.code, 0) << kept.err;
+        EXPECT_EQ(kept.out.find("block of pixels by --pixel-size"), std::string::npos) << quality << kept.out;
+    }
+    const CliRun blurred = runCli(mDir, "render " + mGrid + " " + out + " --res 128x96 -translate 0.3,0.2,1.2 --pixel-size-blur 1 --supersample-span 1 -v");
+    ASSERT_EQ(blurred.code, 0) << blurred.err;
+    EXPECT_NE(blurred.out.find("x4 block of pixels by --pixel-size"), std::string::npos) << blurred.out;
 }
 
 TEST_F(Cli, ArgumentAndOutputErrors)
@@ -832,6 +843,8 @@ TEST_F(Cli, ArgumentAndOutputErrors)
     expectFailure("render " + mGrid + " " + out + " --image-lod coarse", 2, "--image-lod");
     expectFailure("render " + mGrid + " " + out + " --pixel-size 0", 2, "--pixel-size must be in [1, 16] pixels");
     expectFailure("render " + mGrid + " " + out + " --pixel-size 17", 2, "--pixel-size must be in [1, 16] pixels");
+    expectFailure("render " + mGrid + " " + out + " --pixel-size-blur 0", 2, "--pixel-size-blur must be in (0, 1]");
+    expectFailure("render " + mGrid + " " + out + " --pixel-size-blur nan", 2, "--pixel-size-blur must be in (0, 1]");
     expectFailure("render " + mGrid + " " + out + " --zip-level 0", 2, "--zip-level must be in [1, 9]");
     expectFailure("render " + mGrid + " " + out + " --zip-level 10", 2, "--zip-level must be in [1, 9]");
     expectFailure("render " + mGrid + " " + out + " --supersample 0", 2, "--supersample must be in [1, 64]");
@@ -912,7 +925,7 @@ TEST_F(Cli, HelpDocumentsEveryOptionWithItsDefault)
              "--lod", "--lod-error", "--threads", "--max-memory", "--verbose", "--emission", "--ocio-config", "--working-space", "--output-space",
              "--preview", "--display", "--view", "--input-space", "--camera-file", "--exr-type", "--compression", "--aov", "--deep", "--isovalue",
              "--shader", "--samples", "--color", "--iso", "--iso-opacity", "--supersample", "--supersample-span", "--pixel-samples",
-             "--image-lod", "--zip-level", "--pixel-size"}) {
+             "--image-lod", "--zip-level", "--pixel-size", "--pixel-size-blur"}) {
         EXPECT_NE(r.out.find(opt), std::string::npos) << opt;
     }
     EXPECT_NE(r.out.find("default: 1920x1080"), std::string::npos);

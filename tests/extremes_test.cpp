@@ -365,6 +365,7 @@ TEST(Extremes, MemoryBudgetStopsEachStageBeforeItAllocates)
     const GridSource box = gridSourceFromOpenVDB(cube(32, 0.01f, 0.1));
     RenderSettings wide = s;
     wide.splat.kernelSigma = 4.0;
+    wide.splat.pixelSize = 1; // every pixel (at 4 x 4 blocks a 16th of the pairs fit)
     const std::string pairs = message([&] {
         Renderer(wide).render(box, Camera(lookAtCamera(Vec3d(0.0, 0.0, 11.0), Vec3d(0.0), 1024, 1024), box.worldCentre()));
     });

@@ -494,6 +494,7 @@ TEST(MotionBlur, TheStreamedFrameEqualsTheWholeFrame)
     // where their images do not fit in half the budget, they are rendered one after the other,
     // to the same image.
     on.motionBlur.samples = 4;
+    on.splat.pixelSize = 1; // every pixel's images (larger pixels would fit in the budget)
     const CameraSettings large = lookAtCamera(Vec3d(0.5, 0.4, 3.5), Vec3d(0.0), 400, 300);
     RenderStats one, several;
     const Frame a = render(moving, large, on, &one);

@@ -16,24 +16,28 @@ using namespace vdb_ewa::test;
 
 namespace {
 
-/// Alpha's integral over the image (pixels^2) and its centroid (raster).
+/// Alpha's integral over the image (pixels^2), its centroid (raster) and its variance along x
+/// (pixels^2).
 struct AlphaMoments
 {
-    double sum = 0, x = 0, y = 0;
+    double sum = 0, x = 0, y = 0, varianceX = 0;
 };
 
 AlphaMoments alphaMoments(const Image& image)
 {
     AlphaMoments m;
+    double xx = 0.0;
     for (int j = 0; j < image.height; ++j)
         for (int i = 0; i < image.width; ++i) {
             const double a = image.pixel(i, j)[3];
             m.sum += a;
             m.x += a * (i + 0.5);
             m.y += a * (j + 0.5);
+            xx += a * (i + 0.5) * (i + 0.5);
         }
     m.x /= m.sum;
     m.y /= m.sum;
+    m.varianceX = xx / m.sum - m.x * m.x;
     return m;
 }
 
@@ -49,6 +53,7 @@ Image renderCloud(const GridSource& cloud, const Camera& camera, int pixelSize, 
 {
     RenderSettings s;
     s.splat.pixelSize = pixelSize;
+    s.splat.pixelSizeBlur = 1.0; // draft's share: the filter's bound allows 3 from about 6.5 pixels a voxel
     s.splat.supersampleSpan = span;
     s.splat.imageLod = 0.0;
     return Renderer(s).render(cloud, camera, stats);
@@ -140,14 +145,20 @@ TEST(PixelSize, ALinearImageComesBackExactly)
 
 // The choice: the largest whole n up to --pixel-size at which the median voxel (v pixels)
 // still spans --supersample-span samples and the larger pixel's filter (its low-pass and the
-// bilinear tent, n^2 (lowpass + 1/6)) adds no more variance than the kernel's own,
-// (kernel-sigma v)^2; 1 where unmeasured, for a deep image, or off. Over the last quarter of
-// the way to the next size, that size's frame is mixed in (blend), rising from 0 to 1.
+// bilinear tent, n^2 (lowpass + 1/6)) adds at most --pixel-size-blur b of the kernel's own
+// variance, b (kernel-sigma v)^2; 1 where unmeasured, for a deep image, or off. Over the last
+// quarter of the way to the next size, that size's frame is mixed in (blend), rising from 0 to 1.
 TEST(PixelSize, TheVoxelsSetThePixelSize)
 {
     RenderSettings s;
     s.splat.pixelSize = 4;
     s.splat.supersampleSpan = 1.0;
+    // The default share, 1/16: n <= 0.116 v.
+    const double q = 0.25 * 0.5 / std::sqrt(1.0 + 1.0 / 6.0);
+    EXPECT_EQ(detail::choosePixelSize(s, 1.99 / q, {}).size, 1);
+    EXPECT_EQ(detail::choosePixelSize(s, 2.01 / q, {}).size, 2);
+    EXPECT_EQ(detail::choosePixelSize(s, 4.01 / q, {}).size, 4);
+    s.splat.pixelSizeBlur = 1.0; // draft's
     PassRequest flat, deep;
     deep.deep = true;
     const double k = 0.5 / std::sqrt(1.0 + 1.0 / 6.0); // kernel-sigma 0.5, --lowpass 1: n <= 0.463 v
@@ -158,6 +169,9 @@ TEST(PixelSize, TheVoxelsSetThePixelSize)
     EXPECT_EQ(detail::choosePixelSize(s, INFINITY, flat).size, 4);
     EXPECT_EQ(detail::choosePixelSize(s, 0.0, flat).size, 1);
     EXPECT_EQ(detail::choosePixelSize(s, 40.0, deep).size, 1);
+    RenderSettings iso = s;
+    iso.surface.iso = 0.5; // --iso surfaces' coverage keeps every pixel
+    EXPECT_EQ(detail::choosePixelSize(iso, 40.0, flat).size, 1);
     // The next size fades in over the last quarter of the way to it; none past the largest.
     EXPECT_EQ(detail::choosePixelSize(s, 1.7 / k, flat).blend, 0.0);
     EXPECT_NEAR(detail::choosePixelSize(s, 1.875 / k, flat).blend, 0.5, 1e-9);
@@ -176,6 +190,11 @@ TEST(PixelSize, TheVoxelsSetThePixelSize)
     EXPECT_THROW(Renderer{s}, ValueError);
     s.splat.pixelSize = 0;
     EXPECT_THROW(Renderer{s}, ValueError);
+    s.splat.pixelSize = 4;
+    for (const double b : {0.0, -0.5, 1.01, double(NAN)}) {
+        s.splat.pixelSizeBlur = b;
+        EXPECT_THROW(Renderer{s}, ValueError) << b;
+    }
 }
 
 // One voxel magnified to 32 pixels (orthographic, a thin grey absorber, no prefilter): at
@@ -195,6 +214,8 @@ TEST(PixelSize, AMagnifiedVoxelKeepsItsDepthIntegralAndItsCentre)
     RenderSettings s = absorberSettings(sigma);
     s.splat.prefilter = false;
     s.splat.imageLod = 0.0; // every footprint sampled at its raster's every pixel
+    s.splat.pixelSize = 1;
+    s.splat.pixelSizeBlur = 1.0;
     RenderStats one, four;
     const Image full = Renderer(s).render(source, camera, &one);
     s.splat.pixelSize = 4.0;
@@ -214,9 +235,55 @@ TEST(PixelSize, AMagnifiedVoxelKeepsItsDepthIntegralAndItsCentre)
     EXPECT_NEAR(b.y, centre.y, 0.05);
 }
 
+// --pixel-size-blur bounds the blur: one voxel magnified to 27.8 pixels (a kernel of variance
+// (0.5 v)^2 = 193 pixels^2). At the default share, 1/16, the bound is n <= 3.2: 3 x 3 blocks;
+// at draft's, 1, 4 x 4. Closed form of what the larger pixels add to the image's variance:
+// the bilinear tent's, measured on this image's pixels (n^2 - 1) / 6 + phi (1 - phi), phi the
+// offset of their centres from the larger pixels' (0 for odd n, 1/2 for even: 1.33 and 2.75
+// pixels^2); with --aa ewa (the low-pass convolved, not a floor) also the larger low-pass,
+// (n^2 - 1) --lowpass: 9.33 and 17.75, within 1/16 of the kernel's variance at 1/16 and beyond
+// it at 1. (The cut-off at 5 sigma: at 3 its edge falls between larger pixels differently at
+// each size.)
+TEST(PixelSize, TheBlurShareBoundsTheVarianceAdded)
+{
+    auto grid = makeBoxGrid(openvdb::Coord(0), openvdb::Coord(0), 1.0f, 1.0);
+    const GridSource source = gridSourceFromOpenVDB(grid);
+    const Camera camera(orthoDownZ(0.31, -0.17, 10.0, 9.2, 256), source.worldCentre());
+    const double v = camera.focalPixels(); // pixels a voxel (of 1)
+    for (const AntiAliasing aa : {AntiAliasing::Floor, AntiAliasing::Ewa}) {
+        RenderSettings s = absorberSettings(0.05);
+        s.splat.prefilter = false;
+        s.splat.imageLod = 0.0;
+        s.splat.cutoffRadius = 5.0;
+        s.splat.antiAliasing = aa;
+        s.splat.pixelSize = 1;
+        const AlphaMoments full = alphaMoments(Renderer(s).render(source, camera));
+        const double kernelVariance = std::pow(s.splat.kernelSigma * v, 2.0);
+        const auto added = [&](int n) {
+            const double phi = n % 2 == 0 ? 0.5 : 0.0;
+            return (n * n - 1) / 6.0 + phi * (1.0 - phi) + (aa == AntiAliasing::Ewa ? (n * n - 1) * s.splat.lowpass : 0.0);
+        };
+        for (const double blur : {0.0625, 1.0}) {
+            s.splat.pixelSize = 4;
+            s.splat.pixelSizeBlur = blur;
+            RenderStats stats;
+            const AlphaMoments big = alphaMoments(Renderer(s).render(source, camera, &stats));
+            const int n = blur < 1.0 ? 3 : 4;
+            EXPECT_EQ(stats.pixelSize, n) << blur;
+            EXPECT_NEAR(big.sum, full.sum, 1e-3 * full.sum);
+            EXPECT_NEAR(big.varianceX - full.varianceX, added(n), 0.05 * added(n)) << blur << " " << int(aa);
+            if (blur < 1.0) {
+                EXPECT_LT(big.varianceX - full.varianceX, blur * kernelVariance);
+            } else if (aa == AntiAliasing::Ewa) {
+                EXPECT_GT(big.varianceX - full.varianceX, 0.0625 * kernelVariance);
+            }
+        }
+    }
+}
+
 // Volumes seen small keep every pixel: the sample cloud at about 1.6 pixels a voxel (under
 // --supersample-span 2: sub-pixels) renders bit for bit as at --pixel-size 1. From closer by
-// (voxels of about 8 pixels) it takes larger pixels, 3 at most (the filter's bound); where a
+// (voxels of about 7 pixels in view) it takes larger pixels, 3 at most (the filter's bound); where a
 // dolly switches from every pixel to 2 x 2 blocks the image moves by the larger filter and the
 // interpolation alone (measured RMS 2.7e-4, at most 5e-3 in a pixel), and at 3 x 3 its
 // coverage stays within 0.1 %.
@@ -234,7 +301,7 @@ TEST(PixelSize, VolumesSeenSmallKeepEveryPixel)
     EXPECT_EQ(farStats.pixelSize, 1);
     EXPECT_EQ(farOne.rgba, farFour.rgba);
 
-    const Camera close = cloudCameraAt(cloud, 1.5);
+    const Camera close = cloudCameraAt(cloud, 1.3);
     RenderStats two, three;
     const Image one = render(close, 1, 2.0), twoImage = render(close, 2, 2.0, &two), threeImage = render(close, 4, 2.0, &three);
     EXPECT_GT(two.voxelPixels, 6.5); // the filter's bound, 0.463 v, allows 3

@@ -620,6 +620,7 @@ TEST(Renderer, RenormalisationRestoresTheTruncatedMass)
     cam.lookAt = Vec3d(0.0);
     RenderSettings s = absorberSettings(1e-2); // peak optical depth ~1e-3: alpha ~ tau, float-exact
     s.splat.cutoffRadius = 2.0;
+    s.splat.pixelSize = 1; // footprints sampled at every pixel (the larger voxel's 15 pixels fade into 2 x 2 blocks)
     const double on = alphaSum(renderGrid(grid, cam, s));
     s.splat.renormalize = false;
     const double off = alphaSum(renderGrid(grid, cam, s));

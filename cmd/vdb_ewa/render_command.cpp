@@ -375,7 +375,7 @@ private:
                 << ") by --supersample (the median voxel spans " << s.voxelPixels << " pixels)";
         }
         if (s.pixelSize > 1) {
-            out << "; splatted at one sample a " << s.pixelSize << "x" << s.pixelSize << " block of pixels by --pixel-size (the median voxel spans "
+            out << "; splatted at one sample a " << s.pixelSize << "x" << s.pixelSize << " block of pixels by --pixel-size (the median voxel in view spans "
                 << s.voxelPixels << " pixels)";
         }
         out << "\n"

@@ -166,12 +166,16 @@ void RenderOptions::add(CLI::App* app)
     mApp->add_option("--pixel-size", mPixelSize,
         "larger pixels, whole pixels in [1, 16]: a fog volume whose voxels look large is splatted at one sample an n x n block "
         "of pixels and interpolated bilinearly back onto the pixels (footprints filtered at the larger pixel: blurrier, never "
-        "aliased; Z from the nearest larger pixel), n the largest up to this at which the median voxel still spans "
-        "--supersample-span samples and the larger pixel's filter blurs no more than the kernel's own (n <= --kernel-sigma x "
-        "the voxel's pixels / sqrt(--lowpass + 1/6): voxels of 4.4 pixels and more at the defaults), the next size's frame "
-        "fading in near it (no jump as a camera moves; docs/equations.md#larger-pixels); volumes seen smaller, level sets "
-        "and deep images keep every pixel; 1 = off "
-        "(default: " + std::to_string(rs.splat.pixelSize) + ", draft 4)");
+        "aliased; Z from the nearest larger pixel), n the largest up to this at which the median voxel in view still spans "
+        "--supersample-span samples and the larger pixel's filter adds at most --pixel-size-blur of the kernel's variance, "
+        "the next size's frame fading in near it (no jump as a camera moves; docs/equations.md#larger-pixels); volumes seen "
+        "smaller, level sets, --iso surfaces and deep images keep every pixel; 1 = off "
+        "(default: " + std::to_string(rs.splat.pixelSize) + ", draft 4, high and final 1)");
+    mApp->add_option("--pixel-size-blur", mPixelSizeBlur,
+        "with --pixel-size: the variance the larger pixel's filter (its low-pass and the bilinear tent) may add to a voxel's "
+        "footprint, as a share of the kernel's own, in (0, 1]: n <= --kernel-sigma x the voxel's pixels x sqrt(this / "
+        "(--lowpass + 1/6)); the finest detail at most sqrt(1 + this) wider: at the defaults 3 % (2x2 pixels a sample from "
+        "voxels of 17 pixels, 4x4 from 35), draft 1: 41 % (from 4.3 and 8.6 pixels) (default: " + fmt(rs.splat.pixelSizeBlur) + ", draft 1)");
     mApp->add_option("--supersample", mSupersample,
         "fog volumes: where the voxels look smaller than --supersample-span pixels, the pixels the volume covers are composited "
         "in S x S sub-pixels and averaged (a box filter, as a camera averages a pixel; one footprint a pixel wide averages optical "
@@ -433,6 +437,7 @@ void RenderOptions::resolve(std::optional<int> frame, CameraSettings& cam, Rende
     if (!mImageLod.empty()) rs.splat.imageLod = parseImageLod(mImageLod);
     if (!mImageLodComposite.empty()) rs.splat.imageLodComposite = parseChoice("image-lod-composite", mImageLodComposite, kOnOff);
     if (mPixelSize) rs.splat.pixelSize = *mPixelSize;
+    if (mPixelSizeBlur) rs.splat.pixelSizeBlur = *mPixelSizeBlur;
     if (mSupersample) rs.splat.supersample = *mSupersample;
     if (mSupersampleSpan) rs.splat.supersampleSpan = *mSupersampleSpan;
     if (mIsovalue) rs.surface.isovalue = *mIsovalue;
@@ -683,7 +688,7 @@ std::vector<Attributes> RenderOptions::resolvedOptions(const GridSource& grid, c
              {"precision", choiceName(rs.splat.doublePrecision, kPrecisions)}, {"slab", fmt(rs.splat.slab)},
              {"tile-spacing", std::to_string(rs.splat.tileKernelSpacing)}, {"refine", std::to_string(rs.splat.refine)}, {"refine-emission", std::to_string(rs.splat.refineEmission)}, {"lod", fmt(rs.splat.lodPixels)}, {"lod-error", fmt(rs.splat.lodError)},
              {"image-lod", imageLodName(rs.splat.imageLod)}, {"image-lod-composite", choiceName(rs.splat.imageLodComposite, kOnOff)},
-             {"pixel-size", std::to_string(rs.splat.pixelSize)},
+             {"pixel-size", std::to_string(rs.splat.pixelSize)}, {"pixel-size-blur", fmt(rs.splat.pixelSizeBlur)},
              {"supersample", std::to_string(rs.splat.supersample)}, {"supersample-span", fmt(rs.splat.supersampleSpan)},
              {"threads", std::to_string(rs.threads)}, {"simd", choiceName(rs.simd, kOnOff)}, {"cull", choiceName(rs.cull, kOnOff)}})
         method.emplace_back(k, v);

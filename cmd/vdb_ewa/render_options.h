@@ -118,7 +118,7 @@ private:
     mutable std::size_t mEnvironmentLightCount = 0; ///< the last lights of the settings come from --environment
     mutable std::optional<std::vector<Light>> mEnvironmentFill; ///< --environment's lights, once read
     std::optional<double> mEmissionIntensity, mKelvinScale, mKelvinOffset, mBlackbodyIntensity;
-    std::optional<double> mFov, mFocal, mAperture, mFrame, mNear, mFar, mGain, mCutoff, mShadowStep, mStep, mLod, mLodError, mSupersampleSpan;
+    std::optional<double> mFov, mFocal, mAperture, mFrame, mNear, mFar, mGain, mCutoff, mShadowStep, mStep, mLod, mLodError, mSupersampleSpan, mPixelSizeBlur;
     std::string mImageLod;
     std::string mImageLodComposite;
     std::optional<double> mKernelSigma, mSurfaceSigma, mLowpass, mCutoffRadius, mSlab;

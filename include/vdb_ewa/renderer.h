@@ -57,7 +57,9 @@ struct RenderStats
     bool streamed = false;            ///< fog volumes: the streamed frame ran (RenderSettings::cull)
     int supersample = 1;              ///< fog volumes: sub-pixels a pixel side the frame was composited at (SplatOptions::supersample)
     int supersampleWindow[4] = {0, 0, 0, 0}; ///< fog volumes, supersampled: the pixels x0, y0, width, height composited so
-    double voxelPixels = 0;           ///< fog volumes: the active voxels' median screen size, pixels (0: not measured)
+    double voxelPixels = 0;           ///< fog volumes: the active voxels' median screen size, pixels (0: not measured);
+                                      ///< with --pixel-size and no sub-pixels, the median of those in view
+                                      ///< (detail::voxelPixelsInView), which chose the pixel size
     int pixelSize = 1;                ///< fog volumes: the n x n pixels one sample covered (SplatOptions::pixelSize)
     std::uint64_t bricks = 0;         ///< streamed frame: leaf nodes and active tiles of the grid
     std::uint64_t bricksOutside = 0;  ///< streamed frame: bricks no splat of which reaches the image

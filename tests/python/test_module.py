@@ -144,10 +144,11 @@ class Module(unittest.TestCase):
         self.assertEqual(apart.metadata["vdb_ewa/image-lod-composite"], "off")
         # Larger pixels (--pixel-size): from close by, one sample an n x n block, said in stats and the header.
         self.assertEqual(frame.stats["pixel_size"], 1)
-        big = vdb_ewa.render(self.cloud, res="80x60", translate=(0.3, 0.2, 0.9), pixel_size=4)
+        big = vdb_ewa.render(self.cloud, res="160x120", translate=(0.3, 0.2, 0.9), pixel_size=4, pixel_size_blur=1)
         self.assertGreater(big.stats["pixel_size"], 1)
+        self.assertEqual(big.metadata["vdb_ewa/pixel-size-blur"], "1")
         self.assertEqual(big.metadata["vdb_ewa/pixel-size-used"], str(big.stats["pixel_size"]))
-        self.assertEqual((big.width, big.height), (80, 60))
+        self.assertEqual((big.width, big.height), (160, 120))
 
     def test_index_to_world_places_a_voxel_where_the_matrix_says(self):
         # One voxel at index (3, 5, 7) of a 2x-scaled grid translated by (10, 20, 30): world (16, 30, 44).
