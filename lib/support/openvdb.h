@@ -16,4 +16,22 @@
 
 #pragma GCC visibility push(default)
 #include <openvdb/openvdb.h>
+
+/// The Grid and Tree classes of the grids the library and its tests make, declared here and
+/// instantiated once, in support/openvdb_instances.cpp. A unit that makes such a grid otherwise
+/// compiles all their virtual members (I/O, topology, statistics) again: about half of its build
+/// time (CONTRIBUTING.md#build-time). Their inline members are still instantiated where used.
+/// Only targets that link those instances define VDB_EWA_OPENVDB_INSTANCES (the library's objects
+/// and the tests; not the Python module, which links the shared library, whose version script
+/// hides them).
+#define VDB_EWA_OPENVDB_GRID_CLASSES(Declare, TreeType)                                              \
+    Declare template class openvdb::tree::Tree<TreeType::RootNodeType>;                            \
+    Declare template class openvdb::Grid<TreeType>;
+#define VDB_EWA_OPENVDB_INSTANCES_OF(Declare)                                                      \
+    VDB_EWA_OPENVDB_GRID_CLASSES(Declare, openvdb::FloatTree)                                      \
+    VDB_EWA_OPENVDB_GRID_CLASSES(Declare, openvdb::Vec3STree)                                      \
+    VDB_EWA_OPENVDB_GRID_CLASSES(Declare, openvdb::MaskTree)
+#ifdef VDB_EWA_OPENVDB_INSTANCES
+VDB_EWA_OPENVDB_INSTANCES_OF(extern)
+#endif
 #pragma GCC visibility pop
