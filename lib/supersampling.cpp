@@ -141,9 +141,7 @@ double voxelPixelsInView(const GridSource::Impl& grid, const Camera& camera, dou
     auto sizes = nodeSizes(grid, true, [&](const openvdb::CoordBBox& box) {
         const openvdb::Vec3d cIndex = 0.5 * (box.min().asVec3d() + box.max().asVec3d());
         const double side = double(std::max({box.dim().x(), box.dim().y(), box.dim().z()})); // voxels
-        const Mat3d a = indexToWorldJacobian(xform, cIndex);
-        double axis = 0.0; // world length of the longest index axis
-        for (int i = 0; i < 3; ++i) axis = std::max(axis, glm::length(a[i]));
+        const double axis = longestIndexAxis(xform, cIndex);
         const openvdb::Vec3d w = xform.indexToWorld(cIndex);
         const Vec3d c = camera.cameraFromWorldPoint(Vec3d(w.x(), w.y(), w.z()));
         if (perspective && !(c.z > camera.near())) return std::numeric_limits<double>::quiet_NaN(); // behind the near plane

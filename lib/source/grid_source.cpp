@@ -32,6 +32,14 @@ Mat3d indexToWorldJacobian(const openvdb::math::Transform& xform, const openvdb:
     return a;
 }
 
+double longestIndexAxis(const openvdb::math::Transform& xform, const openvdb::Vec3d& pIndex)
+{
+    const Mat3d a = indexToWorldJacobian(xform, pIndex);
+    double axis = 0.0;
+    for (int i = 0; i < 3; ++i) axis = std::max(axis, glm::length(a[i]));
+    return axis;
+}
+
 openvdb::FloatGrid::Ptr resampledOnto(const openvdb::FloatGrid& grid, const openvdb::math::Transform& voxels)
 {
     openvdb::FloatGrid::Ptr out = openvdb::FloatGrid::create(0.0f);

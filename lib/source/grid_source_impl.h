@@ -89,5 +89,9 @@ openvdb::FloatGrid::Ptr resampledOnto(const openvdb::FloatGrid& grid, const open
 /// index axes).
 Mat3d indexToWorldJacobian(const openvdb::math::Transform& xform, const openvdb::Vec3d& pIndex);
 
+/// World length of the longest index axis at an index position (the longest column of
+/// indexToWorldJacobian): a voxel's size along its longest side.
+double longestIndexAxis(const openvdb::math::Transform& xform, const openvdb::Vec3d& pIndex);
+
 } // namespace detail
 } // namespace vdb_ewa

@@ -23,9 +23,7 @@ double LevelOfDetail::voxelPixels(const openvdb::Coord& min, int dim) const
     const auto& xform = mGrid.grid->transform();
     const double half = 0.5 * double(dim - 1);
     const openvdb::Vec3d cIndex(min.x() + half, min.y() + half, min.z() + half);
-    const Mat3d a = indexToWorldJacobian(xform, cIndex);
-    double axis = 0.0; // world length of the longest index axis
-    for (int i = 0; i < 3; ++i) axis = std::max(axis, glm::length(a[i]));
+    const double axis = longestIndexAxis(xform, cIndex);
     if (mCamera.projection() == Projection::Orthographic) return axis * mCamera.focalPixels();
     const openvdb::Vec3d w = xform.indexToWorld(cIndex);
     // Nearest depth of the node: its centre's depth less the radius of its bounding sphere.
