@@ -9,6 +9,8 @@ packages=(
   cmake g++ make pkg-config
   libopenvdb-dev libboost-iostreams-dev libopenexr-dev libimath-dev libtbb-dev libglm-dev
   libopencolorio-dev libopenimageio-dev
+  libdeflate-dev     # zip EXRs deflated in a third to half of zlib's time (lib/output/exr_zip_writer.h)
+  zlib1g-dev         # the tests inflate those chunks with zlib, as OpenEXR reads them
   libcli11-dev nlohmann-json3-dev libgtest-dev
   pybind11-dev python3-dev python3-numpy  # the Python module (python/)
   libhwy-dev         # Highway: the SIMD rasteriser's per-target code and run-time dispatch

@@ -1,10 +1,12 @@
 /// @file exr_output_test.cpp
 /// @brief Files as a compositor reads them, read back with OpenEXR: every channel and
-///        attribute, each compression, deep files flattened, and writes that fail without
-///        touching an existing file. Other formats: image_output_test.cpp.
+///        attribute, each compression, deep files flattened, writes that fail without
+///        touching an existing file, and the zip writer's chunks. Other formats: image_output_test.cpp.
 #include "fixtures.h"
 
 #include "output/atomic_write.h"
+#include "output/exr_header.h"
+#include "output/exr_zip_writer.h"
 
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfDeepFrameBuffer.h>
@@ -13,9 +15,13 @@
 #include <OpenEXR/ImfInputFile.h>
 #include <OpenEXR/ImfStandardAttributes.h>
 #include <OpenEXR/ImfStringAttribute.h>
+#include <OpenEXR/ImfThreading.h>
+#include <OpenEXR/openexr.h>
+#include <zlib.h>
 
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <fstream>
 #include <numeric>
 #include <sstream>
@@ -314,4 +320,111 @@ TEST(ExrOutput, RemoveTemporaryOutputsRemovesOnlyTheWritesInProgress)
     EXPECT_EQ(slurp(path), before);
     EXPECT_EQ(slurp(other), otherBefore);
     EXPECT_EQ(folderContents(path), (std::vector<std::string>{"other.exr", "shot.exr"}));
+}
+
+namespace {
+
+/// Each chunk's packed and unpacked sizes, as OpenEXRCore reads them from a scanline file.
+std::vector<std::pair<std::uint64_t, std::uint64_t>> chunkSizes(const std::string& path)
+{
+    exr_context_t ctx = nullptr;
+    EXPECT_EQ(exr_start_read(&ctx, path.c_str(), nullptr), EXR_ERR_SUCCESS);
+    int chunks = 0, lines = 0;
+    EXPECT_EQ(exr_get_chunk_count(ctx, 0, &chunks), EXR_ERR_SUCCESS);
+    EXPECT_EQ(exr_get_scanlines_per_chunk(ctx, 0, &lines), EXR_ERR_SUCCESS);
+    std::vector<std::pair<std::uint64_t, std::uint64_t>> sizes;
+    for (int c = 0; c < chunks; ++c) {
+        exr_chunk_info_t info;
+        EXPECT_EQ(exr_read_scanline_chunk_info(ctx, 0, c * lines, &info), EXR_ERR_SUCCESS);
+        sizes.emplace_back(info.packed_size, info.unpacked_size);
+    }
+    exr_finish(&ctx);
+    return sizes;
+}
+
+} // namespace
+
+// The zip writer (libdeflate through OpenEXRCore, lib/output/exr_zip_writer.h) against OpenEXR's
+// reader: every value back bit for bit, chunks of 16 lines (zip) and 1 (zips) with a last one cut
+// short, a chunk of noise that deflate cannot shrink stored as it is (the format's rule), smooth
+// chunks shrunk, and the same bytes whatever the threads.
+TEST(ExrOutput, ZipFilesReadBackBitForBitWhateverTheirChunks)
+{
+    const int w = 13, h = 37; // 16 + 16 + 5 lines
+    Frame frame;
+    frame.beauty = Image(w, h);
+    frame.depth.resize(std::size_t(w) * h);
+    std::uint32_t state = 12345u;
+    auto noise = [&] { // every bit random: no deflate shrinks it
+        state = state * 1664525u + 1013904223u;
+        float f;
+        const std::uint32_t bits = (state & 0x807fffffu) | 0x3f000000u; // finite, 0.5 to 1 in size
+        std::memcpy(&f, &bits, sizeof f);
+        return f;
+    };
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const std::size_t i = std::size_t(y) * w + std::size_t(x);
+            const bool noisy = y >= 16 && y < 32; // the second zip chunk
+            for (int c = 0; c < 4; ++c) frame.beauty.rgba[4 * i + std::size_t(c)] = noisy ? noise() : 0.25f + 0.01f * float(c);
+            frame.depth[i] = noisy ? noise() : 10.0f;
+        }
+    frame.beauty.rgba[0] = 1e6f; // clamped to half's range
+    TempDir dir;
+    for (const ExrCompression c : {ExrCompression::Zip, ExrCompression::Zips})
+        for (const ExrPixelType type : {ExrPixelType::Half, ExrPixelType::Float}) {
+            const std::string name = std::string(c == ExrCompression::Zip ? "zip" : "zips") + (type == ExrPixelType::Half ? "_half" : "_float");
+            const std::string path = dir.file(name + ".exr");
+            ExrOptions options;
+            options.compression = c;
+            options.colorType = type;
+            writeExr(frame, path, options);
+            for (int ch = 0; ch < 4; ++ch) {
+                const std::vector<float> read = readChannel(path, std::string(1, "RGBA"[ch]));
+                for (std::size_t i = 0; i < read.size(); ++i) {
+                    const float v = frame.beauty.rgba[4 * i + std::size_t(ch)];
+                    const float expected = type == ExrPixelType::Half ? float(detail::toHalf(v)) : v;
+                    ASSERT_EQ(read[i], expected) << name << " channel " << ch << " pixel " << i;
+                }
+            }
+            EXPECT_EQ(readChannel(path, "Z"), frame.depth) << name;
+
+            const auto sizes = chunkSizes(path);
+            ASSERT_EQ(sizes.size(), c == ExrCompression::Zip ? 3u : 37u) << name;
+            const std::size_t noisyChunk = c == ExrCompression::Zip ? 1 : 20, smoothChunk = c == ExrCompression::Zip ? 0 : 5;
+            if (type == ExrPixelType::Float) { // as half, the noise's fixed exponent bits shrink a little
+                EXPECT_EQ(sizes[noisyChunk].first, sizes[noisyChunk].second) << name << ": noise is stored as it is";
+            }
+            EXPECT_LT(sizes[smoothChunk].first * 4, sizes[smoothChunk].second) << name << ": smooth lines shrink";
+        }
+
+    // The same bytes on one thread and on several.
+    const int threads = Imf::globalThreadCount();
+    ExrOptions options;
+    Imf::setGlobalThreadCount(0);
+    writeExr(frame, dir.file("one.exr"), options);
+    Imf::setGlobalThreadCount(4);
+    writeExr(frame, dir.file("four.exr"), options);
+    Imf::setGlobalThreadCount(threads);
+    EXPECT_EQ(slurp(dir.file("one.exr")), slurp(dir.file("four.exr")));
+}
+
+// EXR's zip of a chunk, undone by hand with zlib (not libdeflate, which made it): inflate, then
+// undo the difference and the even/odd split (the OpenEXR file format's definition of ZIP).
+TEST(ExrOutput, ZipChunkIsTheFormatsPredictorAndSplitThenZlib)
+{
+    std::vector<unsigned char> raw(1001);
+    for (std::size_t i = 0; i < raw.size(); ++i) raw[i] = static_cast<unsigned char>((i / 7) * 3 + (i % 2) * 100);
+    std::vector<unsigned char> packed;
+    detail::zipChunk(raw, 1, packed);
+    ASSERT_LT(packed.size(), raw.size() / 4);
+    std::vector<unsigned char> inflated(raw.size());
+    uLongf size = uLongf(inflated.size());
+    ASSERT_EQ(uncompress(inflated.data(), &size, packed.data(), uLong(packed.size())), Z_OK);
+    ASSERT_EQ(size, raw.size());
+    for (std::size_t i = 1; i < inflated.size(); ++i) inflated[i] = static_cast<unsigned char>(inflated[i - 1] + inflated[i] - 128);
+    std::vector<unsigned char> unsplit(raw.size());
+    const std::size_t half = (raw.size() + 1) / 2;
+    for (std::size_t i = 0; i < raw.size(); ++i) unsplit[i] = i % 2 ? inflated[half + i / 2] : inflated[i / 2];
+    EXPECT_EQ(unsplit, raw);
 }

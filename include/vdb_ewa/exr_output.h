@@ -25,9 +25,9 @@ struct ExrOptions
 {
     ExrPixelType colorType = ExrPixelType::Half;   ///< R, G, B, A and the colour passes; Z is always float
     ExrCompression compression = ExrCompression::Zip;
-    /// zlib's level for zip and zips, 1 (fastest) to 9 (smallest). 1 by default: a 1080p frame
-    /// with its float Z writes in about 0.7x the time of OpenEXR's default 4, about 10 % larger
-    /// (docs/performance.md#writing-the-file).
+    /// Deflate's level for zip and zips, 1 (fastest) to 9 (smallest), zlib's scale. 1 by default.
+    /// Flat zip and zips files are deflated by libdeflate (docs/performance.md#writing-the-file),
+    /// deep zips files by OpenEXR's zlib.
     int zipLevel = 1;
     std::optional<Chromaticities> chromaticities;   ///< of the colour space the file holds
     const Camera* camera = nullptr;                 ///< worldToCamera, worldToNDC, screen window

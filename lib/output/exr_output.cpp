@@ -3,6 +3,8 @@
 #include <vdb_ewa/exr_output.h>
 
 #include "output/atomic_write.h"
+#include "output/exr_header.h"
+#include "output/exr_zip_writer.h"
 #include "support/huge_page_allocator.h"
 
 #include <vdb_ewa/error.h>
@@ -49,24 +51,26 @@ Imf::Compression imfCompression(ExrCompression c)
 
 Imf::PixelType imfType(ExrPixelType t) { return t == ExrPixelType::Half ? Imf::HALF : Imf::FLOAT; }
 
-/// float -> half, finite values beyond the half range clamped to +-65504 instead of becoming inf.
-half toHalf(float v)
+/// 4x4 matrix (column-vector convention, rows given) -> OpenEXR's row-vector matrix (its
+/// transpose), row by row as Imath's M44f holds it.
+std::array<float, 16> rowVectorMatrix(const double m[4][4])
 {
-    return half(std::isfinite(v) ? std::clamp(v, -float(HALF_MAX), float(HALF_MAX)) : v);
+    std::array<float, 16> out;
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) out[std::size_t(4 * i + j)] = float(m[j][i]);
+    return out;
 }
 
-/// 4x4 matrix (column-vector convention, rows given) -> Imath's row-vector M44f (transpose).
-Imath::M44f rowVectorMatrix(const double m[4][4])
+Imath::M44f imathMatrix(const std::array<float, 16>& m)
 {
     Imath::M44f out;
-    for (int i = 0; i < 4; ++i)
-        for (int j = 0; j < 4; ++j) out[i][j] = float(m[j][i]);
+    std::copy(m.begin(), m.end(), &out[0][0]);
     return out;
 }
 
 /// worldToCamera, worldToNDC and the screen window (OpenEXR's definitions: camera space
 /// x right, y up, z forward; NDC (0, 0) top left, (1, 1) bottom right of the display window).
-void addCameraAttributes(Imf::Header& header, const Camera& camera)
+void addCameraAttributes(detail::ExrHeader& header, const Camera& camera)
 {
     const Mat3d& R = camera.cameraFromWorld(); // rows: right, down, forward
     const Vec3d eye = camera.eye();
@@ -84,13 +88,12 @@ void addCameraAttributes(Imf::Header& header, const Camera& camera)
         // (s t0 / t2 + w / 2) / w, (s t1 / t2 + h / 2) / h, z = 1 / t2 (homogeneous w = t2).
         const double p[4][4] = {{s / w, 0, 0.5, 0}, {0, s / h, 0.5, 0}, {0, 0, 0, 1}, {0, 0, 1, 0}};
         std::copy(&p[0][0], &p[0][0] + 16, &toNdc[0][0]);
-        header.screenWindowWidth() = float(w / s); // image width on the plane z = 1
+        header.screenWindowWidth = float(w / s); // image width on the plane z = 1
     } else {
         const double p[4][4] = {{s / w, 0, 0, 0.5}, {0, s / h, 0, 0.5}, {0, 0, 1, 0}, {0, 0, 0, 1}};
         std::copy(&p[0][0], &p[0][0] + 16, &toNdc[0][0]);
-        header.screenWindowWidth() = float(w / s); // frame width in world units
+        header.screenWindowWidth = float(w / s); // frame width in world units
     }
-    header.screenWindowCenter() = Imath::V2f(0.0f, 0.0f);
     double ndc[4][4] = {}, cam[4][4] = {};
     const double flip[3] = {1.0, -1.0, 1.0}; // our t1 points down, OpenEXR's y up
     for (int r = 0; r < 4; ++r)
@@ -98,62 +101,89 @@ void addCameraAttributes(Imf::Header& header, const Camera& camera)
             cam[r][c] = (r < 3 ? flip[r] : 1.0) * view[r][c];
             for (int k = 0; k < 4; ++k) ndc[r][c] += toNdc[r][k] * view[k][c];
         }
-    Imf::addWorldToCamera(header, rowVectorMatrix(cam));
-    Imf::addWorldToNDC(header, rowVectorMatrix(ndc));
+    header.worldToCamera = rowVectorMatrix(cam);
+    header.worldToNdc = rowVectorMatrix(ndc);
 }
 
-Imf::Header makeHeader(int width, int height, const ExrOptions& options)
+/// OpenEXR's C++ header of @a values (the zip writer sets the same in exr_zip_writer.cpp).
+Imf::Header imfHeader(const detail::ExrHeader& values, int zipLevel)
 {
-    Imf::Header header(width, height);
-    header.compression() = imfCompression(options.compression);
-    header.zipCompressionLevel() = options.zipLevel;
-    if (options.chromaticities) {
-        const Chromaticities& c = *options.chromaticities;
+    Imf::Header header(values.width, values.height);
+    header.compression() = imfCompression(values.compression);
+    header.zipCompressionLevel() = zipLevel;
+    if (values.chromaticities) {
+        const Chromaticities& c = *values.chromaticities;
         auto v = [](const Vec2d& p) { return Imath::V2f(float(p.x), float(p.y)); };
         Imf::addChromaticities(header, Imf::Chromaticities(v(c.red), v(c.green), v(c.blue), v(c.white)));
     }
-    if (options.camera) addCameraAttributes(header, *options.camera);
-    for (const auto& [key, value] : options.attributes) header.insert(key, Imf::StringAttribute(value));
+    if (values.worldToCamera && values.worldToNdc) {
+        Imf::addWorldToCamera(header, imathMatrix(*values.worldToCamera));
+        Imf::addWorldToNDC(header, imathMatrix(*values.worldToNdc));
+    }
+    header.screenWindowWidth() = values.screenWindowWidth;
+    for (const auto& [key, value] : values.strings) header.insert(key, Imf::StringAttribute(value));
     return header;
 }
 
-/// Frame buffers for a flat file: float planes are written as they are, half planes are
-/// converted into buffers owned here (OpenEXR's OutputFile does not convert pixel types).
-class FlatChannels
+/// A frame's flat planes: R, G, B, A, then Z and the passes' layers it holds.
+std::vector<detail::ExrPlane> flatPlanes(const Frame& frame, bool halfColour)
 {
-public:
-    FlatChannels(Imf::Header& header, int width) : mHeader(header), mWidth(std::size_t(width)) {}
-
-    /// A plane of @a count floats with @a channels interleaved values per pixel, as @a names.
-    void add(const float* data, std::size_t count, int channels, const std::vector<std::string>& names, Imf::PixelType type)
-    {
-        const std::size_t size = type == Imf::HALF ? sizeof(half) : sizeof(float);
-        const std::size_t xStride = std::size_t(channels) * size, yStride = xStride * mWidth;
-        char* base = reinterpret_cast<char*>(const_cast<float*>(data));
-        if (type == Imf::HALF) {
-            std::vector<half>& h = mHalves.emplace_back();
-            detail::assignAdvised(h, count, half()); // 8-33 MB at 1080p: huge pages where they cannot stall
-            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1 << 16), [&](const tbb::blocked_range<std::size_t>& r) {
-                std::transform(data + r.begin(), data + r.end(), h.begin() + std::ptrdiff_t(r.begin()), toHalf);
-            });
-            base = reinterpret_cast<char*>(h.data());
-        }
-        for (std::size_t c = 0; c < names.size(); ++c) {
-            mHeader.channels().insert(names[c], Imf::Channel(type));
-            mFrameBuffer.insert(names[c], Imf::Slice(type, base + c * size, xStride, yStride));
-        }
+    std::vector<detail::ExrPlane> planes;
+    auto add = [&](const std::vector<float>& values, std::size_t stride, const std::vector<std::string>& names, bool half) {
+        for (std::size_t c = 0; c < names.size(); ++c) planes.push_back({names[c], values.data() + c, stride, half});
+    };
+    add(frame.beauty.rgba, 4, {"R", "G", "B", "A"}, halfColour);
+    if (!frame.depth.empty()) add(frame.depth, 1, {"Z"}, false);
+    const std::pair<const char*, const std::vector<float>*> passes[] = {
+        {"transmittance", &frame.transmittance}, {"shadow", &frame.shadow}, {"emission", &frame.emission}};
+    for (const auto& [layer, values] : passes) {
+        const std::string l(layer);
+        if (!values->empty()) add(*values, 3, {l + ".R", l + ".G", l + ".B"}, halfColour);
     }
+    return planes;
+}
 
-    const Imf::FrameBuffer& frameBuffer() const { return mFrameBuffer; }
-
-private:
-    Imf::Header& mHeader;
-    std::size_t mWidth;
-    Imf::FrameBuffer mFrameBuffer;
-    std::deque<std::vector<half>> mHalves;
-};
+/// OpenEXR's frame buffer of @a planes, their channels added to @a header: float planes as they
+/// are, half planes converted into @a halves (OpenEXR's OutputFile does not convert pixel types).
+Imf::FrameBuffer imfFrameBuffer(const std::vector<detail::ExrPlane>& planes, Imf::Header& header, std::size_t width,
+    std::size_t pixels, std::deque<std::vector<half>>& halves)
+{
+    Imf::FrameBuffer fb;
+    for (const detail::ExrPlane& p : planes) {
+        const Imf::PixelType type = p.half ? Imf::HALF : Imf::FLOAT;
+        header.channels().insert(p.name, Imf::Channel(type));
+        if (!p.half) {
+            const std::size_t xStride = p.stride * sizeof(float);
+            fb.insert(p.name, Imf::Slice(type, reinterpret_cast<char*>(const_cast<float*>(p.values)), xStride, xStride * width));
+            continue;
+        }
+        std::vector<half>& h = halves.emplace_back();
+        detail::assignAdvised(h, pixels, half()); // 2-8 MB at 1080p: huge pages where they cannot stall
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pixels, 1 << 16), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t i = r.begin(); i < r.end(); ++i) h[i] = detail::toHalf(p.values[i * p.stride]);
+        });
+        fb.insert(p.name, Imf::Slice(type, reinterpret_cast<char*>(h.data()), sizeof(half), sizeof(half) * width));
+    }
+    return fb;
+}
 
 } // namespace
+
+namespace detail {
+
+ExrHeader exrHeader(int width, int height, const ExrOptions& options)
+{
+    ExrHeader header;
+    header.width = width;
+    header.height = height;
+    header.compression = options.compression;
+    header.chromaticities = options.chromaticities;
+    if (options.camera) addCameraAttributes(header, *options.camera);
+    header.strings = options.attributes;
+    return header;
+}
+
+} // namespace detail
 
 bool validForDeep(ExrCompression c)
 {
@@ -164,21 +194,20 @@ bool validForDeep(ExrCompression c)
 void writeExr(const Frame& frame, const std::string& path, const ExrOptions& options)
 {
     const Image& beauty = frame.beauty;
+    const detail::ExrHeader values = detail::exrHeader(beauty.width, beauty.height, options);
+    const std::vector<detail::ExrPlane> planes = flatPlanes(frame, options.colorType == ExrPixelType::Half);
     detail::writeAtomically(path, "EXR", [&](const std::string& tmp) {
-        Imf::Header header = makeHeader(beauty.width, beauty.height, options);
-        FlatChannels channels(header, beauty.width);
-        const Imf::PixelType colour = imfType(options.colorType);
-        channels.add(beauty.rgba.data(), beauty.rgba.size(), 4, {"R", "G", "B", "A"}, colour);
-        if (!frame.depth.empty()) channels.add(frame.depth.data(), frame.depth.size(), 1, {"Z"}, Imf::FLOAT);
-        const std::pair<const char*, const std::vector<float>*> passes[] = {
-            {"transmittance", &frame.transmittance}, {"shadow", &frame.shadow}, {"emission", &frame.emission}};
-        for (const auto& [layer, values] : passes) {
-            if (values->empty()) continue;
-            const std::string l(layer);
-            channels.add(values->data(), values->size(), 3, {l + ".R", l + ".G", l + ".B"}, colour);
+        // Zip and zips, the default and vdb_render's: deflated by libdeflate (exr_zip_writer.h).
+        if (options.compression == ExrCompression::Zip || options.compression == ExrCompression::Zips) {
+            detail::writeZipExr(tmp, values, planes, options.zipLevel);
+            return;
         }
+        Imf::Header header = imfHeader(values, options.zipLevel);
+        std::deque<std::vector<half>> halves;
+        const Imf::FrameBuffer fb = imfFrameBuffer(planes, header, std::size_t(beauty.width),
+            std::size_t(beauty.width) * std::size_t(beauty.height), halves);
         Imf::OutputFile file(tmp.c_str(), header);
-        file.setFrameBuffer(channels.frameBuffer());
+        file.setFrameBuffer(fb);
         file.writePixels(beauty.height);
     });
 }
@@ -189,7 +218,7 @@ void writeDeepExr(const DeepImage& deep, const std::string& path, const ExrOptio
         throw ValueError(path + ": deep EXR files take none, rle, zips or zip compression only");
     }
     detail::writeAtomically(path, "deep EXR", [&](const std::string& tmp) {
-        Imf::Header header = makeHeader(deep.width, deep.height, options);
+        Imf::Header header = imfHeader(detail::exrHeader(deep.width, deep.height, options), options.zipLevel);
         header.setType(Imf::DEEPSCANLINE);
         Imf::addDeepImageState(header, Imf::DIS_TIDY);
         const std::size_t pixels = std::size_t(deep.width) * std::size_t(deep.height);
@@ -206,7 +235,7 @@ void writeDeepExr(const DeepImage& deep, const std::string& path, const ExrOptio
             for (std::size_t i = 0; i < deep.samples.size(); ++i) {
                 const DeepSample& d = deep.samples[i];
                 const float v[4] = {d.r, d.g, d.b, d.a};
-                std::transform(v, v + 4, &halves[4 * i], toHalf);
+                std::transform(v, v + 4, &halves[4 * i], detail::toHalf);
             }
         }
         // One array of per-pixel pointers per channel, each at the pixel's first sample.
