@@ -136,7 +136,10 @@ RenderSettings RenderSettings::preset(Quality quality)
         s.lensSamples = 1;
         s.splat.supersample = 16;
         s.splat.supersampleSpan = 1.0;
-        s.splat.imageLod = 1.0;
+        // No image levels: its larger pixels make a draft coarse, and on top of them the levels
+        // (--image-lod 1) saved no time, added pops and memory, and cost 0.2-0.7 dB
+        // (docs/performance.md#image-space-level-of-detail).
+        s.splat.imageLod = 0.0;
         s.splat.pixelSizeBlur = 1.0;
         s.splat.prefilter = false;
         break;

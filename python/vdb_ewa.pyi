@@ -305,7 +305,7 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
         off; docs/equations.md#image-space-level-of-detail); wide footprints (voxels seen large, a
         camera inside the volume) cost a third to a 16th of the samples, and with --image-lod-composite
         of the composites (docs/performance.md#image-space-level-of-detail); off = every footprint at
-        every pixel (default: 4, draft 1, high and final off)
+        every pixel (default: 4; draft, high and final off)
     image_lod_composite (--image-lod-composite): on: with --image-lod, a screen tile whose footprints so
         far all lie at a coarser sample grid is also lit and composited there (the light lookups, the
         exact update and termination at every 2nd, 4th or 8th pixel), and its colour, transmittance and

@@ -156,7 +156,7 @@ void RenderOptions::add(CLI::App* app)
         "interpolated bilinearly onto the pixels when its slab is composited (at most 1/(4 n^2) of a footprint's peak off; "
         "docs/equations.md#image-space-level-of-detail); wide footprints (voxels seen large, a camera inside the volume) cost a "
         "third to a 16th of the samples, and with --image-lod-composite of the composites (docs/performance.md#image-space-level-of-detail); "
-        "off = every footprint at every pixel (default: " + imageLodName(rs.splat.imageLod) + ", draft 1, high and final off)");
+        "off = every footprint at every pixel (default: " + imageLodName(rs.splat.imageLod) + "; draft, high and final off)");
     mApp->add_option("--image-lod-composite", mImageLodComposite,
         "on: with --image-lod, a screen tile whose footprints so far all lie at a coarser sample grid is also lit and composited "
         "there (the light lookups, the exact update and termination at every 2nd, 4th or 8th pixel), and its colour, "

@@ -192,8 +192,9 @@ struct SplatOptions
     /// times, and reconstructed bilinearly onto the pixels when its slab is composited (the
     /// slab's sums are linear: only each footprint's interpolation error changes, at most
     /// 1/(4 n^2) of its peak). 0 = off (every footprint at every pixel); else in [1, 64].
-    /// Presets: draft 1, default 4 (footprints 8 pixels wide and more), high and final 0; with
-    /// imageLodComposite it saves time (docs/performance.md#image-space-level-of-detail).
+    /// Presets: default 4 (footprints 8 pixels wide and more); draft, high and final 0 (draft is
+    /// coarse by its larger pixels); with imageLodComposite it saves time
+    /// (docs/performance.md#image-space-level-of-detail).
     double imageLod = 4.0;
     /// With imageLod: a screen tile whose footprints so far all lie at a coarser sample grid
     /// is also composited and lit there (the exact update, the light lookups and termination
