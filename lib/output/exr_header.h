@@ -1,7 +1,8 @@
 /// @file exr_header.h
 /// @brief The header of a flat or deep EXR as plain values, computed once from ExrOptions and
-///        applied by either writer, and the half conversion both use: OpenEXR's C++ one (exr_output.cpp) or the zip writer on
-///        OpenEXRCore (exr_zip_writer.cpp). Attributes: docs/output.md.
+///        applied by either writer (OpenEXR's C++ one, exr_output.cpp, or the zip writer on
+///        OpenEXRCore, exr_zip_writer.cpp), and the half conversion both use. Attributes:
+///        docs/output.md.
 #pragma once
 
 #include <vdb_ewa/exr_output.h>

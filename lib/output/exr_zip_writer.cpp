@@ -2,7 +2,6 @@
 /// @brief Zip and zips EXRs through OpenEXRCore, deflated by libdeflate (exr_zip_writer.h).
 #include "output/exr_zip_writer.h"
 
-
 #include <OpenEXR/ImfThreading.h>
 #include <OpenEXR/openexr.h>
 #include <libdeflate.h>
@@ -166,17 +165,18 @@ void writeZipExr(const std::string& path, const ExrHeader& header, std::vector<E
     const int linesPerChunk = header.compression == ExrCompression::Zips ? 1 : 16;
     const int chunks = (header.height + linesPerChunk - 1) / linesPerChunk;
     const int threads = std::max(1, Imf::globalThreadCount());
-    // A chunk in flight holds its buffers in slot (index % slots): at most `slots` chunks are,
-    // and the in-order stages keep them consecutive, so the buffers are reused, not re-faulted.
+    // A chunk in flight holds its buffers and compressor in slot (index % slots): at most `slots`
+    // chunks are, and the in-order stages keep them consecutive, so the buffers are reused, not
+    // re-faulted.
     const std::size_t slots = std::size_t(2 * threads);
     struct Slot
     {
+        Compressor compressor;
         int firstLine = 0;
         std::vector<unsigned char> raw, prepared, scratch, packed;
     };
     std::vector<Slot> slot(slots);
-    std::vector<Compressor> compressors;
-    for (std::size_t i = 0; i < slots; ++i) compressors.push_back(makeCompressor(level));
+    for (Slot& s : slot) s.compressor = makeCompressor(level);
     int next = 0;
     tbb::task_arena arena(threads);
     arena.execute([&] {
@@ -191,8 +191,7 @@ void writeZipExr(const std::string& path, const ExrHeader& header, std::vector<E
                         Slot& s = slot[std::size_t(chunk) % slots];
                         s.firstLine = chunk * linesPerChunk;
                         packChunk(planes, header.width, s.firstLine, std::min(linesPerChunk, header.height - s.firstLine), s.raw);
-                        deflateChunk(compressors[std::size_t(chunk) % slots].get(), s.raw.data(), s.raw.size(), s.prepared,
-                            s.scratch, s.packed);
+                        deflateChunk(s.compressor.get(), s.raw.data(), s.raw.size(), s.prepared, s.scratch, s.packed);
                         return chunk;
                     }) &
                 tbb::make_filter<int, void>(tbb::filter_mode::serial_in_order, [&](int chunk) {
