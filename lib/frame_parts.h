@@ -4,7 +4,8 @@
 ///        they fill from the stages' counters.
 #pragma once
 
-#include <vdb_ewa/renderer.h>
+#include <vdb_ewa/frame.h>
+#include <vdb_ewa/render_stats.h>
 
 #include "shading/shading.h"
 #include "source/source.h"

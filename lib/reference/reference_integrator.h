@@ -13,7 +13,7 @@
 
 #include <vdb_ewa/camera.h>
 #include <vdb_ewa/frame.h>
-#include <vdb_ewa/renderer.h>
+#include <vdb_ewa/render_stats.h>
 
 namespace vdb_ewa {
 namespace detail {
