@@ -85,6 +85,7 @@ scripts/install-deps.sh --bench; run with /usr/bin/python3).
 Machines are noisy: compare ratios, not seconds.
 """
 import argparse
+import json
 import math
 import os
 import re
@@ -941,6 +942,46 @@ def cmd_python(args):
         print(f"{k:26s} {v:8.3f} {v / med['vdb_ewa CLI']:7.3f} {v / med['vdb_render']:13.3f}")
 
 
+def cmd_scene(args):
+    """Issue 55's camera move: vdb_ewa.Scene.render after a render from a camera 10 degrees away on
+    an orbit, against vdb_ewa.render of the same frame in the same process (the grid opened once
+    for both: neither pays for loading), interleaved rounds, medians."""
+    pythonpath = os.environ.get("VDB_EWA_PYTHONPATH", os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(EWA))), "python"))
+    rows = []
+    for name in args.scenes.split(","):
+        label, path, camera = next(s for s in SCENES if s[0] == name)
+        keywords = lambda words: dict((words[i][1:], tuple(float(x) for x in words[i + 1].split(","))) for i in range(0, len(words), 2))
+        before, after = keywords(camera_path(camera, "orbit", 0, 1)), keywords(camera_path(camera, "orbit", 10, 1))
+        script = f"""
+import json, statistics, time, vdb_ewa
+grid = vdb_ewa.open({path!r})
+opts = dict(res={args.res!r}, quality={args.quality!r})
+cold, warm, stats = [], [], None
+for _ in range({args.repeat}):
+    t0 = time.perf_counter(); c = vdb_ewa.render(grid, **opts, **{after!r}); cold.append(time.perf_counter() - t0)
+    scene = vdb_ewa.Scene(grid, **opts)
+    scene.render(**{before!r})
+    t0 = time.perf_counter(); w = scene.render(**{after!r}); warm.append(time.perf_counter() - t0)
+    assert (w.beauty == c.beauty).all(), "the scene's frame is not the cold render's"
+    stats = (w.stats, c.stats)
+print(json.dumps([statistics.median(cold), statistics.median(warm), stats[0], stats[1]]))
+"""
+        p = subprocess.run(["/usr/bin/python3", "-c", script], capture_output=True, text=True, env=dict(os.environ, PYTHONPATH=pythonpath))
+        if p.returncode != 0:
+            sys.exit(p.stderr)
+        cold, warm, ws, cs = json.loads(p.stdout.split("\n")[-2])
+        rows.append((label, cold, warm, ws, cs))
+    print(f"# vdb_ewa.Scene: a camera move (an orbit of 10 degrees about the README camera's look-at point) against a cold "
+          f"in-process render of the same frame, {args.res}, --quality {args.quality}, median of {args.repeat} interleaved rounds; "
+          f"the frames are equal bit for bit")
+    print("| scene | cold render (s) | scene after a move (s) | scene / cold | light maps kept | light rays marched: cold, scene (kept) | "
+          "shadows (s): cold, scene |")
+    print("|---|---|---|---|---|---|---|")
+    for label, cold, warm, ws, cs in rows:
+        print(f"| {label} | {cold:.3f} | {warm:.3f} | {warm / cold:.2f}x | {ws['light_maps_reused']} | {cs['light_rays_marched']}, "
+              f"{ws['light_rays_marched']} ({ws['light_rays_reused']}) | {cs['shadow_seconds']:.3f}, {ws['shadow_seconds']:.3f} |")
+
+
 def cmd_imagelod(args):
     """Image-space level of detail (--image-lod): each scene at --image-lod off and each asked
     value (a trailing "c": with --image-lod-composite on), interleaved round by round; the
@@ -1410,6 +1451,11 @@ def main():
     sy.add_argument("--res", default="960x540")
     sy.add_argument("--repeat", type=int, default=7)
     sy.add_argument("--write", action="store_true", help="the Python process writes the EXR too, as the CLI does")
+    sse = sub.add_parser("scene")
+    sse.add_argument("--scenes", default="pyro,smoke,cloud (grids/)")
+    sse.add_argument("--res", default="960x540")
+    sse.add_argument("--quality", default="default")
+    sse.add_argument("--repeat", type=int, default=5)
     sis = sub.add_parser("imagelod-scale")
     sis.add_argument("--res", default="480x270")
     sis.add_argument("--px", default="0.1,3,20")
@@ -1494,7 +1540,7 @@ def main():
     {"speed": cmd_speed, "sigma": cmd_sigma, "tradeoff": cmd_tradeoff, "targets": cmd_targets,
      "output": cmd_output, "imagelod": cmd_imagelod, "draft": cmd_draft, "imagelod-scale": cmd_imagelod_scale, "surfaces": cmd_surfaces, "holes": cmd_holes, "plot": cmd_plot, "ladder": cmd_ladder,
      "analytic": cmd_analytic, "roofline": cmd_roofline, "scaling": cmd_scaling,
-     "stability": cmd_stability, "python": cmd_python, "cull": cmd_cull, "blur": cmd_blur, "lights": cmd_lights, "volumes": cmd_volumes, "scale": cmd_scale, "tiles": cmd_tiles}[a.cmd](a)
+     "stability": cmd_stability, "python": cmd_python, "scene": cmd_scene, "cull": cmd_cull, "blur": cmd_blur, "lights": cmd_lights, "volumes": cmd_volumes, "scale": cmd_scale, "tiles": cmd_tiles}[a.cmd](a)
 
 
 if __name__ == "__main__":

@@ -1,6 +1,7 @@
 /// @file frame_parts.cpp
 #include "frame_parts.h"
 
+#include "light_cache.h"
 #include "raster/raster.h"
 #include "shading/shading.h"
 
@@ -75,7 +76,8 @@ void addPartStats(RenderStats& stats, RenderStats&& part, bool first)
              {&stats.splatTilePairsSkipped, total.splatTilePairsSkipped}, {&stats.footprintSamples, total.footprintSamples},
              {&stats.slabComposites, total.slabComposites}, {&stats.motionSubKernels, total.motionSubKernels},
              {&stats.bricksExpanded, total.bricksExpanded}, {&stats.bricksHidden, total.bricksHidden}, {&stats.windows, total.windows},
-             {&stats.lightRaysMarched, total.lightRaysMarched}, {&stats.kernelsCulled, total.kernelsCulled}})
+             {&stats.lightRaysMarched, total.lightRaysMarched}, {&stats.lightRaysReused, total.lightRaysReused},
+             {&stats.lightMapsReused, total.lightMapsReused}, {&stats.kernelsCulled, total.kernelsCulled}})
         *sum += add;
     for (int k = 0; k < kImageLevels; ++k) stats.footprintSamplesAtLevel[k] += total.footprintSamplesAtLevel[k];
     for (int k = 0; k < kImageLevels; ++k) stats.slabCompositesAtLevel[k] += total.slabCompositesAtLevel[k];
@@ -150,18 +152,39 @@ void splatWarnings(std::uint64_t beforeNear, std::uint64_t clampedNear, std::uin
     if (clippedSpan) warnings.push_back(countLine(clippedSpan, "voxels crossed more than 1024 depth slabs and were cut short (raise --slab)"));
 }
 
-void addLightStats(const std::vector<LightMap>& lights, const PointLights& pointLights, RenderStats& stats)
+void frameLights(FrameLights& lights, const RenderSettings& settings, const GridSource::Impl& g, const MemoryBudget& budget,
+    Progress& progress, RenderStats& stats, bool onDemand, LightCache* cache)
 {
-    for (const PointLightMap& map : pointLights.maps()) {
+    if (!cache || !cache->serves(g)) {
+        lights.ownMaps = detail::lightMaps(settings, g, budget, progress, stats.warnings, onDemand);
+        lights.ownPoints = detail::pointLightMaps(settings, g, budget, progress, stats.warnings);
+        lights.maps = &lights.ownMaps;
+        lights.points = &lights.ownPoints;
+        return;
+    }
+    lights.maps = &cache->lightMaps(settings, budget, progress, stats.warnings, stats.lightMapsReused);
+    if (!onDemand) {
+        for (const LightMap& map : *lights.maps) map.marchRemaining();
+    }
+    const std::uint64_t before = stats.lightMapsReused;
+    lights.points = &cache->pointLightMaps(settings, budget, progress, stats.warnings, stats.lightMapsReused);
+    lights.pointsReused = stats.lightMapsReused > before;
+}
+
+void addLightStats(const FrameLights& lights, RenderStats& stats)
+{
+    // A kept point light's rays were all marched by the render that made it.
+    for (const PointLightMap& map : lights.points->maps()) {
         stats.lightRays += map.rays();
-        stats.lightRaysMarched += map.rays();
+        (lights.pointsReused ? stats.lightRaysReused : stats.lightRaysMarched) += map.rays();
     }
     // Light on demand is marched inside the compositing: its thread-time, shared out over the
     // threads, moves from the rasteriser's stage to the shadows'.
     double marching = 0.0;
-    for (const LightMap& light : lights) {
+    for (const LightMap& light : *lights.maps) {
         stats.lightRays += light.rays();
-        stats.lightRaysMarched += light.raysMarched();
+        stats.lightRaysMarched += light.raysMarched() - light.raysMarchedBefore();
+        stats.lightRaysReused += light.raysMarchedBefore();
         marching += light.marchThreadSeconds();
     }
     marching = std::clamp(marching / double(tbb::this_task_arena::max_concurrency()), 0.0, stats.rasterSeconds);
@@ -169,10 +192,6 @@ void addLightStats(const std::vector<LightMap>& lights, const PointLights& point
     stats.rasterSeconds -= marching;
 }
 
-namespace {
-
-/// Each light map's share of the lights' quarter of @a budget (4 bytes a lattice point): the
-/// directional and point lights that scatter share it evenly.
 double lightMapPoints(const RenderSettings& settings, const MemoryBudget& budget)
 {
     const OpticalModel model(settings);
@@ -181,8 +200,6 @@ double lightMapPoints(const RenderSettings& settings, const MemoryBudget& budget
     for (std::size_t l = 0; l < settings.pointLights.size(); ++l) lit += model.pointDark(l) ? 0 : 1;
     return std::min(kLightMapPointBudget, budget.itemsWithin(0.25, 4.0)) / double(std::max<std::size_t>(lit, 1));
 }
-
-} // namespace
 
 PointLights pointLightMaps(const RenderSettings& settings, const GridSource::Impl& g, const MemoryBudget& budget,
     Progress& progress, std::vector<std::string>& warnings)

@@ -83,10 +83,30 @@ void addMotionStats(const MotionStats& motion, RenderStats& stats);
 /// What motion blur clamped or stretched, a line each (@a splitSigmas: MotionBlur::splitSigmas).
 void motionWarnings(const MotionStats& motion, double splitSigmas, std::vector<std::string>& warnings);
 
-/// The light maps' rays in all and marched, into @a stats (the point lights' are marched whole),
-/// and the time spent marching light on demand, moved from the rasteriser's stage to the
-/// shadows' (call it after the rasteriser's time is in @a stats).
-void addLightStats(const std::vector<LightMap>& lights, const PointLights& pointLights, RenderStats& stats);
+class LightCache;
+
+/// A frame's light maps: a Scene's kept ones (lib/light_cache.h), or made for this frame alone.
+struct FrameLights
+{
+    const std::vector<LightMap>* maps = nullptr;
+    const PointLights* points = nullptr;
+    bool pointsReused = false; ///< the point lights' maps were made by an earlier render
+    std::vector<LightMap> ownMaps;
+    PointLights ownPoints;
+};
+/// Fills @a lights from @a cache where it serves @a g (a Scene's grid), else with maps of its
+/// own (lightMaps, pointLightMaps). Maps of its own are marched whole unless @a onDemand; kept
+/// ones are marched on demand, and whole here unless @a onDemand (an --iso surface reads them
+/// without asking). Their warnings, and how many maps were kept (lightMapsReused), go into
+/// @a stats.
+void frameLights(FrameLights& lights, const RenderSettings& settings, const GridSource::Impl& g, const MemoryBudget& budget,
+    Progress& progress, RenderStats& stats, bool onDemand, LightCache* cache);
+
+/// The light maps' rays in all, marched by this render and by earlier ones (a Scene's kept
+/// maps), into @a stats (the point lights' are marched whole), and the time spent marching
+/// light on demand, moved from the rasteriser's stage to the shadows' (call it after the
+/// rasteriser's time is in @a stats).
+void addLightStats(const FrameLights& lights, RenderStats& stats);
 
 /// A whole frame marches its light maps whole unless one would hold more lattice points than
 /// this many a pixel: then it marches what its lookups read (light on demand), as the streamed
@@ -95,6 +115,10 @@ void addLightStats(const std::vector<LightMap>& lights, const PointLights& point
 /// whole, where blocks of 16 x 16 rays march 1.1-1.3x faster than tiles of 4
 /// (docs/performance.md#light-rays-marched-against-looked-up).
 constexpr double kLightPointsPerPixelMarchedWhole = 1024.0;
+
+/// Each light map's share of the lights' quarter of @a budget (4 bytes a lattice point): the
+/// directional and point lights that scatter share it evenly.
+double lightMapPoints(const RenderSettings& settings, const MemoryBudget& budget);
 
 /// Whether a light map of @a g would hold more than kLightPointsPerPixelMarchedWhole lattice
 /// points a pixel of a frame of @a pixels.

@@ -31,7 +31,6 @@ using detail::addLightStats;
 using detail::addRasterStats;
 using detail::budgetFor;
 using detail::countLine;
-using detail::lightMaps;
 using detail::splatWarnings;
 using detail::StageTimer;
 using detail::valueWarnings;
@@ -212,7 +211,9 @@ void Renderer::renderSubFrames(const GridSource::Impl& g, const Camera& camera, 
         const RenderSettings part = detail::subFrameSettings(mSettings, moving, s, n);
         Frame sub;
         RenderStats subStats;
-        Renderer(part).renderFogVolume(g, lens ? camera.throughLensPart(s, n) : camera, passes, sub, subStats, progress);
+        Renderer partRenderer(part);
+        partRenderer.mLightCache = mLightCache; // the light knows no shutter: a Scene's maps serve every part
+        partRenderer.renderFogVolume(g, lens ? camera.throughLensPart(s, n) : camera, passes, sub, subStats, progress);
         detail::addToAverage(frame, std::move(sub), s, n);
         // Counts and times add up over the sub-frames; the warnings are each sub-frame's alike.
         detail::addPartStats(stats, std::move(subStats), s == 0);
@@ -260,8 +261,10 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     // surface, which looks the maps up at its kernels, march them whole.
     const bool lightOnDemand = mSettings.cull && std::isnan(mSettings.surface.iso) &&
         detail::lightMapsOutgrowFrame(mSettings, g, budget, double(camera.width()) * double(camera.height()));
-    const std::vector<detail::LightMap> lights = lightMaps(mSettings, g, budget, progress, stats.warnings, lightOnDemand);
-    const detail::PointLights pointLights = detail::pointLightMaps(mSettings, g, budget, progress, stats.warnings);
+    detail::FrameLights frameLights;
+    detail::frameLights(frameLights, mSettings, g, budget, progress, stats, lightOnDemand, mLightCache);
+    const std::vector<detail::LightMap>& lights = *frameLights.maps;
+    const detail::PointLights& pointLights = *frameLights.points;
     stats.shadowSeconds = timer.lap();
     if (emittersLowered) {
         std::ostringstream w;
@@ -287,7 +290,7 @@ void Renderer::renderFogVolume(const GridSource::Impl& g, const Camera& camera, 
     frame = detail::rasterizeSplats(splats, camera, mSettings, passes, raster, lights, !colors.empty(), &progress, &budget,
         iso ? &iso->layer : nullptr, iso && passes.shadow ? &iso->shadow : nullptr, &pointLights);
     stats.rasterSeconds = timer.lap();
-    addLightStats(lights, pointLights, stats);
+    addLightStats(frameLights, stats);
 
     stats.activeVoxels = kernels.activeVoxels;
     stats.activeTiles = kernels.activeTiles;

@@ -111,9 +111,12 @@ void Renderer::renderStreamedFogVolume(const GridSource::Impl& g, const Camera& 
 
     // Light on demand: no ray is marched yet; the compositor marches those its lookups read,
     // once for every sub-frame (the light follows the shutter's mid-time; it knows no camera).
-    std::vector<detail::LightMap> lights = detail::lightMaps(mSettings, g, budget, progress, stats.warnings, true);
     // Point and spot lights: their maps marched whole, then looked up as the light on demand's.
-    const detail::PointLights pointLights = detail::pointLightMaps(mSettings, g, budget, progress, stats.warnings);
+    // A Scene's renders take the maps an earlier one made, with the rays it marched.
+    detail::FrameLights frameLights;
+    detail::frameLights(frameLights, mSettings, g, budget, progress, stats, true, mLightCache);
+    const std::vector<detail::LightMap>& lights = *frameLights.maps;
+    const detail::PointLights& pointLights = *frameLights.points;
     stats.shadowSeconds = timer.lap();
 
     progress.stage(5, 100);
@@ -279,7 +282,7 @@ void Renderer::renderStreamedFogVolume(const GridSource::Impl& g, const Camera& 
     }
     stats.rasterSeconds += timer.lap();
     detail::addRasterStats(rasterStats, stats);
-    detail::addLightStats(lights, pointLights, stats);
+    detail::addLightStats(frameLights, stats);
     if (outOfOrder) stats.warnings.push_back(detail::countLine(outOfOrder, "splats started in front of their window (a bound of the streamed frame is wrong; --cull off renders without it)"));
     if (g.activeVoxels == 0 && g.activeTiles == 0) stats.warnings.push_back("the grid has no active values: the image is empty");
     // Counted in the bricks expanded: a hidden brick's values are never read.

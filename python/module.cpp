@@ -101,6 +101,22 @@ py::dict aovs(const py::object& self)
     return d;
 }
 
+/// A render's cancel= keyword: a CancelToken or None.
+std::shared_ptr<CancelToken> cancelToken(const py::object& cancel)
+{
+    if (cancel.is_none()) return nullptr;
+    if (!py::isinstance<CancelToken>(cancel)) throw vdb_ewa::ValueError("cancel: expected a vdb_ewa.CancelToken or None");
+    return cancel.cast<std::shared_ptr<CancelToken>>();
+}
+
+/// A render's warnings as Python warnings (vdb_ewa.RenderWarning), attributed to the caller.
+void warnAll(const std::vector<std::string>& warnings)
+{
+    const py::object warn = py::module_::import("warnings").attr("warn");
+    const py::object category = py::module_::import("vdb_ewa").attr("RenderWarning");
+    for (const std::string& w : warnings) warn(w, category, 1); // this C function has no frame: 1 is the caller
+}
+
 py::dict statsOf(const RenderStats& s)
 {
     py::dict d;
@@ -135,6 +151,8 @@ py::dict statsOf(const RenderStats& s)
     d["splats_in_flight"] = s.splatsInFlight;
     d["light_rays"] = s.lightRays;
     d["light_rays_marched"] = s.lightRaysMarched;
+    d["light_maps_reused"] = s.lightMapsReused;
+    d["light_rays_reused"] = s.lightRaysReused;
     d["supersample"] = s.supersample;
     d["pixel_size"] = s.pixelSize;
     d["voxel_pixels"] = s.voxelPixels;
@@ -373,17 +391,36 @@ PYBIND11_MODULE(vdb_ewa, m)
         });
 
     m.def("render", [](const py::object& grid, const py::object& progress, const py::object& cancel, const py::kwargs& kwargs) {
-        std::shared_ptr<CancelToken> token;
-        if (!cancel.is_none()) {
-            if (!py::isinstance<CancelToken>(cancel)) throw vdb_ewa::ValueError("cancel: expected a vdb_ewa.CancelToken or None");
-            token = cancel.cast<std::shared_ptr<CancelToken>>();
-        }
-        std::shared_ptr<RenderedFrame> frame = render(grid, progress, token, kwargs);
-        const py::object warn = py::module_::import("warnings").attr("warn");
-        const py::object category = py::module_::import("vdb_ewa").attr("RenderWarning");
-        for (const std::string& w : frame->warnings) warn(w, category, 1); // this C function has no frame: 1 is the caller
+        std::shared_ptr<RenderedFrame> frame = render(grid, progress, cancelToken(cancel), kwargs);
+        warnAll(frame->warnings);
         return frame;
     }, py::arg("grid"), py::kw_only(), py::arg("progress") = py::none(), py::arg("cancel") = py::none(), renderDoc().c_str());
+
+    py::class_<SceneCall, std::shared_ptr<SceneCall>>(m, "Scene",
+        "A grid that stays loaded, rendered from camera after camera (a viewport, a turntable): Scene(grid, **options)\n"
+        "takes a Grid or a path and render()'s keywords; render(**options) overrides them for one render. What\n"
+        "the renders can share they share (today the light maps, with the rays marched: Frame.stats says\n"
+        "light_maps_reused and light_rays_reused); each frame is the frame render() makes with the same\n"
+        "keywords, bit for bit (docs/api.md#scenes-what-a-render-reuses). One render at a time per scene.")
+        .def(py::init([](const py::object& grid, const py::kwargs& kwargs) { return std::make_shared<SceneCall>(grid, kwargs); }),
+            py::arg("grid"), "Open the grid (a path with name=, color=, emission_grid=, temperature=, velocity_grid=, or a Grid)\n"
+            "and keep render()'s keywords. Raises vdb_ewa.ValueError, vdb_ewa.IoError as render().")
+        .def("render", [](SceneCall& scene, const py::object& progress, const py::object& cancel, const py::kwargs& kwargs) {
+            std::shared_ptr<RenderedFrame> frame = scene.render(progress, cancelToken(cancel), kwargs);
+            warnAll(frame->warnings);
+            return frame;
+        }, py::kw_only(), py::arg("progress") = py::none(), py::arg("cancel") = py::none(),
+            "Render with the scene's keywords, updated by these (camera, quality, lights...; not the grid keywords):\n"
+            "a Frame, as vdb_ewa.render() returns. progress and cancel as render()'s.")
+        .def("clear", [](SceneCall& scene) {
+            py::gil_scoped_release release; // waits for a render of the scene on another thread
+            scene.scene->clear();
+        }, "Let go of what the renders kept: the next render starts cold.")
+        .def_property_readonly("options", [](const SceneCall& scene) { return py::dict(scene.options); },
+            "The keywords the scene was made with.")
+        .def("__repr__", [](const SceneCall& scene) {
+            return "<vdb_ewa.Scene of " + (scene.input.empty() ? scene.grid->name() : scene.input) + ">";
+        });
 
     m.def("set_exr_threads", &setExrThreadsProcessWide, py::arg("threads") = 0,
         "Let OpenEXR compress written files with this many threads (0: all cores), as the CLI does. Process-wide\n"

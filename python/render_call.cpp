@@ -9,6 +9,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <exception>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <thread>
@@ -167,15 +168,16 @@ private:
     CallInterrupter& mInterrupter;
 };
 
-/// Run @a renderer on a worker thread; serve @a progress and Python's signals (Ctrl+C) here.
-Frame renderOnWorker(const Renderer& renderer, const GridSource& grid, const Camera& camera, const PassRequest& passes,
-    RenderStats& stats, const py::object& progress, const std::shared_ptr<CancelToken>& cancel)
+/// Run @a renderFrame (a Renderer's or a Scene's) on a worker thread; serve @a progress and
+/// Python's signals (Ctrl+C) here.
+Frame renderOnWorker(const std::function<Frame(Interrupter&)>& renderFrame, const py::object& progress,
+    const std::shared_ptr<CancelToken>& cancel)
 {
     CallInterrupter interrupter(cancel);
     Frame frame;
     std::thread thread([&] {
         try {
-            frame = renderer.renderFrame(grid, camera, passes, &stats, &interrupter);
+            frame = renderFrame(interrupter);
             interrupter.finish(nullptr);
         } catch (...) {
             interrupter.finish(std::current_exception());
@@ -245,62 +247,135 @@ void RenderedFrame::write(const std::string& path) const
     options.output().write(copy, camera, path, preview, options.headerAttributes(grid, camera, given, input, seconds, std::nullopt, stats));
 }
 
+namespace {
+
+/// A call's keyword arguments parsed, checked and prepared, before any grid is read.
+struct PreparedCall
+{
+    std::vector<std::string> arguments;
+    std::shared_ptr<ParsedOptions> options = std::make_shared<ParsedOptions>();
+    CameraSettings camera;
+    RenderSettings given, working;
+    std::vector<std::string> warnings;
+};
+
+PreparedCall prepareCall(const py::kwargs& kwargs, bool gridIsPath, bool attachedVelocity)
+{
+    PreparedCall call;
+    call.arguments = argumentsOf(kwargs, gridIsPath);
+    ParsedOptions& parsed = *call.options;
+    parsed.parse(call.arguments);
+    parsed.options.resolve(std::nullopt, call.camera, call.given);
+    const Renderer validated(call.given); // the settings are checked before any file is read
+    call.working = parsed.options.prepare("", "", call.given, call.warnings, attachedVelocity);
+    return call;
+}
+
+bool isPathLike(const py::object& gridOrPath)
+{
+    const bool isPath = py::isinstance<py::str>(gridOrPath) || py::hasattr(gridOrPath, "__fspath__");
+    if (!isPath && !py::isinstance<GridSource>(gridOrPath)) throw ValueError("grid: expected a vdb_ewa.Grid or the path of a .vdb file");
+    return isPath;
+}
+
+/// The grid a call renders: the file opened with the name and grid keywords, or the Grid given
+/// with the colour, emission, temperature and velocity grids the keywords add. @a input: its file.
+GridSource openGrid(const py::object& gridOrPath, bool isPath, const PreparedCall& call, const py::kwargs& kwargs, std::string& input)
+{
+    if (isPath) {
+        input = py::module_::import("os").attr("fspath")(gridOrPath).cast<std::string>();
+        py::gil_scoped_release release;
+        return call.options->options.open(input);
+    }
+    const GridSource& opened = gridOrPath.cast<const GridSource&>();
+    input = opened.path();
+    for (const char* keyword : {"color", "emission_grid", "temperature", "velocity_grid"}) {
+        if (opened.path().empty() && kwargs.contains(keyword) && !kwargs[keyword].is_none()) {
+            throw ValueError(std::string(keyword) + ": the grid came from an array, with no file to read grids from (from_array takes "
+                             "emission=, temperature= and velocity= arrays)");
+        }
+    }
+    py::gil_scoped_release release; // reads and resamples the colour and emission grids
+    return call.options->options.withExtraGrids(opened);
+}
+
+bool attachedVelocityOf(const py::object& gridOrPath, bool isPath)
+{
+    return !isPath && gridOrPath.cast<const GridSource&>().hasVelocityGrid(); // Grid.with_velocity_grid
+}
+
+/// Render @a grid as @a call asks, through @a renderFrame on a worker thread: the frame with its
+/// options, stats and warnings, in the output space.
+std::shared_ptr<RenderedFrame> finishCall(PreparedCall&& call, const GridSource& grid, const std::string& input,
+    const std::chrono::steady_clock::time_point& t0, const py::object& progress, const std::shared_ptr<CancelToken>& cancel,
+    const std::function<Frame(const Camera&, const PassRequest&, RenderStats&, Interrupter&)>& renderFrame)
+{
+    const Camera camera(call.camera, grid.worldCentre());
+    const std::string what = input.empty() ? grid.name() : input;
+    std::vector<std::string> warnings = std::move(call.warnings);
+    for (const std::string& w : cli::RenderOptions::cameraWarnings(camera)) warnings.push_back(what + ": " + w);
+
+    auto result = std::make_shared<RenderedFrame>(grid, camera);
+    result->arguments = call.arguments;
+    result->options = call.options;
+    result->input = input;
+    result->given = call.given;
+    const PassRequest passes = call.options->options.output().passes();
+    result->working = renderOnWorker([&](Interrupter& interrupter) { return renderFrame(camera, passes, result->stats, interrupter); },
+        progress, cancel);
+    for (const std::string& w : result->stats.warnings) warnings.push_back(what + ": " + w);
+    result->output = result->working;
+    call.options->options.output().toOutputSpace(result->output);
+    result->warnings = std::move(warnings);
+    result->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return result;
+}
+
+} // namespace
+
 std::shared_ptr<RenderedFrame> render(const py::object& gridOrPath, const py::object& progress,
     const std::shared_ptr<CancelToken>& cancel, const py::kwargs& kwargs)
 {
     const auto t0 = std::chrono::steady_clock::now();
-    const bool isPath = py::isinstance<py::str>(gridOrPath) || py::hasattr(gridOrPath, "__fspath__");
-    if (!isPath && !py::isinstance<GridSource>(gridOrPath)) {
-        throw ValueError("grid: expected a vdb_ewa.Grid or the path of a .vdb file");
-    }
+    const bool isPath = isPathLike(gridOrPath);
     if (!progress.is_none() && !PyCallable_Check(progress.ptr())) throw ValueError("progress: expected a callable taking the percent");
-    const std::vector<std::string> arguments = argumentsOf(kwargs, isPath);
-    const auto options = std::make_shared<ParsedOptions>();
-    ParsedOptions& parsed = *options;
-    parsed.parse(arguments);
-    CameraSettings cam;
-    RenderSettings given;
-    parsed.options.resolve(std::nullopt, cam, given);
-    const Renderer validated(given); // the settings are checked before any file is read
-    std::vector<std::string> warnings;
-    const bool attachedVelocity = !isPath && gridOrPath.cast<const GridSource&>().hasVelocityGrid(); // Grid.with_velocity_grid
-    const RenderSettings working = parsed.options.prepare("", "", given, warnings, attachedVelocity);
-
+    PreparedCall call = prepareCall(kwargs, isPath, attachedVelocityOf(gridOrPath, isPath));
     std::string input;
-    std::optional<GridSource> grid;
-    if (isPath) {
-        input = py::module_::import("os").attr("fspath")(gridOrPath).cast<std::string>();
-        py::gil_scoped_release release;
-        grid = parsed.options.open(input);
-    } else {
-        const GridSource& opened = gridOrPath.cast<const GridSource&>();
-        input = opened.path();
-        for (const char* keyword : {"color", "emission_grid", "temperature", "velocity_grid"}) {
-            if (opened.path().empty() && kwargs.contains(keyword) && !kwargs[keyword].is_none()) {
-                throw ValueError(std::string(keyword) + ": the grid came from an array, with no file to read grids from (from_array takes "
-                                 "emission=, temperature= and velocity= arrays)");
-            }
-        }
-        py::gil_scoped_release release; // reads and resamples the colour and emission grids
-        grid = parsed.options.withExtraGrids(opened);
-    }
-    const Camera camera(cam, grid->worldCentre());
-    const std::string what = input.empty() ? grid->name() : input;
-    for (const std::string& w : cli::RenderOptions::cameraWarnings(camera)) warnings.push_back(what + ": " + w);
+    const GridSource grid = openGrid(gridOrPath, isPath, call, kwargs, input);
+    const Renderer renderer(call.working);
+    return finishCall(std::move(call), grid, input, t0, progress, cancel,
+        [&](const Camera& camera, const PassRequest& passes, RenderStats& stats, Interrupter& interrupter) {
+            return renderer.renderFrame(grid, camera, passes, &stats, &interrupter);
+        });
+}
 
-    auto result = std::make_shared<RenderedFrame>(*grid, camera);
-    result->arguments = arguments;
-    result->options = options;
-    result->input = input;
-    result->given = given;
-    const Renderer renderer(working);
-    result->working = renderOnWorker(renderer, *grid, camera, parsed.options.output().passes(), result->stats, progress, cancel);
-    for (const std::string& w : result->stats.warnings) warnings.push_back(what + ": " + w);
-    result->output = result->working;
-    parsed.options.output().toOutputSpace(result->output);
-    result->warnings = std::move(warnings);
-    result->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    return result;
+SceneCall::SceneCall(const py::object& gridOrPath, const py::kwargs& kwargs)
+    : isPath(isPathLike(gridOrPath)), options(kwargs)
+{
+    PreparedCall call = prepareCall(kwargs, isPath, attachedVelocityOf(gridOrPath, isPath));
+    grid.emplace(openGrid(gridOrPath, isPath, call, kwargs, input));
+    scene = std::make_unique<Scene>(*grid, call.working);
+}
+
+std::shared_ptr<RenderedFrame> SceneCall::render(const py::object& progress, const std::shared_ptr<CancelToken>& cancel,
+    const py::kwargs& kwargs)
+{
+    const auto t0 = std::chrono::steady_clock::now();
+    if (!progress.is_none() && !PyCallable_Check(progress.ptr())) throw ValueError("progress: expected a callable taking the percent");
+    for (const char* keyword : {"name", "density_grid", "color", "emission_grid", "temperature", "velocity_grid"}) {
+        if (kwargs.contains(keyword)) {
+            throw ValueError(std::string(keyword) + ": a Scene's grids are given when it is made (vdb_ewa.Scene(grid, " + keyword + "=...))");
+        }
+    }
+    py::kwargs merged;
+    for (const auto& [key, value] : options) merged[key] = value;
+    for (const auto& [key, value] : kwargs) merged[key] = value;
+    PreparedCall call = prepareCall(merged, isPath, grid->hasVelocityGrid() && !isPath);
+    const RenderSettings settings = call.working;
+    return finishCall(std::move(call), *grid, input, t0, progress, cancel,
+        [&](const Camera& camera, const PassRequest& passes, RenderStats& stats, Interrupter& interrupter) {
+            return scene->render(camera, settings, passes, &stats, &interrupter);
+        });
 }
 
 } // namespace vdb_ewa::python

@@ -77,4 +77,23 @@ private:
 std::shared_ptr<RenderedFrame> render(const pybind11::object& grid, const pybind11::object& progress,
     const std::shared_ptr<CancelToken>& cancel, const pybind11::kwargs& kwargs);
 
+/// vdb_ewa.Scene: a grid opened once (with the grid keywords given when it is made) and the
+/// keywords every render starts from; each render's keywords override them for that render.
+/// What the renders can share they share (vdb_ewa::Scene).
+struct SceneCall
+{
+    /// @throw vdb_ewa::Error as render().
+    SceneCall(const pybind11::object& grid, const pybind11::kwargs& kwargs);
+    /// As render(), with the scene's keywords updated by @a kwargs (not the grid keywords: those
+    /// are the scene's).
+    std::shared_ptr<RenderedFrame> render(const pybind11::object& progress, const std::shared_ptr<CancelToken>& cancel,
+        const pybind11::kwargs& kwargs);
+
+    bool isPath;
+    pybind11::dict options;   ///< the keywords it was made with
+    std::optional<GridSource> grid;
+    std::string input;        ///< the grid's file, empty for an array
+    std::unique_ptr<Scene> scene;
+};
+
 } // namespace vdb_ewa::python

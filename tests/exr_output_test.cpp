@@ -64,13 +64,13 @@ std::vector<float> readChannel(const std::string& path, const std::string& name)
     return values;
 }
 
-struct Scene
+struct CloudView
 {
     GridSource cloud = makeSampleGrid(SampleGrid::Cloud, 0.05);
     Camera camera = cloudCamera(cloud, 64, 48);
 };
 
-Frame renderAll(const Scene& scene, bool deep = false)
+Frame renderAll(const CloudView& scene, bool deep = false)
 {
     PassRequest p;
     p.depth = p.transmittance = p.shadow = p.emission = !deep;
@@ -85,7 +85,7 @@ Frame renderAll(const Scene& scene, bool deep = false)
 
 TEST(ExrOutput, EveryChannelAndAttributeReadsBack)
 {
-    const Scene scene;
+    const CloudView scene;
     const Frame frame = renderAll(scene);
     TempDir dir;
     for (const ExrPixelType type : {ExrPixelType::Half, ExrPixelType::Float}) {
@@ -186,7 +186,7 @@ TEST(ExrOutput, CameraMatricesProjectLikeTheCamera)
 
 TEST(ExrOutput, EveryCompressionReadsBack)
 {
-    const Scene scene;
+    const CloudView scene;
     const Frame frame = renderAll(scene);
     TempDir dir;
     for (const ExrCompression c : {ExrCompression::None, ExrCompression::Rle, ExrCompression::Zip, ExrCompression::Zips,
@@ -209,7 +209,7 @@ TEST(ExrOutput, EveryCompressionReadsBack)
 
 TEST(ExrOutput, DeepFileIsTidyAndFlattensToTheBeauty)
 {
-    const Scene scene;
+    const CloudView scene;
     const Frame flat = renderAll(scene);
     const Frame deep = renderAll(scene, true);
     TempDir dir;
@@ -270,7 +270,7 @@ TEST(ExrOutput, FailedWritesLeaveTheExistingFileByteIdentical)
 {
     TempDir dir;
     const std::string path = dir.file("shot.exr");
-    const Scene scene;
+    const CloudView scene;
     const Frame frame = renderAll(scene);
     writeExr(frame, path, ExrOptions{});
     const std::string before = slurp(path);
@@ -301,7 +301,7 @@ TEST(ExrOutput, RemoveTemporaryOutputsRemovesOnlyTheWritesInProgress)
 {
     TempDir dir;
     const std::string path = dir.file("shot.exr"), other = dir.file("other.exr");
-    const Scene scene;
+    const CloudView scene;
     const Frame frame = renderAll(scene);
     writeExr(frame, path, ExrOptions{});
     writeExr(frame, other, ExrOptions{});

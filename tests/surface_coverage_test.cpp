@@ -23,7 +23,7 @@ constexpr double kVoxel = 0.05;
 
 /// A closed surface: its signed distance, and a point on it with its outward normal (where the
 /// near and grazing cameras look).
-struct Scene
+struct ClosedSurface
 {
     const char* name;
     std::function<double(const Vec3d&)> sdf;
@@ -39,7 +39,7 @@ double boxDistance(const Vec3d& p, const Vec3d& half)
     return glm::length(glm::max(q, Vec3d(0.0))) + std::min(std::max({q.x, q.y, q.z}), 0.0);
 }
 
-std::vector<Scene> scenes()
+std::vector<ClosedSurface> scenes()
 {
     const Vec3d oblique = glm::normalize(Vec3d(0.35, 0.45, 1.0));
     return {
@@ -58,7 +58,7 @@ std::vector<Scene> scenes()
     };
 }
 
-openvdb::FloatGrid::Ptr levelSet(const Scene& scene, double voxel = kVoxel)
+openvdb::FloatGrid::Ptr levelSet(const ClosedSurface& scene, double voxel = kVoxel)
 {
     const int n = int(std::ceil(scene.extent / voxel)) + 4;
     return makeLevelSet(scene.sdf, openvdb::Coord(-n), openvdb::Coord(n), voxel);
@@ -74,12 +74,12 @@ constexpr int kWidth = 320, kHeight = 240;
 constexpr double kTanHalf = 41.2136 / 2.0 / 50.0; // vdb_render's default aperture and focal length
 
 /// The eye at which @a s spans about @a pixels pixels, from its far direction.
-Vec3d eyeSpanning(const Scene& s, double pixels)
+Vec3d eyeSpanning(const ClosedSurface& s, double pixels)
 {
     return s.farDirection * (s.size * kWidth / pixels / (2.0 * kTanHalf));
 }
 
-std::vector<View> views(const Scene& s)
+std::vector<View> views(const ClosedSurface& s)
 {
     auto base = [](const Vec3d& eye, const Vec3d& target) { return lookAtCamera(eye, target, kWidth, kHeight); };
     std::vector<View> out;
@@ -104,7 +104,7 @@ constexpr int kMargin = 2;
 
 /// The analytic hit mask, kMargin pixels wider than the image on each side: sphere tracing of
 /// the signed distance along each pixel's ray.
-std::vector<std::uint8_t> hitMask(const Scene& s, const Camera& camera)
+std::vector<std::uint8_t> hitMask(const ClosedSurface& s, const Camera& camera)
 {
     const int w = kWidth + 2 * kMargin, h = kHeight + 2 * kMargin;
     std::vector<std::uint8_t> hit(std::size_t(w) * std::size_t(h), 0);
@@ -175,7 +175,7 @@ RenderSettings matte()
 // the plate, 0 elsewhere (docs/equations.md#surface-coverage).
 TEST(SurfaceCoverage, ClosedLevelSetsAreOpaqueWhereverTheyAreHit)
 {
-    for (const Scene& scene : scenes()) {
+    for (const ClosedSurface& scene : scenes()) {
         const auto grid = levelSet(scene);
         const GridSource source = gridSourceFromOpenVDB(grid);
         for (const View& view : views(scene)) {
@@ -212,7 +212,7 @@ TEST(SurfaceCoverage, ClosedLevelSetsAreOpaqueWhereverTheyAreHit)
 // composited, every pixel is a hole. The thin plate is left out: one voxel of fog has no gradient across it, so no surface.
 TEST(SurfaceCoverage, FogIsoSurfacesAreOpaqueWhereverTheyAreHit)
 {
-    for (const Scene& scene : scenes()) {
+    for (const ClosedSurface& scene : scenes()) {
         if (std::string(scene.name) == "thin plate") continue;
         const GridSource source =
             gridSourceFromOpenVDB(makeFogAround(scene.sdf, 0.002, int(std::ceil(scene.extent / kVoxel)) + 4, kVoxel));
@@ -246,12 +246,12 @@ TEST(SurfaceCoverage, DistantViewsTakeACoarserLatticeWithoutHoles)
     const Vec3d above = glm::normalize(Vec3d(0.3, 1.0, 0.6));
     // Plates one voxel thick, their sheets half a voxel from a lattice point (whose gradient
     // vanishes) or either side of a voxel between lattice points (no crossing between them).
-    const Scene onPoint{"plate on a lattice point", [](const Vec3d& p) { return boxDistance(p, Vec3d(0.8, 0.5 * kFine, 0.8)); },
+    const ClosedSurface onPoint{"plate on a lattice point", [](const Vec3d& p) { return boxDistance(p, Vec3d(0.8, 0.5 * kFine, 0.8)); },
         1.6, 0.8, Vec3d(0.0), Vec3d(0, 1, 0), above};
-    const Scene between{"plate between lattice points",
+    const ClosedSurface between{"plate between lattice points",
         [](const Vec3d& p) { return boxDistance(p - Vec3d(0.0, kFine, 0.0), Vec3d(0.8, 0.5 * kFine, 0.8)); }, 1.6, 0.8, Vec3d(0.0),
         Vec3d(0, 1, 0), above};
-    for (const Scene& scene : {scenes()[0], scenes()[1], onPoint, between}) {
+    for (const ClosedSurface& scene : {scenes()[0], scenes()[1], onPoint, between}) {
         const GridSource source = gridSourceFromOpenVDB(levelSet(scene, kFine));
         for (const auto& [pixels, lattice] : {std::pair{64.0, 2}, std::pair{32.0, 4}}) {
             const Camera camera(lookAtCamera(eyeSpanning(scene, pixels), Vec3d(0.0), kWidth, kHeight), source.worldCentre());
@@ -285,7 +285,7 @@ TEST(SurfaceCoverage, DistantViewsTakeACoarserLatticeWithoutHoles)
 // (creases), from far, near (most leaves out of view), grazing and orthographic cameras.
 TEST(SurfaceCoverage, RelatingOnlyTheDrawnKernelsLeavesTheImageUnchanged)
 {
-    for (const Scene& scene : {scenes()[1], scenes()[2]}) {
+    for (const ClosedSurface& scene : {scenes()[1], scenes()[2]}) {
         const GridSource source = gridSourceFromOpenVDB(levelSet(scene));
         for (const View& view : views(scene)) {
             const Camera camera(view.camera, source.worldCentre());
@@ -317,7 +317,7 @@ TEST(SurfaceCoverage, RelatingOnlyTheDrawnKernelsLeavesTheImageUnchanged)
 TEST(SurfaceCoverage, CubeFacesKeepTheirNormalsUpToTheEdges)
 {
     constexpr double kEdgeBand = 2.0;
-    const Scene cube = scenes()[1];
+    const ClosedSurface cube = scenes()[1];
     const GridSource source = gridSourceFromOpenVDB(levelSet(cube));
     const Camera camera(lookAtCamera(Vec3d(2.2, 2.6, 3.4), Vec3d(0.0), kWidth, kHeight), source.worldCentre());
     RenderSettings shaded;

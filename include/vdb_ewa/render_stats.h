@@ -56,7 +56,9 @@ struct RenderStats
     std::uint64_t windows = 0;        ///< streamed frame: depth windows composited
     std::uint64_t splatsInFlight = 0; ///< streamed frame: the most splats one window composited (what its memory holds)
     std::uint64_t lightRays = 0;      ///< light-map rays of all lights' lattices
-    std::uint64_t lightRaysMarched = 0; ///< of them, marched (all but where light on demand needed none: the streamed frame, and a whole frame whose maps outgrow it)
+    std::uint64_t lightRaysMarched = 0; ///< of them, marched by this render (all but where light on demand needed none: the streamed frame, a whole frame whose maps outgrow it, and a Scene's rays marched before)
+    std::uint64_t lightMapsReused = 0;  ///< a Scene's renders: light maps (directional and point) kept from an earlier render (Scene)
+    std::uint64_t lightRaysReused = 0;  ///< a Scene's renders: rays of those maps that earlier renders marched
     /// The process's peak resident memory when the render ended (peakResidentBytes(): what the
     /// render held at most, with the process's own, and earlier renders' where they held more).
     std::uint64_t peakResidentBytes = 0;

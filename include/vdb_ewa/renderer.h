@@ -18,6 +18,7 @@
 namespace vdb_ewa {
 namespace detail {
 class Progress;
+class LightCache;
 } // namespace detail
 
 /// The process's peak resident memory in bytes: the high-water mark of its own address space
@@ -80,7 +81,11 @@ private:
     /// True if the grid has a velocity grid and the shutter is open: motion blur moves its kernels.
     VDB_EWA_LOCAL bool movesOverTheShutter(const GridSource::Impl& grid) const;
 
+    friend class Scene;
     RenderSettings mSettings;
+    /// A Scene's light maps, kept between its renders (lib/light_cache.h); none for a Renderer
+    /// of its own. Not owned.
+    detail::LightCache* mLightCache = nullptr;
 };
 
 } // namespace vdb_ewa

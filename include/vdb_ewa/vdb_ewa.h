@@ -19,6 +19,7 @@
 #include "render_settings.h"
 #include "interrupter.h"
 #include "renderer.h"
+#include "scene.h"
 #include "render_stats.h"
 #include "slab_share.h"
 #include "types.h"

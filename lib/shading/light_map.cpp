@@ -283,6 +283,31 @@ void LightMap::ensureMarched(const Vec3d& lo, const Vec3d& hi) const
     });
 }
 
+void LightMap::marchRemaining() const
+{
+    if (!mMarching) return;
+    // Its time is the caller's (the shadows' stage), not light on demand's (marchThreadSeconds).
+    const std::uint64_t nanoseconds = mMarching->nanoseconds.load();
+    const std::size_t tiles = std::size_t(mTilesU) * std::size_t(mTilesV);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tiles, 16), [&](const tbb::blocked_range<std::size_t>& range) {
+        std::unique_ptr<MarchScratch> scratch;
+        for (std::size_t t = range.begin(); t < range.end(); ++t) {
+            if (mMarching->state[t].load(std::memory_order_acquire)) continue;
+            if (!scratch) scratch = std::make_unique<MarchScratch>(*mGrid, mNw, mWeight.size());
+            marchTile(t, *scratch);
+        }
+    });
+    mMarching->nanoseconds.store(nanoseconds);
+}
+
+void LightMap::beginRender(Progress* progress)
+{
+    mProgress = progress;
+    if (!mMarching) return;
+    mRaysBefore = mMarching->raysMarched.load();
+    mMarching->nanoseconds.store(0);
+}
+
 bool LightMap::marchedIn(const Vec3d& lo, const Vec3d& hi) const
 {
     if (!mMarching) return true;

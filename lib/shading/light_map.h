@@ -96,6 +96,15 @@ public:
     /// Whether every ray that a lookup in the box [@a lo, @a hi] reads is marched already (as
     /// ensureMarched would leave it): always where the whole map was marched at construction.
     bool marchedIn(const Vec3d& lo, const Vec3d& hi) const;
+    /// March every ray not marched yet, in parallel (a map kept on demand, then looked up where
+    /// no compositor asks for its rays first: an --iso surface's kernels). Throws Cancelled.
+    void marchRemaining() const;
+    /// A map kept for another render (a Scene's, lib/light_cache.h): on-demand marching now
+    /// checks @a progress for cancellation, and the counters a render reports
+    /// (raysMarchedBefore, marchThreadSeconds) start from here.
+    void beginRender(Progress* progress);
+    /// Rays marched before beginRender: by earlier renders, reused by this one.
+    std::uint64_t raysMarchedBefore() const { return mRaysBefore; }
     /// Whether lattice ray (@a i, @a j) has been marched (false off the lattice).
     bool marched(int i, int j) const
     {
@@ -108,7 +117,8 @@ public:
     /// Rays marched so far, and the lattice's rays in all.
     std::uint64_t raysMarched() const { return mMarching ? mMarching->raysMarched.load() : 0; }
     std::uint64_t rays() const { return std::uint64_t(mNu) * std::uint64_t(mNv); }
-    /// Thread-seconds spent marching rays so far, summed over the threads that marched them.
+    /// Thread-seconds spent marching rays so far (since beginRender), summed over the threads
+    /// that marched them.
     double marchThreadSeconds() const { return mMarching ? 1e-9 * double(mMarching->nanoseconds.load()) : 0.0; }
 
     /// The shadow step and ray spacing used (voxel lengths): the settings', unless the budget
@@ -253,6 +263,7 @@ private:
     std::unique_ptr<Marching> mMarching;
     Progress* mProgress = nullptr;
     bool mOnDemand = false;
+    std::uint64_t mRaysBefore = 0; ///< raysMarched at beginRender
 };
 
 // The lookups, inline: the rasteriser makes one per lit (pixel, slab) sample.

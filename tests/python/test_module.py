@@ -274,6 +274,38 @@ class Module(unittest.TestCase):
         return vdb_ewa.render(vdb_ewa.from_array(smoke_block((96, 96, 96), 2)), res="1920x1080", translate=(48, 48, 150),
                               quality="high", threads=2, **kw)
 
+    # --- a scene that stays loaded ---
+
+    def test_a_scene_renders_what_render_renders_and_keeps_the_light(self):
+        views = [dict(translate=(0.3, 0.2, 1.2), lookat=(0.0, 0.0, 0.0)), dict(translate=(-0.8, 0.3, 1.0), lookat=(0.0, 0.0, 0.0))]
+        scene = vdb_ewa.Scene(self.cloud, res=(96, 72), aov="shadow")
+        self.assertEqual(scene.options["res"], (96, 72))
+        for k, view in enumerate(views + views[:1]):
+            frame = scene.render(**view)
+            cold = vdb_ewa.render(self.cloud, res=(96, 72), aov="shadow", **view)
+            np.testing.assert_array_equal(frame.beauty, cold.beauty)
+            np.testing.assert_array_equal(frame.aov("shadow"), cold.aov("shadow"))
+            if k > 0:
+                self.assertGreater(frame.stats["light_maps_reused"], 0)
+                self.assertGreater(frame.stats["light_rays_reused"], 0)
+            if k == 2:
+                self.assertEqual(frame.stats["light_rays_marched"], 0)  # back where the first render looked
+        # A render's keywords override the scene's for that render only; the light's direction
+        # makes its maps anew.
+        lit = scene.render(light=(-0.5, 0.7, 0.2, 0.7, 0.7, 0.7), **views[0])
+        np.testing.assert_array_equal(lit.beauty, vdb_ewa.render(self.cloud, res=(96, 72), light=(-0.5, 0.7, 0.2, 0.7, 0.7, 0.7), **views[0]).beauty)
+        self.assertEqual(lit.stats["light_maps_reused"], 0)
+        again = scene.render(**views[0])
+        self.assertEqual(again.stats["light_maps_reused"], 0)  # the scene's own light again: made anew, then kept
+        scene.clear()
+        with self.assertRaisesRegex(vdb_ewa.ValueError, "color: a Scene's grids are given when it is made"):
+            scene.render(color="density")
+        with self.assertRaisesRegex(vdb_ewa.ValueError, "shadowstep"):
+            scene.render(shadowstep=-1)
+        with self.assertRaises(vdb_ewa.Cancelled):
+            scene.render(progress=lambda p: p >= 0)
+        np.testing.assert_array_equal(scene.render(**views[1]).beauty, vdb_ewa.render(self.cloud, res=(96, 72), **views[1]).beauty)
+
     def test_progress_rises_to_100_on_the_calling_thread(self):
         calls = []
         frame = self.long_render(progress=lambda p: calls.append((p, threading.get_ident())))

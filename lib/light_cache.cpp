@@ -1,0 +1,86 @@
+/// @file light_cache.cpp
+#include "light_cache.h"
+
+namespace vdb_ewa {
+namespace detail {
+
+LightKey lightKey(const RenderSettings& settings, const MemoryBudget& budget)
+{
+    // Everything LightMap, PointLightMap and PointLights read of the settings: the lattice's
+    // budget, the march (step, spacing, gain, cutoff), the medium's extinction, and each
+    // light's direction or position and cone, and what makes it dark or scales it.
+    const OpticalModel model(settings);
+    LightKey key = {lightMapPoints(settings, budget), settings.shadow.step, settings.shadow.resolution, settings.shadow.gain,
+        settings.cutoff, model.extinction(0), model.extinction(1), model.extinction(2), double(settings.lights.size()),
+        double(settings.pointLights.size())};
+    for (std::size_t l = 0; l < settings.lights.size(); ++l) {
+        const Vec3d d = settings.lights[l].unitDirection();
+        key.insert(key.end(), {d.x, d.y, d.z, model.dark(l) ? 1.0 : 0.0});
+    }
+    for (std::size_t l = 0; l < settings.pointLights.size(); ++l) {
+        const PointLight& p = settings.pointLights[l];
+        key.insert(key.end(), {p.position.x, p.position.y, p.position.z, p.radius, p.spotAngle, p.spotTarget.x, p.spotTarget.y,
+                                  p.spotTarget.z, p.spotBlend, model.pointScale(l, 0), model.pointScale(l, 1), model.pointScale(l, 2)});
+    }
+    return key;
+}
+
+namespace {
+
+/// Equal keys, NaN included (a NaN setting is refused before a render, but equal is equal).
+bool sameKey(const LightKey& a, const LightKey& b)
+{
+    if (a.size() != b.size()) return false;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+        if (!(a[i] == b[i]) && !(a[i] != a[i] && b[i] != b[i])) return false;
+    }
+    return true;
+}
+
+} // namespace
+
+const std::vector<LightMap>& LightCache::lightMaps(const RenderSettings& settings, const MemoryBudget& budget, Progress& progress,
+    std::vector<std::string>& warnings, std::uint64_t& reused)
+{
+    const LightKey key = lightKey(settings, budget);
+    if (mMaps && sameKey(key, mKey)) {
+        reused += mMaps->size();
+    } else {
+        mMaps.reset();
+        mWarnings.clear();
+        mMaps = std::make_unique<std::vector<LightMap>>(detail::lightMaps(settings, *mGrid, budget, progress, mWarnings, true));
+        mKey = key;
+    }
+    for (LightMap& map : *mMaps) map.beginRender(&progress);
+    warnings.insert(warnings.end(), mWarnings.begin(), mWarnings.end());
+    return *mMaps;
+}
+
+const PointLights& LightCache::pointLightMaps(const RenderSettings& settings, const MemoryBudget& budget, Progress& progress,
+    std::vector<std::string>& warnings, std::uint64_t& reused)
+{
+    const LightKey key = lightKey(settings, budget);
+    if (mPoints && sameKey(key, mPointKey)) {
+        reused += mPoints->maps().size();
+    } else {
+        mPoints.reset();
+        mPointWarnings.clear();
+        mPoints = std::make_unique<PointLights>(detail::pointLightMaps(settings, *mGrid, budget, progress, mPointWarnings));
+        mPointKey = key;
+    }
+    warnings.insert(warnings.end(), mPointWarnings.begin(), mPointWarnings.end());
+    return *mPoints;
+}
+
+void LightCache::clear()
+{
+    mMaps.reset();
+    mPoints.reset();
+    mKey.clear();
+    mPointKey.clear();
+    mWarnings.clear();
+    mPointWarnings.clear();
+}
+
+} // namespace detail
+} // namespace vdb_ewa
