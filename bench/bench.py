@@ -982,6 +982,52 @@ print(json.dumps([statistics.median(cold), statistics.median(warm), stats[0], st
               f"{ws['light_rays_marched']} ({ws['light_rays_reused']}) | {cs['shadow_seconds']:.3f}, {ws['shadow_seconds']:.3f} |")
 
 
+def cmd_turntable(args):
+    """Issue 55's turntable: 24 frames orbiting one cache (15 degrees a frame about the README
+    camera's look-at point, keyed in a --camera-file), rendered as one sequence (`--frames 1-24`,
+    one scene: the grid read once, the light kept) against 24 separate processes of one frame
+    each, and against the same sequence read from a file per frame (one process, a Renderer per
+    frame, as before scenes); wall-clock seconds a frame, interleaved rounds, medians."""
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for name in args.scenes.split(","):
+            label, path, camera = next(s for s in SCENES if s[0] == name)
+            keys = []
+            for f in range(1, args.frames + 1):
+                words = camera_path(camera, "orbit", 15 * (f - 1), args.frames)
+                keys.append({"at": f, "translate": [float(x) for x in words[1].split(",")], "lookat": [float(x) for x in words[3].split(",")]})
+            orbit = os.path.join(tmp, "orbit.json")
+            with open(orbit, "w") as f:
+                json.dump({"keys": keys}, f)
+            for f in range(1, args.frames + 1):
+                link = os.path.join(tmp, "copy.%04d.vdb" % f)
+                if os.path.lexists(link):
+                    os.remove(link)
+                os.symlink(path, link)
+            common = ["--res", args.res, "--quality", args.quality, "--camera-file", orbit]
+            frames = "1-%d" % args.frames
+            scene = [EWA, path, os.path.join(tmp, "s.####.exr"), "--frames", frames, "-q"] + common
+            files = [EWA, os.path.join(tmp, "copy.####.vdb"), os.path.join(tmp, "f.####.exr"), "--frames", frames, "-q"] + common
+            times = {"scene": [], "files": [], "processes": []}
+            for _ in range(args.repeat):
+                times["scene"].append(run(scene)[0])
+                times["files"].append(run(files)[0])
+                t = 0.0
+                for f in range(1, args.frames + 1):
+                    t += run([EWA, path, os.path.join(tmp, "p.%04d.exr" % f), "--frames", str(f), "-q"] + common)[0]
+                times["processes"].append(t)
+            med = {k: statistics.median(v) / args.frames for k, v in times.items()}
+            rows.append((label, med))
+    print(f"# A {args.frames}-frame turntable of one cache (15 degrees a frame about the README camera's look-at point), {args.res}, "
+          f"--quality {args.quality}, half zip EXRs, wall-clock seconds a frame, median of {args.repeat} interleaved rounds")
+    print("| scene | separate processes (s/frame) | a file per frame, one process (s/frame) | one scene (s/frame) | one scene against separate processes | "
+          "against a file per frame |")
+    print("|---|---|---|---|---|---|")
+    for label, med in rows:
+        print(f"| {label} | {med['processes']:.3f} | {med['files']:.3f} | {med['scene']:.3f} | {med['processes'] / med['scene']:.2f}x faster | "
+              f"{med['files'] / med['scene']:.2f}x faster |")
+
+
 def cmd_imagelod(args):
     """Image-space level of detail (--image-lod): each scene at --image-lod off and each asked
     value (a trailing "c": with --image-lod-composite on), interleaved round by round; the
@@ -1456,6 +1502,12 @@ def main():
     sse.add_argument("--res", default="960x540")
     sse.add_argument("--quality", default="default")
     sse.add_argument("--repeat", type=int, default=5)
+    stt = sub.add_parser("turntable")
+    stt.add_argument("--scenes", default="pyro,smoke,cloud (grids/)")
+    stt.add_argument("--res", default="960x540")
+    stt.add_argument("--quality", default="default")
+    stt.add_argument("--frames", type=int, default=24)
+    stt.add_argument("--repeat", type=int, default=3)
     sis = sub.add_parser("imagelod-scale")
     sis.add_argument("--res", default="480x270")
     sis.add_argument("--px", default="0.1,3,20")
@@ -1540,7 +1592,7 @@ def main():
     {"speed": cmd_speed, "sigma": cmd_sigma, "tradeoff": cmd_tradeoff, "targets": cmd_targets,
      "output": cmd_output, "imagelod": cmd_imagelod, "draft": cmd_draft, "imagelod-scale": cmd_imagelod_scale, "surfaces": cmd_surfaces, "holes": cmd_holes, "plot": cmd_plot, "ladder": cmd_ladder,
      "analytic": cmd_analytic, "roofline": cmd_roofline, "scaling": cmd_scaling,
-     "stability": cmd_stability, "python": cmd_python, "scene": cmd_scene, "cull": cmd_cull, "blur": cmd_blur, "lights": cmd_lights, "volumes": cmd_volumes, "scale": cmd_scale, "tiles": cmd_tiles}[a.cmd](a)
+     "stability": cmd_stability, "python": cmd_python, "scene": cmd_scene, "turntable": cmd_turntable, "cull": cmd_cull, "blur": cmd_blur, "lights": cmd_lights, "volumes": cmd_volumes, "scale": cmd_scale, "tiles": cmd_tiles}[a.cmd](a)
 
 
 if __name__ == "__main__":

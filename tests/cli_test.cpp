@@ -390,6 +390,32 @@ TEST_F(Cli, CamerasPerFrameFromKeyframesAndFromASequencesFiles)
     EXPECT_NE(bad.err.find("bad.json: keys: frames must rise"), std::string::npos) << bad.err;
 }
 
+// A turntable of one file (no frame pattern in IN, the camera keyed): its frames render from one
+// scene, the grid read once and the light kept, and are the frames of the same sequence read
+// from a file per frame, pixel for pixel. Without a camera that moves, such a sequence is refused.
+TEST_F(Cli, ATurntableOfOneFileRendersFromOneScene)
+{
+    namespace fs = std::filesystem;
+    for (int f = 1; f <= 3; ++f) fs::copy_file(mGrid, mDir.file("turn.000" + std::to_string(f) + ".vdb"));
+    std::ofstream(mDir.file("orbit.json")) << R"({"keys": [
+        {"at": 1, "translate": [0, 0, 5], "lookat": [0, 0, 0]},
+        {"at": 3, "translate": [5, 0, 0], "lookat": [0, 0, 0]}]})";
+    const std::string common = " -res 48x32 --frames 1-3 --camera-file " + mDir.file("orbit.json");
+    const CliRun scene = runCli(mDir, mGrid + " " + mDir.file("scene.####.exr") + common + " -v");
+    ASSERT_EQ(scene.code, 0) << scene.err;
+    const CliRun files = runCli(mDir, mDir.file("turn.####.vdb") + " " + mDir.file("files.####.exr") + common);
+    ASSERT_EQ(files.code, 0) << files.err;
+    for (const char* f : {"0001", "0002", "0003"}) {
+        EXPECT_EQ(maxAbsDiff(readExr(mDir.file(std::string("scene.") + f + ".exr")), readExr(mDir.file(std::string("files.") + f + ".exr"))), 0.0) << f;
+    }
+    EXPECT_GT(maxAbsDiff(readExr(mDir.file("scene.0001.exr")), readExr(mDir.file("scene.0003.exr"))), 0.01) << "the camera moved";
+    EXPECT_NE(scene.out.find("kept from earlier frames"), std::string::npos) << scene.out;
+    const CliRun still = runCli(mDir, mGrid + " " + mDir.file("still.####.exr") + " -res 48x32 --frames 1-3");
+    EXPECT_EQ(still.code, 2);
+    EXPECT_NE(still.err.find("no frame pattern (#### or %04d) and no --camera-file moves the camera"), std::string::npos) << still.err;
+    EXPECT_FALSE(fs::exists(mDir.file("still.0001.exr")));
+}
+
 TEST_F(Cli, ProgressBarOnATerminalNeverSharesALine)
 {
     // On a terminal (script(1) gives the CLI a pseudo-terminal) the bar is redrawn in place,

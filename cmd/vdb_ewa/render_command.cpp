@@ -86,7 +86,9 @@ public:
         // Batch jobs.
         mApp->add_option("--frames", mFrames,
             "render a sequence: frames N, A-B, A-BxS (every S), comma-separated (1-10,20); IN and OUT (and "
-            "--preview) hold a frame pattern, #### (padded to the number of #) or %04d (default: one frame)");
+            "--preview) hold a frame pattern, #### (padded to the number of #) or %04d; IN may have none where --camera-file "
+            "moves the camera (a turntable): the frames then render from one scene, the grid read once and its light kept "
+            "(default: one frame)");
         mApp->add_flag("--skip-existing", mSkipExisting,
             "skip frames whose output (and --preview, if given) exist (outputs are written whole or not at all, so a killed job resumes)");
         mApp->add_option("--skip-newer-than", mSkipNewerThan,
@@ -161,6 +163,10 @@ public:
         }
         setExrThreadsProcessWide(rs.threads);
 
+        // One grid for every frame (a turntable): the frames render from one scene, which reads it
+        // once and keeps what the frames share (vdb_ewa::Scene).
+        std::unique_ptr<Scene> scene;
+        std::unique_ptr<Scene>* oneGrid = isSequence() && !hasFramePattern(mInput) ? &scene : nullptr;
         ProgressReport report(int(frames.size()), verbosity);
         installStopHandlers(report);
         std::vector<int> failed;
@@ -183,7 +189,8 @@ public:
                 continue;
             }
             try {
-                renderOneFrame(renderer, mOptions.cameraFile().empty() ? cam : mOptions.cameraFor(frameOf(frames[i])), rs, frames[i], output, report, verbosity, i == 0);
+                renderOneFrame(renderer, mOptions.cameraFile().empty() ? cam : mOptions.cameraFor(frameOf(frames[i])), rs, frames[i], output, report,
+                    verbosity, i == 0, oneGrid);
                 report.framesWritten(++written);
                 stallForTests("between-frames", stopRequested);
             } catch (const Cancelled&) {
@@ -231,7 +238,10 @@ private:
             return {0};
         }
         const std::vector<int> frames = parseFrameList(mFrames);
-        if (!hasFramePattern(mInput)) throw ValueError("--frames: the input " + mInput + " has no frame pattern (#### or %04d)");
+        if (!hasFramePattern(mInput) && mOptions.cameraFile().empty()) {
+            throw ValueError("--frames: the input " + mInput + " has no frame pattern (#### or %04d) and no --camera-file moves the camera: "
+                             "every frame would be the same");
+        }
         for (const std::string& out : {mOutput, mOptions.output().previewOption()}) {
             if (!out.empty() && frames.size() > 1 && !hasFramePattern(out)) { // every task's frames, not only this one's
                 throw ValueError("--frames: " + out + " has no frame pattern (#### or %04d): every frame would overwrite it");
@@ -260,9 +270,10 @@ private:
     /// @a path for @a frame (as it is without --frames).
     std::string pathOf(const std::string& path, int frame) const { return isSequence() ? framePath(path, frame) : path; }
 
-    /// Load, render and write one frame. @a first: print the settings (-v).
+    /// Load, render and write one frame. @a first: print the settings (-v). @a scene: where every
+    /// frame renders the same grid, the scene they render from (made at the first frame rendered).
     void renderOneFrame(const Renderer& renderer, const CameraSettings& cam, const RenderSettings& rs, int frameNumber,
-        const std::string& output, ProgressReport& report, Verbosity verbosity, bool first) const
+        const std::string& output, ProgressReport& report, Verbosity verbosity, bool first, std::unique_ptr<Scene>* scene) const
     {
         const std::string input = pathOf(mInput, frameNumber);
         const std::string preview = pathOf(mOptions.output().previewOption(), frameNumber);
@@ -272,7 +283,8 @@ private:
         const auto t0 = std::chrono::steady_clock::now();
         resetPeakMemory(); // each frame reports its own peak
         stallForTests("read");
-        const GridSource grid = mOptions.open(input);
+        const GridSource grid = scene && *scene ? (*scene)->grid() : mOptions.open(input);
+        if (scene && !*scene) *scene = std::make_unique<Scene>(grid, renderer.settings());
         const double loadSeconds = seconds(t0);
         const Camera camera(cam, grid.worldCentre());
         if (verbosity != Verbosity::Quiet) {
@@ -286,7 +298,8 @@ private:
         }
 
         RenderStats stats;
-        Frame frame = renderer.renderFrame(grid, camera, mOptions.output().passes(), &stats, &report);
+        Frame frame = scene ? (*scene)->render(camera, mOptions.output().passes(), &stats, &report)
+                            : renderer.renderFrame(grid, camera, mOptions.output().passes(), &stats, &report);
         if (verbosity != Verbosity::Quiet) {
             for (const std::string& w : stats.warnings) report.line("vdb_ewa: warning: " + input + ": " + w, stderr);
         }
@@ -368,7 +381,10 @@ private:
                 << s.bricksExpanded << " expanded, " << s.bricksHidden << " hidden behind opaque tiles, " << s.bricksOutside << " outside the frame, "
                 << s.splatsInFlight << " splats in flight at most";
         }
-        if (s.lightRays > 0 && (s.streamed || s.lightRaysMarched < s.lightRays)) out << "; light on demand: " << s.lightRaysMarched << " of " << s.lightRays << " light-map rays marched";
+        if (s.lightRays > 0 && (s.streamed || s.lightRaysMarched < s.lightRays)) {
+            out << "; light on demand: " << s.lightRaysMarched << " of " << s.lightRays << " light-map rays marched";
+            if (s.lightRaysReused > 0) out << " (and " << s.lightRaysReused << " kept from earlier frames)";
+        }
         if (s.supersample > 1) {
             out << "; composited at " << s.supersample << "x" << s.supersample << " sub-pixels a pixel over " << s.supersampleWindow[2] << "x"
                 << s.supersampleWindow[3] << " pixels from (" << s.supersampleWindow[0] << ", " << s.supersampleWindow[1]

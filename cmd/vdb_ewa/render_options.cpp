@@ -581,6 +581,7 @@ Attributes RenderOptions::statsAttributes(const RenderStats& s)
                                                                    n(s.slabCompositesAtLevel[2]) + "," + n(s.slabCompositesAtLevel[3])}});
     }
     if (s.lightRays > 0) out.insert(out.end(), {{"light-rays", n(s.lightRays)}, {"light-rays-marched", n(s.lightRaysMarched)}});
+    if (s.lightMapsReused > 0) out.insert(out.end(), {{"light-maps-reused", n(s.lightMapsReused)}, {"light-rays-reused", n(s.lightRaysReused)}});
     if (s.pixelSize > 1) out.emplace_back("pixel-size-used", std::to_string(s.pixelSize));
     if (s.supersample > 1) {
         out.insert(out.end(), {{"supersampled", std::to_string(s.supersample)},
