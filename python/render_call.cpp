@@ -350,9 +350,9 @@ std::shared_ptr<RenderedFrame> render(const py::object& gridOrPath, const py::ob
 }
 
 SceneCall::SceneCall(const py::object& gridOrPath, const py::kwargs& kwargs)
-    : isPath(isPathLike(gridOrPath)), options(kwargs)
+    : isPath(isPathLike(gridOrPath)), attachedVelocity(attachedVelocityOf(gridOrPath, isPath)), options(kwargs)
 {
-    PreparedCall call = prepareCall(kwargs, isPath, attachedVelocityOf(gridOrPath, isPath));
+    PreparedCall call = prepareCall(kwargs, isPath, attachedVelocity);
     grid.emplace(openGrid(gridOrPath, isPath, call, kwargs, input));
     scene = std::make_unique<Scene>(*grid, call.working);
 }
@@ -370,7 +370,7 @@ std::shared_ptr<RenderedFrame> SceneCall::render(const py::object& progress, con
     py::kwargs merged;
     for (const auto& [key, value] : options) merged[key] = value;
     for (const auto& [key, value] : kwargs) merged[key] = value;
-    PreparedCall call = prepareCall(merged, isPath, grid->hasVelocityGrid() && !isPath);
+    PreparedCall call = prepareCall(merged, isPath, attachedVelocity);
     const RenderSettings settings = call.working;
     return finishCall(std::move(call), *grid, input, t0, progress, cancel,
         [&](const Camera& camera, const PassRequest& passes, RenderStats& stats, Interrupter& interrupter) {

@@ -90,6 +90,7 @@ struct SceneCall
         const pybind11::kwargs& kwargs);
 
     bool isPath;
+    bool attachedVelocity;    ///< the Grid given had a velocity grid (Grid.with_velocity_grid)
     pybind11::dict options;   ///< the keywords it was made with
     std::optional<GridSource> grid;
     std::string input;        ///< the grid's file, empty for an array
