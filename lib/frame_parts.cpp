@@ -1,11 +1,9 @@
 /// @file frame_parts.cpp
 #include "frame_parts.h"
 
-#include "light_cache.h"
 #include "raster/raster.h"
 #include "shading/shading.h"
 
-#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <type_traits>
@@ -150,46 +148,6 @@ void splatWarnings(std::uint64_t beforeNear, std::uint64_t clampedNear, std::uin
     if (clampedNear) warnings.push_back(countLine(clampedNear, "voxels around the camera drawn as if a little further away (the camera is inside the volume; move it out for an exact image)"));
     if (clampedGrazing) warnings.push_back(countLine(clampedGrazing, "voxels far outside the frame drawn with the perspective of its edge (only the image's border can show it; widen --fov to include them)"));
     if (clippedSpan) warnings.push_back(countLine(clippedSpan, "voxels crossed more than 1024 depth slabs and were cut short (raise --slab)"));
-}
-
-void frameLights(FrameLights& lights, const RenderSettings& settings, const GridSource::Impl& g, const MemoryBudget& budget,
-    Progress& progress, RenderStats& stats, bool onDemand, LightCache* cache)
-{
-    if (!cache || !cache->serves(g)) {
-        lights.ownMaps = detail::lightMaps(settings, g, budget, progress, stats.warnings, onDemand);
-        lights.ownPoints = detail::pointLightMaps(settings, g, budget, progress, stats.warnings);
-        lights.maps = &lights.ownMaps;
-        lights.points = &lights.ownPoints;
-        return;
-    }
-    lights.maps = &cache->lightMaps(settings, budget, progress, stats.warnings, stats.lightMapsReused);
-    if (!onDemand) {
-        for (const LightMap& map : *lights.maps) map.marchRemaining();
-    }
-    const std::uint64_t before = stats.lightMapsReused;
-    lights.points = &cache->pointLightMaps(settings, budget, progress, stats.warnings, stats.lightMapsReused);
-    lights.pointsReused = stats.lightMapsReused > before;
-}
-
-void addLightStats(const FrameLights& lights, RenderStats& stats)
-{
-    // A kept point light's rays were all marched by the render that made it.
-    for (const PointLightMap& map : lights.points->maps()) {
-        stats.lightRays += map.rays();
-        (lights.pointsReused ? stats.lightRaysReused : stats.lightRaysMarched) += map.rays();
-    }
-    // Light on demand is marched inside the compositing: its thread-time, shared out over the
-    // threads, moves from the rasteriser's stage to the shadows'.
-    double marching = 0.0;
-    for (const LightMap& light : *lights.maps) {
-        stats.lightRays += light.rays();
-        stats.lightRaysMarched += light.raysMarched() - light.raysMarchedBefore();
-        stats.lightRaysReused += light.raysMarchedBefore();
-        marching += light.marchThreadSeconds();
-    }
-    marching = std::clamp(marching / double(tbb::this_task_arena::max_concurrency()), 0.0, stats.rasterSeconds);
-    stats.shadowSeconds += marching;
-    stats.rasterSeconds -= marching;
 }
 
 double lightMapPoints(const RenderSettings& settings, const MemoryBudget& budget)

@@ -83,31 +83,6 @@ void addMotionStats(const MotionStats& motion, RenderStats& stats);
 /// What motion blur clamped or stretched, a line each (@a splitSigmas: MotionBlur::splitSigmas).
 void motionWarnings(const MotionStats& motion, double splitSigmas, std::vector<std::string>& warnings);
 
-class LightCache;
-
-/// A frame's light maps: a Scene's kept ones (lib/light_cache.h), or made for this frame alone.
-struct FrameLights
-{
-    const std::vector<LightMap>* maps = nullptr;
-    const PointLights* points = nullptr;
-    bool pointsReused = false; ///< the point lights' maps were made by an earlier render
-    std::vector<LightMap> ownMaps;
-    PointLights ownPoints;
-};
-/// Fills @a lights from @a cache where it serves @a g (a Scene's grid), else with maps of its
-/// own (lightMaps, pointLightMaps). Maps of its own are marched whole unless @a onDemand; kept
-/// ones are marched on demand, and whole here unless @a onDemand (an --iso surface reads them
-/// without asking). Their warnings, and how many maps were kept (lightMapsReused), go into
-/// @a stats.
-void frameLights(FrameLights& lights, const RenderSettings& settings, const GridSource::Impl& g, const MemoryBudget& budget,
-    Progress& progress, RenderStats& stats, bool onDemand, LightCache* cache);
-
-/// The light maps' rays in all, marched by this render and by earlier ones (a Scene's kept
-/// maps), into @a stats (the point lights' are marched whole), and the time spent marching
-/// light on demand, moved from the rasteriser's stage to the shadows' (call it after the
-/// rasteriser's time is in @a stats).
-void addLightStats(const FrameLights& lights, RenderStats& stats);
-
 /// A whole frame marches its light maps whole unless one would hold more lattice points than
 /// this many a pixel: then it marches what its lookups read (light on demand), as the streamed
 /// frame does. A file of tiles 32,768 voxels wide at 160x90 and `final` held 2e8 points for

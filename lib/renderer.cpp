@@ -4,6 +4,7 @@
 
 #include <vdb_ewa/error.h>
 
+#include "frame_lights.h"
 #include "frame_parts.h"
 #include "pixel_size.h"
 #include "projection/projection.h"

@@ -2,7 +2,7 @@
 #include <vdb_ewa/renderer.h>
 #include <vdb_ewa/scene.h>
 
-#include "light_cache.h"
+#include "frame_lights.h"
 
 #include <mutex>
 

@@ -6,6 +6,7 @@
 ///        share one sweep: each window's bricks are expanded, and the light marched, once for all.
 #include <vdb_ewa/renderer.h>
 
+#include "frame_lights.h"
 #include "frame_parts.h"
 #include "projection/projection.h"
 #include "raster/raster.h"

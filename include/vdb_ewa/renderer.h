@@ -83,7 +83,7 @@ private:
 
     friend class Scene;
     RenderSettings mSettings;
-    /// A Scene's light maps, kept between its renders (lib/light_cache.h); none for a Renderer
+    /// A Scene's light maps, kept between its renders (lib/frame_lights.h); none for a Renderer
     /// of its own. Not owned.
     detail::LightCache* mLightCache = nullptr;
 };

@@ -99,7 +99,7 @@ public:
     /// March every ray not marched yet, in parallel (a map kept on demand, then looked up where
     /// no compositor asks for its rays first: an --iso surface's kernels). Throws Cancelled.
     void marchRemaining() const;
-    /// A map kept for another render (a Scene's, lib/light_cache.h): on-demand marching now
+    /// A map kept for another render (a Scene's, lib/frame_lights.h): on-demand marching now
     /// checks @a progress for cancellation, and the counters a render reports
     /// (raysMarchedBefore, marchThreadSeconds) start from here.
     void beginRender(Progress* progress);
