@@ -29,51 +29,19 @@ LightKey lightKey(const RenderSettings& settings, const MemoryBudget& budget)
     return key;
 }
 
-namespace {
-
-/// Equal keys, NaN included (a NaN setting is refused before a render, but equal is equal).
-bool sameKey(const LightKey& a, const LightKey& b)
+bool LightCache::prepare(const RenderSettings& settings, const MemoryBudget& budget, Progress& progress, std::vector<std::string>& warnings)
 {
-    if (a.size() != b.size()) return false;
-    for (std::size_t i = 0; i < a.size(); ++i) {
-        if (!(a[i] == b[i]) && !(a[i] != a[i] && b[i] != b[i])) return false;
+    LightKey key = lightKey(settings, budget);
+    const bool kept = !mKey.empty() && key == mKey;
+    if (!kept) {
+        clear();
+        mMaps = detail::lightMaps(settings, *mGrid, budget, progress, mWarnings, true);
+        mPoints = detail::pointLightMaps(settings, *mGrid, budget, progress, mWarnings);
+        mKey = std::move(key);
     }
-    return true;
-}
-
-} // namespace
-
-const std::vector<LightMap>& LightCache::lightMaps(const RenderSettings& settings, const MemoryBudget& budget, Progress& progress,
-    std::vector<std::string>& warnings, std::uint64_t& reused)
-{
-    const LightKey key = lightKey(settings, budget);
-    if (mMaps && sameKey(key, mKey)) {
-        reused += mMaps->size();
-    } else {
-        mMaps.reset();
-        mWarnings.clear();
-        mMaps = std::make_unique<std::vector<LightMap>>(detail::lightMaps(settings, *mGrid, budget, progress, mWarnings, true));
-        mKey = key;
-    }
-    for (LightMap& map : *mMaps) map.beginRender(&progress);
+    for (LightMap& map : mMaps) map.beginRender(&progress);
     warnings.insert(warnings.end(), mWarnings.begin(), mWarnings.end());
-    return *mMaps;
-}
-
-const PointLights& LightCache::pointLightMaps(const RenderSettings& settings, const MemoryBudget& budget, Progress& progress,
-    std::vector<std::string>& warnings, std::uint64_t& reused)
-{
-    const LightKey key = lightKey(settings, budget);
-    if (mPoints && sameKey(key, mPointKey)) {
-        reused += mPoints->maps().size();
-    } else {
-        mPoints.reset();
-        mPointWarnings.clear();
-        mPoints = std::make_unique<PointLights>(detail::pointLightMaps(settings, *mGrid, budget, progress, mPointWarnings));
-        mPointKey = key;
-    }
-    warnings.insert(warnings.end(), mPointWarnings.begin(), mPointWarnings.end());
-    return *mPoints;
+    return kept;
 }
 
 void frameLights(FrameLights& lights, const RenderSettings& settings, const GridSource::Impl& g, const MemoryBudget& budget,
@@ -86,13 +54,13 @@ void frameLights(FrameLights& lights, const RenderSettings& settings, const Grid
         lights.points = &lights.ownPoints;
         return;
     }
-    lights.maps = &cache->lightMaps(settings, budget, progress, stats.warnings, stats.lightMapsReused);
+    lights.kept = cache->prepare(settings, budget, progress, stats.warnings);
+    lights.maps = &cache->maps();
+    lights.points = &cache->points();
+    if (lights.kept) stats.lightMapsReused += lights.maps->size() + lights.points->maps().size();
     if (!onDemand) {
         for (const LightMap& map : *lights.maps) map.marchRemaining();
     }
-    const std::uint64_t before = stats.lightMapsReused;
-    lights.points = &cache->pointLightMaps(settings, budget, progress, stats.warnings, stats.lightMapsReused);
-    lights.pointsReused = stats.lightMapsReused > before;
 }
 
 void addLightStats(const FrameLights& lights, RenderStats& stats)
@@ -100,7 +68,7 @@ void addLightStats(const FrameLights& lights, RenderStats& stats)
     // A kept point light's rays were all marched by the render that made it.
     for (const PointLightMap& map : lights.points->maps()) {
         stats.lightRays += map.rays();
-        (lights.pointsReused ? stats.lightRaysReused : stats.lightRaysMarched) += map.rays();
+        (lights.kept ? stats.lightRaysReused : stats.lightRaysMarched) += map.rays();
     }
     // Light on demand is marched inside the compositing: its thread-time, shared out over the
     // threads, moves from the rasteriser's stage to the shadows'.
@@ -118,12 +86,10 @@ void addLightStats(const FrameLights& lights, RenderStats& stats)
 
 void LightCache::clear()
 {
-    mMaps.reset();
-    mPoints.reset();
+    mMaps.clear();
+    mPoints = PointLights();
     mKey.clear();
-    mPointKey.clear();
     mWarnings.clear();
-    mPointWarnings.clear();
 }
 
 } // namespace detail

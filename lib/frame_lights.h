@@ -9,7 +9,6 @@
 
 #include "frame_parts.h"
 
-#include <memory>
 #include <string>
 #include <vector>
 
@@ -31,13 +30,14 @@ public:
     bool serves(const GridSource::Impl& g) const { return &g == mGrid; }
 
     /// The directional lights' maps (lightMaps, marched on demand) and the point lights'
-    /// (pointLightMaps) for @a settings: the kept ones where their key is this render's, made
-    /// anew otherwise. Their warnings are added to @a warnings either way, and each map's
-    /// counters start at this render (LightMap::beginRender). @a reused: maps handed over.
-    const std::vector<LightMap>& lightMaps(const RenderSettings& settings, const MemoryBudget& budget, Progress& progress,
-        std::vector<std::string>& warnings, std::uint64_t& reused);
-    const PointLights& pointLightMaps(const RenderSettings& settings, const MemoryBudget& budget, Progress& progress,
-        std::vector<std::string>& warnings, std::uint64_t& reused);
+    /// (pointLightMaps) for @a settings, in maps() and points(): the kept ones where their key
+    /// is this render's, all made anew otherwise (the directional maps' share of the budget
+    /// depends on the point lights too). Their warnings are added to @a warnings either way, and
+    /// each map's counters start at this render (LightMap::beginRender).
+    /// @return whether the maps were kept from an earlier render.
+    bool prepare(const RenderSettings& settings, const MemoryBudget& budget, Progress& progress, std::vector<std::string>& warnings);
+    const std::vector<LightMap>& maps() const { return mMaps; }
+    const PointLights& points() const { return mPoints; }
 
     /// Let go of every map: after a render that threw (a cancelled one may have left a tile of
     /// rays half marched), and when a Scene is cleared.
@@ -45,10 +45,10 @@ public:
 
 private:
     const GridSource::Impl* mGrid;
-    LightKey mKey, mPointKey;
-    std::unique_ptr<std::vector<LightMap>> mMaps;
-    std::unique_ptr<PointLights> mPoints;
-    std::vector<std::string> mWarnings, mPointWarnings;
+    LightKey mKey; ///< of the maps held; empty: none
+    std::vector<LightMap> mMaps;
+    PointLights mPoints;
+    std::vector<std::string> mWarnings; ///< those their making gave
 };
 
 /// A frame's light maps: a Scene's kept ones (LightCache), or made for this frame alone.
@@ -56,7 +56,7 @@ struct FrameLights
 {
     const std::vector<LightMap>* maps = nullptr;
     const PointLights* points = nullptr;
-    bool pointsReused = false; ///< the point lights' maps were made by an earlier render
+    bool kept = false; ///< the maps were made by an earlier render (a Scene's)
     std::vector<LightMap> ownMaps;
     PointLights ownPoints;
 };

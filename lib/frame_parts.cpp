@@ -4,7 +4,6 @@
 #include "raster/raster.h"
 #include "shading/shading.h"
 
-
 #include <algorithm>
 #include <type_traits>
 #include <sstream>
