@@ -49,6 +49,12 @@
                                                          issue 19: the Python module against the CLI on the
                                                          same settings (import to array, and with the EXR
                                                          written), vdb_render in the same rounds
+  bench/bench.py scene | turntable | progressive | soak [--scenes pyro,smoke] [--res 960x540] [--quality default] [--repeat N]
+                                                         issue 55: a Scene's camera move against a cold
+                                                         render; a 24-frame turntable against 24
+                                                         processes (--frames); a progressive render's
+                                                         coarse and asked images, cold and warm (480x270);
+                                                         resident memory over 100 camera moves (--moves)
   bench/bench.py cull [--res 1920x1080] [--repeat 3]      issue 37's streamed frame: --cull on against off
                                                          and vdb_render's defaults, README and default
                                                          cameras, with the streamed frame's counters
@@ -942,34 +948,43 @@ def cmd_python(args):
         print(f"{k:26s} {v:8.3f} {v / med['vdb_ewa CLI']:7.3f} {v / med['vdb_render']:13.3f}")
 
 
+def scene_script(args, name, body):
+    """Run @a body (Python, with grid, opts, before and after, the README camera and the one an
+    orbit of 10 degrees away, in scope) in a fresh Python process with the vdb_ewa module;
+    @return the JSON it printed last."""
+    pythonpath = os.environ.get("VDB_EWA_PYTHONPATH", os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(EWA))), "python"))
+    label, path, camera = next(s for s in SCENES if s[0] == name)
+    keywords = lambda words: dict((words[i][1:], tuple(float(x) for x in words[i + 1].split(","))) for i in range(0, len(words), 2))
+    before, after = keywords(camera_path(camera, "orbit", 0, 1)), keywords(camera_path(camera, "orbit", 10, 1))
+    script = f"""
+import json, statistics, time, vdb_ewa
+grid = vdb_ewa.open({path!r})
+opts = dict(res={args.res!r}, quality={args.quality!r})
+before, after = {before!r}, {after!r}
+""" + body
+    p = subprocess.run(["/usr/bin/python3", "-c", script], capture_output=True, text=True, env=dict(os.environ, PYTHONPATH=pythonpath))
+    if p.returncode != 0:
+        sys.exit(p.stderr)
+    return label, json.loads(p.stdout.split("\n")[-2])
+
+
 def cmd_scene(args):
     """Issue 55's camera move: vdb_ewa.Scene.render after a render from a camera 10 degrees away on
     an orbit, against vdb_ewa.render of the same frame in the same process (the grid opened once
     for both: neither pays for loading), interleaved rounds, medians."""
-    pythonpath = os.environ.get("VDB_EWA_PYTHONPATH", os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(EWA))), "python"))
     rows = []
     for name in args.scenes.split(","):
-        label, path, camera = next(s for s in SCENES if s[0] == name)
-        keywords = lambda words: dict((words[i][1:], tuple(float(x) for x in words[i + 1].split(","))) for i in range(0, len(words), 2))
-        before, after = keywords(camera_path(camera, "orbit", 0, 1)), keywords(camera_path(camera, "orbit", 10, 1))
-        script = f"""
-import json, statistics, time, vdb_ewa
-grid = vdb_ewa.open({path!r})
-opts = dict(res={args.res!r}, quality={args.quality!r})
+        label, (cold, warm, ws, cs) = scene_script(args, name, f"""
 cold, warm, stats = [], [], None
 for _ in range({args.repeat}):
-    t0 = time.perf_counter(); c = vdb_ewa.render(grid, **opts, **{after!r}); cold.append(time.perf_counter() - t0)
+    t0 = time.perf_counter(); c = vdb_ewa.render(grid, **opts, **after); cold.append(time.perf_counter() - t0)
     scene = vdb_ewa.Scene(grid, **opts)
-    scene.render(**{before!r})
-    t0 = time.perf_counter(); w = scene.render(**{after!r}); warm.append(time.perf_counter() - t0)
+    scene.render(**before)
+    t0 = time.perf_counter(); w = scene.render(**after); warm.append(time.perf_counter() - t0)
     assert (w.beauty == c.beauty).all(), "the scene's frame is not the cold render's"
     stats = (w.stats, c.stats)
 print(json.dumps([statistics.median(cold), statistics.median(warm), stats[0], stats[1]]))
-"""
-        p = subprocess.run(["/usr/bin/python3", "-c", script], capture_output=True, text=True, env=dict(os.environ, PYTHONPATH=pythonpath))
-        if p.returncode != 0:
-            sys.exit(p.stderr)
-        cold, warm, ws, cs = json.loads(p.stdout.split("\n")[-2])
+""")
         rows.append((label, cold, warm, ws, cs))
     print(f"# vdb_ewa.Scene: a camera move (an orbit of 10 degrees about the README camera's look-at point) against a cold "
           f"in-process render of the same frame, {args.res}, --quality {args.quality}, median of {args.repeat} interleaved rounds; "
@@ -980,6 +995,85 @@ print(json.dumps([statistics.median(cold), statistics.median(warm), stats[0], st
     for label, cold, warm, ws, cs in rows:
         print(f"| {label} | {cold:.3f} | {warm:.3f} | {warm / cold:.2f}x | {ws['light_maps_reused']} | {cs['light_rays_marched']}, "
               f"{ws['light_rays_marched']} ({ws['light_rays_reused']}) | {cs['shadow_seconds']:.3f}, {ws['shadow_seconds']:.3f} |")
+
+
+def cmd_progressive(args):
+    """Issue 55's progressive render: Scene.render(progressive=...) of the README camera in a new
+    scene (cold: the light maps made) and after an orbit of 10 degrees (warm); seconds from the
+    call to the coarse image and to the asked one, against a cold in-process render of the same
+    frame (vdb_ewa.render; the grid opened once for all), interleaved rounds, medians."""
+    rows = []
+    for name in args.scenes.split(","):
+        label, row = scene_script(args, name, f"""
+times = {{"render": [], "cold coarse": [], "cold asked": [], "warm coarse": [], "warm asked": []}}
+rays = None
+for _ in range({args.repeat}):
+    t0 = time.perf_counter(); c = vdb_ewa.render(grid, **opts, **after); times["render"].append(time.perf_counter() - t0)
+    scene = vdb_ewa.Scene(grid, **opts)
+    for when, view in (("cold", before), ("warm", after)):
+        seen = []
+        t0 = time.perf_counter()
+        scene.render(progressive=lambda f: seen.append((time.perf_counter() - t0, f.stats["light_rays_marched"])), **view)
+        times[when + " coarse"].append(seen[0][0]); times[when + " asked"].append(seen[1][0])
+        if when == "cold":
+            rays = (seen[0][1], seen[1][1])
+print(json.dumps([{{k: statistics.median(v) for k, v in times.items()}}, rays]))
+""")
+        rows.append((label, row))
+    print(f"# vdb_ewa.Scene.render(progressive=...): seconds from the call to the coarse image and to the asked one, {args.res}, "
+          f"--quality {args.quality}; cold: a new scene's first render (README camera), warm: after an orbit of 10 degrees; "
+          f"against vdb_ewa.render of the same frame in the same process; median of {args.repeat} interleaved rounds")
+    print("| scene | render (s) | cold: coarse, asked (s) | warm: coarse, asked (s) | warm coarse / render | light rays a cold scene marches: "
+          "coarse, asked |")
+    print("|---|---|---|---|---|---|")
+    for label, (t, rays) in rows:
+        print(f"| {label} | {t['render']:.3f} | {t['cold coarse']:.3f}, {t['cold asked']:.3f} | {t['warm coarse']:.3f}, {t['warm asked']:.3f} | "
+              f"{t['warm coarse'] / t['render']:.2f}x | {rays[0]}, {rays[1]} |")
+
+
+def cmd_soak(args):
+    """Issue 55's memory soak: one scene, --moves camera moves (an orbit, 3.6 degrees a move);
+    the process's resident memory after the first move and every tenth (/proc/self/statm, after
+    malloc_trim) and what malloc holds allocated (mallinfo2: blocks in use, without the frame's
+    own mappings of 4 MiB and more, which are unmapped when freed), its peak against a cold
+    render's, and both after the scene is released."""
+    for name in args.scenes.split(","):
+        label, (cold_peak, after, released, peak) = scene_script(args, name, f"""
+import ctypes, gc, math, resource
+class MallInfo2(ctypes.Structure):
+    _fields_ = [(n, ctypes.c_size_t) for n in ("arena", "ordblks", "smblks", "hblks", "hblkhd", "usmblks", "fsmblks", "uordblks",
+                                              "fordblks", "keepcost")]
+libc = ctypes.CDLL("libc.so.6")
+libc.mallinfo2.restype = MallInfo2
+def resident():
+    libc.malloc_trim(0)  # what malloc keeps for later goes back first
+    rss = int(open("/proc/self/statm").read().split()[1]) * resource.getpagesize() / 2**20
+    m = libc.mallinfo2()
+    return rss, (m.uordblks + m.hblkhd) / 2**20  # resident; allocated and not freed (malloc's own count)
+c = vdb_ewa.render(grid, **opts, **before)
+cold_peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+for view in (after, before):  # the process's own growth over its first renders (thread arenas, pools)
+    c = vdb_ewa.render(grid, **opts, **view)
+del c
+loaded = resident()
+scene = vdb_ewa.Scene(grid, **opts)
+eye, at = before["translate"], before["lookat"]
+r, h = math.hypot(eye[0] - at[0], eye[2] - at[2]), math.atan2(eye[0] - at[0], eye[2] - at[2])
+after = []
+for k in range({args.moves}):
+    a = h + math.radians(3.6 * k)
+    scene.render(translate=(at[0] + r * math.sin(a), eye[1], at[2] + r * math.cos(a)), lookat=at)
+    if k == 0 or (k + 1) % 10 == 0:
+        after.append((k + 1, resident()))
+peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+del scene; gc.collect()
+print(json.dumps([cold_peak, after, (loaded, resident()), peak]))
+""")
+        print(f"# {label}: one vdb_ewa.Scene, {args.moves} camera moves (3.6 degrees each), {args.res}, --quality {args.quality}")
+        print(f"a cold render's peak: {cold_peak:.0f} MB; the scene's: {peak:.0f} MB ({peak / cold_peak:.2f}x)")
+        print("after move: " + ", ".join(f"{k}: {mb[0]:.0f} MB resident, {mb[1]:.1f} MB allocated" for k, mb in after))
+        print(f"before the scene (the grid loaded, three cold renders done): {released[0][0]:.0f} MB resident, {released[0][1]:.1f} MB "
+              f"allocated; after the scene is released: {released[1][0]:.0f} MB resident, {released[1][1]:.1f} MB allocated")
 
 
 def cmd_turntable(args):
@@ -1497,17 +1591,18 @@ def main():
     sy.add_argument("--res", default="960x540")
     sy.add_argument("--repeat", type=int, default=7)
     sy.add_argument("--write", action="store_true", help="the Python process writes the EXR too, as the CLI does")
-    sse = sub.add_parser("scene")
-    sse.add_argument("--scenes", default="pyro,smoke,cloud (grids/)")
-    sse.add_argument("--res", default="960x540")
-    sse.add_argument("--quality", default="default")
-    sse.add_argument("--repeat", type=int, default=5)
-    stt = sub.add_parser("turntable")
-    stt.add_argument("--scenes", default="pyro,smoke,cloud (grids/)")
-    stt.add_argument("--res", default="960x540")
-    stt.add_argument("--quality", default="default")
-    stt.add_argument("--frames", type=int, default=24)
-    stt.add_argument("--repeat", type=int, default=3)
+    def scene_parser(verb, repeat, res="960x540", scenes="pyro,smoke,cloud (grids/)"):
+        """A verb of issue 55's figures: the scenes, the resolution, the quality, the rounds."""
+        parser = sub.add_parser(verb)
+        parser.add_argument("--scenes", default=scenes)
+        parser.add_argument("--res", default=res)
+        parser.add_argument("--quality", default="default")
+        parser.add_argument("--repeat", type=int, default=repeat)
+        return parser
+    scene_parser("scene", 5)
+    scene_parser("turntable", 3).add_argument("--frames", type=int, default=24)
+    scene_parser("progressive", 7, res="480x270", scenes="pyro")
+    scene_parser("soak", 1, scenes="pyro,smoke").add_argument("--moves", type=int, default=100)
     sis = sub.add_parser("imagelod-scale")
     sis.add_argument("--res", default="480x270")
     sis.add_argument("--px", default="0.1,3,20")
@@ -1592,7 +1687,7 @@ def main():
     {"speed": cmd_speed, "sigma": cmd_sigma, "tradeoff": cmd_tradeoff, "targets": cmd_targets,
      "output": cmd_output, "imagelod": cmd_imagelod, "draft": cmd_draft, "imagelod-scale": cmd_imagelod_scale, "surfaces": cmd_surfaces, "holes": cmd_holes, "plot": cmd_plot, "ladder": cmd_ladder,
      "analytic": cmd_analytic, "roofline": cmd_roofline, "scaling": cmd_scaling,
-     "stability": cmd_stability, "python": cmd_python, "scene": cmd_scene, "turntable": cmd_turntable, "cull": cmd_cull, "blur": cmd_blur, "lights": cmd_lights, "volumes": cmd_volumes, "scale": cmd_scale, "tiles": cmd_tiles}[a.cmd](a)
+     "stability": cmd_stability, "python": cmd_python, "scene": cmd_scene, "turntable": cmd_turntable, "progressive": cmd_progressive, "soak": cmd_soak, "cull": cmd_cull, "blur": cmd_blur, "lights": cmd_lights, "volumes": cmd_volumes, "scale": cmd_scale, "tiles": cmd_tiles}[a.cmd](a)
 
 
 if __name__ == "__main__":

@@ -153,6 +153,7 @@ py::dict statsOf(const RenderStats& s)
     d["light_rays_marched"] = s.lightRaysMarched;
     d["light_maps_reused"] = s.lightMapsReused;
     d["light_rays_reused"] = s.lightRaysReused;
+    d["coarse_scale"] = s.coarseScale;
     d["supersample"] = s.supersample;
     d["pixel_size"] = s.pixelSize;
     d["voxel_pixels"] = s.voxelPixels;
@@ -371,6 +372,9 @@ PYBIND11_MODULE(vdb_ewa, m)
             return py::object(d[py::str(name)]); // not the accessor: it would outlive d
         }, py::arg("name"), "The pass called name (see aovs); vdb_ewa.ValueError if it was not rendered.")
         .def_property_readonly("stats", [](const RenderedFrame& f) { return statsOf(f.stats); }, "Counts and stage timings (seconds).")
+        .def_property_readonly("coarse", [](const RenderedFrame& f) { return f.stats.coarseScale > 1; },
+            "True for a progressive render's coarse image (Scene.render(progressive=...)): draft's knobs at one sample an\n"
+            "n x n block of pixels (stats['coarse_scale'] = n), interpolated back to the frame's width and height.")
         .def_property_readonly("warnings", [](const RenderedFrame& f) { return f.warnings; }, "The render's warnings, one line each.")
         .def_property_readonly("render_seconds", [](const RenderedFrame& f) { return f.seconds; }, "From the call to the frame, seconds.")
         .def_property_readonly("metadata", [](const RenderedFrame& f) {
@@ -405,13 +409,19 @@ PYBIND11_MODULE(vdb_ewa, m)
         .def(py::init([](const py::object& grid, const py::kwargs& kwargs) { return std::make_shared<SceneCall>(grid, kwargs); }),
             py::arg("grid"), "Open the grid (a path with name=, color=, emission_grid=, temperature=, velocity_grid=, or a Grid)\n"
             "and keep render()'s keywords. Raises vdb_ewa.ValueError, vdb_ewa.IoError as render().")
-        .def("render", [](SceneCall& scene, const py::object& progress, const py::object& cancel, const py::kwargs& kwargs) {
-            std::shared_ptr<RenderedFrame> frame = scene.render(progress, cancelToken(cancel), kwargs);
+        .def("render", [](SceneCall& scene, const py::object& progress, const py::object& cancel, const py::object& progressive,
+                           const py::kwargs& kwargs) {
+            std::shared_ptr<RenderedFrame> frame = scene.render(progress, cancelToken(cancel), progressive, kwargs);
             warnAll(frame->warnings);
             return frame;
-        }, py::kw_only(), py::arg("progress") = py::none(), py::arg("cancel") = py::none(),
+        }, py::kw_only(), py::arg("progress") = py::none(), py::arg("cancel") = py::none(), py::arg("progressive") = py::none(),
             "Render with the scene's keywords, updated by these (camera, quality, lights...; not the grid keywords):\n"
-            "a Frame, as vdb_ewa.render() returns. progress and cancel as render()'s.")
+            "a Frame, as vdb_ewa.render() returns. progress and cancel as render()'s.\n"
+            "progressive: None, or a callable f(frame) called on this thread with a coarse Frame first (frame.coarse:\n"
+            "draft's knobs at one sample a 4x4 block of pixels, interpolated to the full size; images under 32 pixels a\n"
+            "side have none), then with the Frame render() returns: what a viewport draws while the user drags. f\n"
+            "returning True for the coarse image cancels the rest (vdb_ewa.Cancelled), as cancel= does at any time.\n"
+            "progress then runs over both: the coarse image is its first 10 percent.")
         .def("clear", [](SceneCall& scene) {
             py::gil_scoped_release release; // waits for a render of the scene on another thread
             scene.scene->clear();

@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <condition_variable>
+#include <deque>
 #include <exception>
 #include <functional>
 #include <map>
@@ -120,12 +121,32 @@ public:
         mChanged.notify_all();
     }
 
+    /// A progressive render's coarse image, from the worker: the caller's thread takes it.
+    void post(const Frame& frame, const RenderStats& stats)
+    {
+        {
+            const std::lock_guard<std::mutex> lock(mMutex);
+            mImages.push_back({frame, stats});
+        }
+        mChanged.notify_all();
+    }
+
+    /// The oldest image posted and not yet taken, if any, into @a image.
+    bool take(std::pair<Frame, RenderStats>& image)
+    {
+        const std::lock_guard<std::mutex> lock(mMutex);
+        if (mImages.empty()) return false;
+        image = std::move(mImages.front());
+        mImages.pop_front();
+        return true;
+    }
+
     /// Wait (without the GIL) up to @a timeout for news; @return the percent, and whether it is done.
     std::pair<int, bool> wait(int reported, std::chrono::milliseconds timeout)
     {
         py::gil_scoped_release release;
         std::unique_lock<std::mutex> lock(mMutex);
-        mChanged.wait_for(lock, timeout, [&] { return mDone || mPercent != reported; });
+        mChanged.wait_for(lock, timeout, [&] { return mDone || mPercent != reported || !mImages.empty(); });
         return {mPercent, mDone};
     }
 
@@ -142,6 +163,7 @@ private:
     int mPercent = -1;
     bool mDone = false;
     std::exception_ptr mError;
+    std::deque<std::pair<Frame, RenderStats>> mImages; ///< posted, not yet taken
 };
 
 /// Joins the render's thread whatever happens on the caller's (cancelling it first if the
@@ -168,10 +190,13 @@ private:
     CallInterrupter& mInterrupter;
 };
 
-/// Run @a renderFrame (a Renderer's or a Scene's) on a worker thread; serve @a progress and
-/// Python's signals (Ctrl+C) here.
-Frame renderOnWorker(const std::function<Frame(Interrupter&)>& renderFrame, const py::object& progress,
-    const std::shared_ptr<CancelToken>& cancel)
+/// A progressive render's coarse image, handed to the caller's thread; true cancels the render.
+using CoarseImage = std::function<bool(Frame&& frame, RenderStats&& stats)>;
+
+/// Run @a renderFrame (a Renderer's or a Scene's) on a worker thread; serve @a progress,
+/// Python's signals (Ctrl+C) and the coarse images it posts (@a coarse) here.
+Frame renderOnWorker(const std::function<Frame(CallInterrupter&)>& renderFrame, const py::object& progress,
+    const std::shared_ptr<CancelToken>& cancel, const CoarseImage& coarse)
 {
     CallInterrupter interrupter(cancel);
     Frame frame;
@@ -190,6 +215,9 @@ Frame renderOnWorker(const std::function<Frame(Interrupter&)>& renderFrame, cons
         std::tie(percent, done) = interrupter.wait(reported, std::chrono::milliseconds(50));
         if (PyErr_CheckSignals() != 0) throw py::error_already_set(); // the guard cancels and joins
         if (cancel && cancel->cancelled.load(std::memory_order_relaxed)) interrupter.cancel(); // seen at the render's next check
+        for (std::pair<Frame, RenderStats> image; interrupter.take(image);) {
+            if (coarse(std::move(image.first), std::move(image.second))) interrupter.cancel(); // an exception: the guard cancels
+        }
         if (done && !interrupter.error()) percent = 100;
         if (percent == reported) continue; // the 50 ms passed with no news
         reported = percent; // also without a callback, or the wait would return at once from now on
@@ -304,30 +332,55 @@ bool attachedVelocityOf(const py::object& gridOrPath, bool isPath)
     return !isPath && gridOrPath.cast<const GridSource&>().hasVelocityGrid(); // Grid.with_velocity_grid
 }
 
+/// How a call renders its frame on the worker: the camera, the passes, the stats to fill, the
+/// interrupter, and where a progressive render's images go (Scene::render).
+using FrameRender = std::function<Frame(const Camera&, const PassRequest&, RenderStats&, Interrupter&, const ProgressiveCallback&)>;
+
 /// Render @a grid as @a call asks, through @a renderFrame on a worker thread: the frame with its
-/// options, stats and warnings, in the output space.
+/// options, stats and warnings, in the output space. @a progressive: None, or a callable
+/// called here with each image of a progressive render, coarse first (True cancels the rest),
+/// then the frame returned.
 std::shared_ptr<RenderedFrame> finishCall(PreparedCall&& call, const GridSource& grid, const std::string& input,
     const std::chrono::steady_clock::time_point& t0, const py::object& progress, const std::shared_ptr<CancelToken>& cancel,
-    const std::function<Frame(const Camera&, const PassRequest&, RenderStats&, Interrupter&)>& renderFrame)
+    const py::object& progressive, const FrameRender& renderFrame)
 {
     const Camera camera(call.camera, grid.worldCentre());
     const std::string what = input.empty() ? grid.name() : input;
     std::vector<std::string> warnings = std::move(call.warnings);
     for (const std::string& w : cli::RenderOptions::cameraWarnings(camera)) warnings.push_back(what + ": " + w);
 
-    auto result = std::make_shared<RenderedFrame>(grid, camera);
-    result->arguments = call.arguments;
-    result->options = call.options;
-    result->input = input;
-    result->given = call.given;
+    // A frame rendered with the call's options: the working frame, its stats and warnings, the output.
+    const auto frameOf = [&](Frame&& working, RenderStats&& stats) {
+        auto result = std::make_shared<RenderedFrame>(grid, camera);
+        result->arguments = call.arguments;
+        result->options = call.options;
+        result->input = input;
+        result->given = call.given;
+        result->working = std::move(working);
+        result->stats = std::move(stats);
+        result->warnings = warnings;
+        for (const std::string& w : result->stats.warnings) result->warnings.push_back(what + ": " + w);
+        result->output = result->working;
+        call.options->options.output().toOutputSpace(result->output);
+        result->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        return result;
+    };
+    const auto handOver = [&](const std::shared_ptr<RenderedFrame>& frame) {
+        return !progressive.is_none() && py::bool_(progressive(frame));
+    };
     const PassRequest passes = call.options->options.output().passes();
-    result->working = renderOnWorker([&](Interrupter& interrupter) { return renderFrame(camera, passes, result->stats, interrupter); },
-        progress, cancel);
-    for (const std::string& w : result->stats.warnings) warnings.push_back(what + ": " + w);
-    result->output = result->working;
-    call.options->options.output().toOutputSpace(result->output);
-    result->warnings = std::move(warnings);
-    result->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    RenderStats stats;
+    Frame working = renderOnWorker(
+        [&](CallInterrupter& interrupter) {
+            // The coarse image goes to this thread; the last, the one returned, is handed over below.
+            const ProgressiveCallback post = [&](const Frame& f, const RenderStats& s) {
+                if (s.coarseScale > 1) interrupter.post(f, s);
+            };
+            return renderFrame(camera, passes, stats, interrupter, progressive.is_none() ? ProgressiveCallback{} : post);
+        },
+        progress, cancel, [&](Frame&& f, RenderStats&& s) { return handOver(frameOf(std::move(f), std::move(s))); });
+    std::shared_ptr<RenderedFrame> result = frameOf(std::move(working), std::move(stats));
+    handOver(result); // the render is done: what it answers no longer matters
     return result;
 }
 
@@ -343,8 +396,8 @@ std::shared_ptr<RenderedFrame> render(const py::object& gridOrPath, const py::ob
     std::string input;
     const GridSource grid = openGrid(gridOrPath, isPath, call, kwargs, input);
     const Renderer renderer(call.working);
-    return finishCall(std::move(call), grid, input, t0, progress, cancel,
-        [&](const Camera& camera, const PassRequest& passes, RenderStats& stats, Interrupter& interrupter) {
+    return finishCall(std::move(call), grid, input, t0, progress, cancel, py::none(),
+        [&](const Camera& camera, const PassRequest& passes, RenderStats& stats, Interrupter& interrupter, const ProgressiveCallback&) {
             return renderer.renderFrame(grid, camera, passes, &stats, &interrupter);
         });
 }
@@ -358,10 +411,11 @@ SceneCall::SceneCall(const py::object& gridOrPath, const py::kwargs& kwargs)
 }
 
 std::shared_ptr<RenderedFrame> SceneCall::render(const py::object& progress, const std::shared_ptr<CancelToken>& cancel,
-    const py::kwargs& kwargs)
+    const py::object& progressive, const py::kwargs& kwargs)
 {
     const auto t0 = std::chrono::steady_clock::now();
     if (!progress.is_none() && !PyCallable_Check(progress.ptr())) throw ValueError("progress: expected a callable taking the percent");
+    if (!progressive.is_none() && !PyCallable_Check(progressive.ptr())) throw ValueError("progressive: expected a callable taking a Frame");
     for (const char* keyword : {"name", "density_grid", "color", "emission_grid", "temperature", "velocity_grid"}) {
         if (kwargs.contains(keyword)) {
             throw ValueError(std::string(keyword) + ": a Scene's grids are given when it is made (vdb_ewa.Scene(grid, " + keyword + "=...))");
@@ -372,9 +426,10 @@ std::shared_ptr<RenderedFrame> SceneCall::render(const py::object& progress, con
     for (const auto& [key, value] : kwargs) merged[key] = value;
     PreparedCall call = prepareCall(merged, isPath, attachedVelocity);
     const RenderSettings settings = call.working;
-    return finishCall(std::move(call), *grid, input, t0, progress, cancel,
-        [&](const Camera& camera, const PassRequest& passes, RenderStats& stats, Interrupter& interrupter) {
-            return scene->render(camera, settings, passes, &stats, &interrupter);
+    return finishCall(std::move(call), *grid, input, t0, progress, cancel, progressive,
+        [&](const Camera& camera, const PassRequest& passes, RenderStats& stats, Interrupter& interrupter, const ProgressiveCallback& images) {
+            if (!images) return scene->render(camera, settings, passes, &stats, &interrupter);
+            return scene->render(camera, settings, images, passes, &stats, &interrupter);
         });
 }
 

@@ -85,9 +85,10 @@ struct SceneCall
     /// @throw vdb_ewa::Error as render().
     SceneCall(const pybind11::object& grid, const pybind11::kwargs& kwargs);
     /// As render(), with the scene's keywords updated by @a kwargs (not the grid keywords: those
-    /// are the scene's).
+    /// are the scene's). @a progressive: None, or a callable taking each Frame of a progressive
+    /// render on this thread, the coarse one first (True cancels the rest), then the one returned.
     std::shared_ptr<RenderedFrame> render(const pybind11::object& progress, const std::shared_ptr<CancelToken>& cancel,
-        const pybind11::kwargs& kwargs);
+        const pybind11::object& progressive, const pybind11::kwargs& kwargs);
 
     bool isPath;
     bool attachedVelocity;    ///< the Grid given had a velocity grid (Grid.with_velocity_grid)

@@ -59,6 +59,9 @@ struct RenderStats
     std::uint64_t lightRaysMarched = 0; ///< of them, marched by this render (all but where light on demand needed none: the streamed frame, a whole frame whose maps outgrow it, and a Scene's rays marched before)
     std::uint64_t lightMapsReused = 0;  ///< a Scene's renders: light maps (directional and point) kept from an earlier render (Scene)
     std::uint64_t lightRaysReused = 0;  ///< a Scene's renders: rays of those maps that earlier renders marched
+    /// A progressive render's coarse image (Scene::render with a ProgressiveCallback): one
+    /// sample an n x n block of pixels, interpolated; 1: the image of the asked settings.
+    int coarseScale = 1;
     /// The process's peak resident memory when the render ended (peakResidentBytes(): what the
     /// render held at most, with the process's own, and earlier renders' where they held more).
     std::uint64_t peakResidentBytes = 0;

@@ -6,6 +6,7 @@
 ///        (docs/api.md#scenes-what-a-render-reuses).
 #pragma once
 
+#include <functional>
 #include <memory>
 
 #include "camera.h"
@@ -17,6 +18,14 @@
 #include "render_stats.h"
 
 namespace vdb_ewa {
+
+/// A progressive render's images (docs/api.md#progressive-refinement), called on the thread
+/// that called Scene::render: first the coarse image (@a stats.coarseScale n > 1: draft's
+/// knobs at one sample an n x n block of pixels, interpolated back to the camera's width x
+/// height; no deep samples), then the image of the asked settings (coarseScale 1), the one
+/// render returns. An image too small for a coarse one (under 32 pixels a side) gets only the
+/// second. To stop, cancel the render's Interrupter (a callback that throws stops it too).
+using ProgressiveCallback = std::function<void(const Frame& frame, const RenderStats& stats)>;
 
 class VDB_EWA_API Scene
 {
@@ -30,7 +39,8 @@ public:
     Scene& operator=(const Scene&) = delete;
 
     const GridSource& grid() const;
-    const RenderSettings& settings() const;
+    /// A copy, taken under the scene's lock (setSettings may run on another thread).
+    RenderSettings settings() const;
     /// The settings of the renders to come. What they change is made anew at the next render
     /// (docs/api.md#scenes-what-a-render-reuses); the rest is kept.
     /// @throw ValueError if a setting is out of range.
@@ -48,6 +58,14 @@ public:
     /// @throw ValueError if a setting is out of range; Cancelled.
     Frame render(const Camera& camera, const RenderSettings& settings, const PassRequest& passes = PassRequest{},
         RenderStats* stats = nullptr, Interrupter* interrupter = nullptr);
+
+    /// Progressive refinement: as above, with @a progressive called with a coarse image first,
+    /// then with the frame returned. Both share what the scene keeps (the coarse image marches
+    /// the light rays the asked one reads). @a interrupter sees one rising progress: the coarse
+    /// image takes its first 10 %; a cancel between or during them stops at once.
+    /// @throw ValueError, Cancelled, and what @a progressive throws.
+    Frame render(const Camera& camera, const RenderSettings& settings, const ProgressiveCallback& progressive,
+        const PassRequest& passes = PassRequest{}, RenderStats* stats = nullptr, Interrupter* interrupter = nullptr);
 
     /// Let go of everything kept: the next render starts cold.
     void clear();

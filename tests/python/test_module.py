@@ -306,6 +306,29 @@ class Module(unittest.TestCase):
             scene.render(progress=lambda p: p >= 0)
         np.testing.assert_array_equal(scene.render(**views[1]).beauty, vdb_ewa.render(self.cloud, res=(96, 72), **views[1]).beauty)
 
+    def test_a_progressive_render_gives_a_coarse_frame_then_the_one_returned(self):
+        view = dict(translate=(0.3, 0.2, 1.2), lookat=(0.0, 0.0, 0.0))
+        scene = vdb_ewa.Scene(self.cloud, res=(128, 96), aov="shadow")
+        images = []
+        frame = scene.render(progressive=lambda f: images.append((f, threading.get_ident())), **view)
+        self.assertEqual([f.coarse for f, _ in images], [True, False])
+        self.assertEqual([f.stats["coarse_scale"] for f, _ in images], [4, 1])
+        self.assertEqual({t for _, t in images}, {threading.get_ident()})  # on the calling thread
+        self.assertIs(images[1][0], frame)
+        coarse = images[0][0]
+        self.assertEqual((coarse.width, coarse.height), (128, 96))
+        self.assertEqual(coarse.aov("shadow").shape, (96, 128, 3))
+        np.testing.assert_array_equal(frame.beauty, vdb_ewa.render(self.cloud, res=(128, 96), aov="shadow", **view).beauty)
+        self.assertLess(np.abs(coarse.beauty[..., 3] - frame.beauty[..., 3]).mean(), 0.1 * frame.beauty[..., 3].mean())
+        # True for the coarse frame cancels the rest; a frame render() returned stays as it was.
+        with self.assertRaises(vdb_ewa.Cancelled):
+            scene.render(progressive=lambda f: f.coarse, **view)
+        with self.assertRaisesRegex(vdb_ewa.ValueError, "progressive: expected a callable"):
+            scene.render(progressive=3)
+        with self.assertRaisesRegex(ZeroDivisionError, ""):
+            scene.render(progressive=lambda f: 1 / 0, **view)
+        np.testing.assert_array_equal(scene.render(**view).beauty, frame.beauty)
+
     def test_progress_rises_to_100_on_the_calling_thread(self):
         calls = []
         frame = self.long_render(progress=lambda p: calls.append((p, threading.get_ident())))
