@@ -21,8 +21,8 @@ packages=(
 )
 if [ "${1:-}" = "--test" ]; then
   # The Python module's test reads EXRs and writes VDBs with OpenVDB's own binding; the Blender
-  # add-on's test renders in Blender (plugins/blender).
-  packages+=(python3-openvdb python3-openimageio blender)
+  # add-on's tests render in Blender (plugins/blender), its viewport test in a virtual X server (xvfb-run).
+  packages+=(python3-openvdb python3-openimageio blender xvfb)
   # tests/slurm: a one-node Slurm cluster (controller, node daemon, client commands, munge) runs
   # vdb_ewa submit's job arrays.
   packages+=(slurmctld slurmd slurm-client munge)

@@ -16,9 +16,10 @@ import re
 import sys
 
 import bpy
+import mathutils
 import numpy as np
 
-from . import scene_mapping
+from . import scene_mapping, viewport
 
 # Cycles' and EEVEE's panels that apply to vdb_ewa too: the output size, the camera, lights, volumes.
 _SHARED_PANELS = ("RENDER_PT_format", "RENDER_PT_frame_range", "DATA_PT_lens", "DATA_PT_camera", "DATA_PT_light",
@@ -51,15 +52,21 @@ class VdbEwaPreferences(bpy.types.AddonPreferences):
         self.layout.prop(self, "module_path")
 
 
+def _settings_changed(settings, context):
+    """A depsgraph update of the settings' scene, so the Rendered viewport's view_update sees them
+    (a property of an add-on's own tags nothing)."""
+    settings.id_data.update_tag()
+
+
 class VdbEwaSettings(bpy.types.PropertyGroup):
     quality: bpy.props.EnumProperty(
-        name="Quality", default='default',
+        name="Quality", default='default', update=_settings_changed,
         items=[('draft', "Draft", "vdb_ewa --quality draft"), ('default', "Default", "vdb_ewa's defaults"),
                ('high', "High", "vdb_ewa --quality high"), ('final', "Final", "vdb_ewa --quality final: refined kernels")])
     extra_options: bpy.props.StringProperty(
-        name="Options", description="More vdb_ewa render options as keyword=value, comma-separated "
-                                    "(lod=0, refine=2, ambient=0.1,0.1,0.1); they override the scene's; "
-                                    "help(vdb_ewa.render) lists them")
+        name="Options", update=_settings_changed,
+        description="More vdb_ewa render options as keyword=value, comma-separated "
+                    "(lod=0, refine=2, ambient=0.1,0.1,0.1); they override the scene's; help(vdb_ewa.render) lists them")
 
 
 class RENDER_PT_vdb_ewa(bpy.types.Panel):
@@ -99,19 +106,28 @@ def parse_extra_options(text):
     return options
 
 
-def render_options(depsgraph, warnings):
-    """The options every volume of the frame shares: camera, lights, colour spaces, quality."""
+def shading_options(depsgraph, warnings):
+    """The options every render of the scene shares, F12's and the viewport's: lights, shadows,
+    colour spaces, quality."""
     scene = depsgraph.scene
-    options = scene_mapping.camera_options(scene, warnings)
-    options["light"] = scene_mapping.light_options(depsgraph, warnings) or [(0.0, 0.0, 1.0, 0.0, 0.0, 0.0)]
+    options = dict(light=scene_mapping.light_options(depsgraph, warnings) or [(0.0, 0.0, 1.0, 0.0, 0.0, 0.0)])
     options.update(scene_mapping.point_light_options(depsgraph, warnings))
-    options.update(scene_mapping.motion_options(scene))
     # Blender's scene-linear space is linear Rec.709; render and return it there.
     # Cycles' attenuation: shadows fall as exp(-optical depth), without vdb_render's --gain.
     options["gain"] = 0.0
     options["working_space"] = "lin_rec709"
     options["output_space"] = "lin_rec709"
     options["quality"] = scene.vdb_ewa.quality
+    return options
+
+
+def render_options(depsgraph, warnings):
+    """The options every volume of an F12 frame shares: the scene camera, its motion blur and the
+    shading."""
+    scene = depsgraph.scene
+    options = scene_mapping.camera_options(scene, warnings)
+    options.update(shading_options(depsgraph, warnings))
+    options.update(scene_mapping.motion_options(scene))
     return options
 
 
@@ -157,6 +173,7 @@ class MergedVolumes:
         self.name = "+".join(v.name for v in volumes)
         self.path = volumes[0].path
         self.object_to_world = "each its own"
+        self.centre = volumes[0].centre
 
     def render_input(self, vdb_ewa):
         """The summed grid on the finest volume's voxels, and the first volume's material per its
@@ -187,17 +204,61 @@ class MergedVolumes:
         return grid, material
 
 
+def render_inputs(vdb_ewa, volumes, warnings):
+    """What to render for @a volumes (nearest first): [(volume, grid, material)], one summed field
+    (MergedVolumes) where they can share one, else each alone, nearest first, to composite with
+    over(). Raises ValueError naming the volume where its grid cannot be read."""
+    try:
+        if len(volumes) > 1 and mergeable(volumes):
+            merged = MergedVolumes(volumes)
+            summed = merged.render_input(vdb_ewa)
+            if summed is not None:
+                return [(merged, *summed)]
+    except vdb_ewa.Error as e:
+        raise ValueError(str(e)) from e
+    if len(volumes) > 1:
+        warnings.append("volumes moving in different velocity units or scales, or glowing with different Temperature or "
+                        "Blackbody Intensity per voxel, are composited one over the other: wrong where they interpenetrate")
+    inputs = []
+    for volume in volumes:
+        try:
+            inputs.append((volume, *volume_options(vdb_ewa, volume)))
+        except vdb_ewa.Error as e:
+            raise ValueError("volume %s: %s" % (volume.name, e)) from e
+    return inputs
+
+
 def over(front, back):
     """Premultiplied front over back."""
     return front + back * (1.0 - front[..., 3:4])
+
+
+def viewport_scenes(vdb_ewa, volumes, grid_keywords):
+    """A vdb_ewa.Scene for each render input of @a volumes, made with its material and the grid
+    keywords of the panel's Options: [(centre, Scene)]. Raises ValueError, vdb_ewa.Error."""
+    return [(volume.centre, vdb_ewa.Scene(grid, **{**material, **grid_keywords}))  # Options override, as for F12
+            for volume, grid, material in render_inputs(vdb_ewa, volumes, [])]
 
 
 class VdbEwaRenderEngine(bpy.types.RenderEngine):
     bl_idname = "VDB_EWA"
     bl_label = "vdb_ewa"
     bl_use_preview = False
-    bl_use_eevee_viewport = True
+    bl_use_eevee_viewport = False  # Rendered shading: view_update and view_draw below
     bl_use_postprocess = True
+
+    def __init__(self):
+        self._viewport = None  # viewport.Session of the 3D view this engine draws, made by view_update
+        self._scene_key = None  # what the session's scenes were made of
+        self._shading = {}  # per-render keywords from the scene: lights, quality
+        self._extra = {}  # the panel's Options, but the grid keywords (they go to the scenes)
+        self._error = None  # what the view shows instead of an image
+        self._shown = None  # the text the view shows (update_stats), to set it once
+        self._warned = set()  # the scene mapping's warnings printed, each once
+
+    def __del__(self):
+        if getattr(self, "_viewport", None) is not None:
+            self._viewport.stop()
 
     def render(self, depsgraph):
         scene = depsgraph.scene
@@ -216,6 +277,75 @@ class VdbEwaRenderEngine(bpy.types.RenderEngine):
         """Esc: Blender's test_break()."""
         return self.test_break()
 
+    def view_update(self, context, depsgraph):
+        """The scene changed (and the view was switched to Rendered): the per-render keywords
+        anew; the scenes anew where the volumes, their data or materials changed (a key of what
+        they are made of), the session's light maps kept otherwise. Runs on the main thread."""
+        self._error = None
+        try:
+            vdb_ewa = import_vdb_ewa()
+        except ImportError as e:
+            self._error = "the Python module is not found (%s): set the add-on's module folder" % e
+            return
+        warnings = []
+        try:
+            scene = depsgraph.scene
+            shading = shading_options(depsgraph, warnings)
+            grid_keywords, extra = viewport.split_grid_keywords(parse_extra_options(scene.vdb_ewa.extra_options))
+            # No motion blur in the viewport, as in Cycles'; each render orders several volumes from its own eye.
+            volumes = scene_mapping.volumes(depsgraph, mathutils.Vector(), warnings, motion_blur=False)
+        except ValueError as e:
+            self._error = str(e)
+            return
+        if not volumes:
+            self._error = "no volume object with an OpenVDB file to render"
+            return
+        if self._viewport is None:
+            self._viewport = viewport.Session(vdb_ewa, over)
+        key = repr([(v.path, v.density_grid, v.object_to_world, sorted(v.options.items())) for v in volumes]
+                   + sorted(grid_keywords.items()))
+        if key != self._scene_key:
+            self._scene_key = key
+            self._viewport.set_scene(lambda: viewport_scenes(vdb_ewa, volumes, grid_keywords))
+        self._shading, self._extra = shading, extra
+        self.warn(warnings)
+
+    def view_draw(self, context, depsgraph):
+        """Draw the newest image of the view and, where the view changed, ask for one of the new
+        view (the running render of the old one is cancelled). Runs on the main thread."""
+        region = context.region
+        error = self._error
+        if error is None and self._viewport is not None:
+            warnings = []
+            try:
+                camera = scene_mapping.viewport_camera_options(depsgraph.scene, context.space_data, context.region_data,
+                                                               region.width, region.height, warnings)
+                self._viewport.request({**self._shading, **camera, **self._extra}, camera["translate"])
+            except ValueError as e:
+                error = str(e)
+            self.warn(warnings)
+        image, render_error = self._viewport.take() if self._viewport is not None else (None, None)
+        error = error or render_error
+        if error is None and image is not None:
+            image.draw(self, depsgraph.scene, region.width, region.height)
+            image.record()
+        self.show("vdb_ewa: " + error if error else "")
+
+    def warn(self, warnings):
+        """The scene mapping's warnings on the console, each once."""
+        for w in warnings:
+            if w not in self._warned:
+                self._warned.add(w)
+                print("vdb_ewa warning: " + w, flush=True)
+
+    def show(self, text):
+        """@a text in the view's corner (update_stats) and once on the console."""
+        if text != self._shown:
+            self._shown = text
+            self.update_stats("", text)
+            if text:
+                print(text, flush=True)
+
     def report_frame(self, depsgraph, result, width, height):
         try:
             vdb_ewa = import_vdb_ewa()
@@ -227,31 +357,19 @@ class VdbEwaRenderEngine(bpy.types.RenderEngine):
             options = render_options(depsgraph, warnings)
             extra = parse_extra_options(depsgraph.scene.vdb_ewa.extra_options)
             volumes = scene_mapping.volumes(depsgraph, depsgraph.scene.camera.matrix_world.translation, warnings)
+            inputs = render_inputs(vdb_ewa, volumes, warnings)
         except ValueError as e:
             self.report({'ERROR'}, "vdb_ewa: %s" % e)
             return
         image = np.zeros((height, width, 4), np.float32)
-        merged = None
-        if len(volumes) > 1 and mergeable(volumes):
-            try:
-                merged = MergedVolumes(volumes).render_input(vdb_ewa)
-            except vdb_ewa.Error as e:
-                self.report({'ERROR'}, "vdb_ewa: %s" % e)
-                return
-            if merged is not None:
-                volumes = [MergedVolumes(volumes)]
-        if len(volumes) > 1:
-            warnings.append("volumes moving in different velocity units or scales, or glowing with different Temperature or "
-                            "Blackbody Intensity per voxel, are composited one over the other: wrong where they interpenetrate")
-        for index, volume in enumerate(volumes):
-            self.update_stats("vdb_ewa", "volume %s (%d of %d)" % (volume.name, index + 1, len(volumes)))
+        for index, (volume, grid, material) in enumerate(inputs):
+            self.update_stats("vdb_ewa", "volume %s (%d of %d)" % (volume.name, index + 1, len(inputs)))
 
             def progress(percent, index=index):
-                self.report_progress((index + percent / 100.0) / len(volumes))
+                self.report_progress((index + percent / 100.0) / len(inputs))
                 return self.cancel_requested()
 
             try:
-                grid, material = merged if isinstance(volume, MergedVolumes) else volume_options(vdb_ewa, volume)
                 call = {**options, **material, **extra}  # the panel's Options override the scene's
                 if os.environ.get("VDB_EWA_VERBOSE"):
                     print("vdb_ewa: volume %s: %s moved by %s: %s" % (volume.name, volume.path, volume.object_to_world, call))
@@ -287,6 +405,7 @@ def register():
 
 
 def unregister():
+    viewport.stop_all()
     _panels(False)
     del bpy.types.Scene.vdb_ewa
     for cls in reversed(_CLASSES):

@@ -13,7 +13,7 @@ FOUR_PI = 4.0 * math.pi
 class Volume:
     """One volume object to render: its grid's file, grid names, transform and material options."""
 
-    def __init__(self, name, path, object_to_world, density_grid, options, depth, motion=None):
+    def __init__(self, name, path, object_to_world, density_grid, options, depth, motion=None, centre=(0.0, 0.0, 0.0)):
         self.name = name
         self.path = path
         self.object_to_world = object_to_world  # 4x4 nested lists, column vectors
@@ -21,6 +21,7 @@ class Volume:
         self.options = options  # material options; scatter/absorb/blackbody per grid value per *world* unit
         self.depth = depth  # of its centre from the camera, to composite several front to back
         self.motion = motion  # motion blur: dict(velocity_grid, velocity_unit, velocity_scale), or None
+        self.centre = centre  # its object's origin in the world, to order several from another eye
 
 
 def resolution(scene):
@@ -29,31 +30,42 @@ def resolution(scene):
     return max(1, int(r.resolution_x * r.resolution_percentage / 100)), max(1, int(r.resolution_y * r.resolution_percentage / 100))
 
 
-def camera_options(scene, warnings):
-    """The scene camera as translate, rotate (degrees, about x then y then z: Blender's XYZ Euler;
-    both cameras look down their local -z with +y up), the lens and the clip range."""
-    cam = scene.camera
+def placement_options(world_from_camera):
+    """A camera at @a world_from_camera as translate and rotate (degrees, about x then y then z:
+    Blender's XYZ Euler; both cameras look down their local -z with +y up). Its scale is dropped."""
+    location, rotation, _ = world_from_camera.decompose()
+    return dict(translate=tuple(location), rotate=tuple(math.degrees(a) for a in rotation.to_euler('XYZ')))
+
+
+def lens_options(kind, width, height, lens, sensor_width, sensor_height, sensor_fit, ortho_scale, zoom=1.0):
+    """Blender's projection onto an image of @a width x @a height pixels as vdb_ewa's: focal and
+    aperture (mm; aperture the horizontal film width) for 'PERSP', camera="ortho" and frame (the
+    horizontal extent, scene units) for 'ORTHO'. The sensor (or orthographic scale) spans the
+    image side Blender's sensor fit picks (Auto: the longer one), times @a zoom (Blender's view
+    zoom: 2 in a 3D view, the camera zoom's factor through a camera)."""
+    aspect = width / height
+    horizontal = sensor_fit == 'HORIZONTAL' or (sensor_fit == 'AUTO' and width >= height)
+    if kind == 'ORTHO':
+        return dict(camera="ortho", frame=zoom * (ortho_scale if horizontal else ortho_scale * aspect))
+    sensor = zoom * (sensor_width if sensor_fit != 'VERTICAL' else sensor_height)
+    return dict(focal=lens, aperture=sensor if horizontal else sensor * aspect)
+
+
+def camera_options(scene, warnings, camera=None, size=None, zoom=1.0):
+    """A camera object (the scene camera by default) as translate, rotate, the lens and the clip
+    range, on an image of @a size pixels (the scene's resolution by default) spanning @a zoom
+    times its sensor (a 3D view through the camera: viewport_camera_options)."""
+    cam = camera or scene.camera
     if cam is None or cam.type != 'CAMERA':
         raise ValueError("the scene has no camera")
-    width, height = resolution(scene)
-    location, rotation, _ = cam.matrix_world.decompose()
-    euler = rotation.to_euler('XYZ')
+    width, height = size or resolution(scene)
+    location = cam.matrix_world.translation
     data = cam.data
-    options = dict(res="%dx%d" % (width, height), translate=tuple(location), rotate=tuple(math.degrees(a) for a in euler),
-                   near=data.clip_start, far=data.clip_end)
-    aspect = width / height
-    # Which image side the sensor (or orthographic scale) spans: Blender's sensor fit.
-    fit = data.sensor_fit
-    horizontal = fit == 'HORIZONTAL' or (fit == 'AUTO' and width >= height)
-    if data.type == 'ORTHO':
-        options["camera"] = "ortho"
-        options["frame"] = data.ortho_scale if horizontal else data.ortho_scale * aspect
-    elif data.type == 'PERSP':
-        sensor = data.sensor_width if fit != 'VERTICAL' else data.sensor_height
-        options["focal"] = data.lens
-        options["aperture"] = sensor if horizontal else sensor * aspect
-    else:
+    options = dict(res="%dx%d" % (width, height), near=data.clip_start, far=data.clip_end, **placement_options(cam.matrix_world))
+    if data.type not in ('ORTHO', 'PERSP'):
         raise ValueError("camera %s: %s cameras are not supported (perspective and orthographic are)" % (cam.name, data.type))
+    options.update(lens_options(data.type, width, height, data.lens, data.sensor_width, data.sensor_height, data.sensor_fit,
+                                data.ortho_scale, zoom))
     if data.shift_x or data.shift_y:
         warnings.append("camera %s: lens shift is ignored" % cam.name)
     if scene.render.pixel_aspect_x != scene.render.pixel_aspect_y:
@@ -74,6 +86,48 @@ def camera_options(scene, warnings):
                 options["focus_distance"] = focus
             else:
                 warnings.append("camera %s: the focus lies behind the camera; focused on the point looked at" % cam.name)
+    return options
+
+
+# Blender's 3D view: a 36 mm sensor (Auto fit) behind the view's lens, at twice a camera's zoom
+# (BKE_camera_params_from_view3d, CAMERA_PARAM_ZOOM_INIT_PERSP): 72 mm of film across the longer side.
+VIEW_SENSOR = 36.0
+VIEW_ZOOM = 2.0
+
+
+def camera_view_zoom(view_camera_zoom):
+    """The part of the camera's sensor a 3D view through it spans, from its View Camera Zoom
+    (-30 to 600): 1 / Blender's BKE_screen_view3d_zoom_to_fac, (sqrt 2 + zoom / 50)^2 / 4;
+    2 at zoom 0 (the camera frame half the view wide), 1 at 50 (2 - sqrt 2) = 29.3."""
+    return 4.0 / (math.sqrt(2.0) + view_camera_zoom / 50.0) ** 2
+
+
+def viewport_camera_options(scene, space, region_data, width, height, warnings):
+    """A 3D view (its RegionView3D, the View3D space's lens and clip range) on a region of @a width
+    x @a height pixels as vdb_ewa's camera keywords, the whole region as Blender draws it.
+    Perspective: the view's placement, VIEW_SENSOR x VIEW_ZOOM mm of film behind the lens.
+    Orthographic: Blender's scale, the view distance x VIEW_SENSOR / lens at VIEW_ZOOM, and its clip
+    range, [-clip_end / 2, clip_end / 2] about the view point (the eye is moved back by half of it).
+    Through the camera: camera_options at the region's size, the sensor spanned as the view's
+    camera zoom draws it (camera_view_zoom); the camera frame's offset (a lens shift) is ignored,
+    with a warning."""
+    if region_data.view_perspective == 'CAMERA':
+        camera = space.camera if space.use_local_camera and space.camera else scene.camera
+        if tuple(region_data.view_camera_offset) != (0.0, 0.0):
+            warnings.append("the camera frame's offset in the view is ignored: the view is rendered centred on the camera")
+        return camera_options(scene, warnings, camera, (width, height), camera_view_zoom(region_data.view_camera_zoom))
+    world_from_view = region_data.view_matrix.inverted()
+    options = dict(res="%dx%d" % (width, height))
+    if region_data.view_perspective == 'ORTHO':
+        depth = 0.5 * space.clip_end
+        options.update(placement_options(world_from_view @ mathutils.Matrix.Translation((0.0, 0.0, depth))))
+        options.update(near=1e-6 * depth, far=2.0 * depth)
+        options.update(lens_options('ORTHO', width, height, space.lens, VIEW_SENSOR, VIEW_SENSOR, 'AUTO',
+                                    region_data.view_distance * VIEW_SENSOR / space.lens, VIEW_ZOOM))
+    else:
+        options.update(placement_options(world_from_view))
+        options.update(near=space.clip_start, far=space.clip_end)
+        options.update(lens_options('PERSP', width, height, space.lens, VIEW_SENSOR, VIEW_SENSOR, 'AUTO', 0.0, VIEW_ZOOM))
     return options
 
 
@@ -255,8 +309,9 @@ def half_voxel(volume, grid_name):
     return mathutils.Vector((0.0, 0.0, 0.0)) if grid is None else grid.matrix_object.to_3x3() @ mathutils.Vector((0.5, 0.5, 0.5))
 
 
-def volumes(depsgraph, camera_location, warnings):
-    """Every visible volume object with an OpenVDB file, nearest first."""
+def volumes(depsgraph, camera_location, warnings, motion_blur=True):
+    """Every visible volume object with an OpenVDB file, nearest first; without their velocity
+    grids where @a motion_blur is False (the viewport)."""
     found = []
     for instance in _instances(depsgraph, 'VOLUME'):
         obj = instance.object
@@ -272,6 +327,7 @@ def volumes(depsgraph, camera_location, warnings):
         object_to_world = [[m[r][c] for c in range(4)] for r in range(4)]
         centre = m.translation
         depth = (centre - camera_location).length
-        found.append(Volume(obj.name, path, object_to_world, grid, options, depth, volume_motion(obj, depsgraph.scene, warnings)))
+        motion = volume_motion(obj, depsgraph.scene, warnings) if motion_blur else None
+        found.append(Volume(obj.name, path, object_to_world, grid, options, depth, motion, tuple(centre)))
     found.sort(key=lambda v: v.depth)
     return found
