@@ -1033,47 +1033,44 @@ print(json.dumps([{{k: statistics.median(v) for k, v in times.items()}}, rays]))
 
 def cmd_soak(args):
     """Issue 55's memory soak: one scene, --moves camera moves (an orbit, 3.6 degrees a move);
-    the process's resident memory after the first move and every tenth (/proc/self/statm, after
-    malloc_trim) and what malloc holds allocated (mallinfo2: blocks in use, without the frame's
-    own mappings of 4 MiB and more, which are unmapped when freed), its peak against a cold
-    render's, and both after the scene is released."""
+    the process's resident memory (/proc/self/statm, after malloc_trim) after the first move
+    and every tenth, its peak against a cold render's, and after the scene is released, beside
+    the same process after cold renders alone (before the scene and after it: a frame's
+    resident memory varies by 10-20 MB with what it sees)."""
     for name in args.scenes.split(","):
-        label, (cold_peak, after, released, peak) = scene_script(args, name, f"""
+        label, (cold_peak, moves, levels, peak) = scene_script(args, name, f"""
 import ctypes, gc, math, resource
-class MallInfo2(ctypes.Structure):
-    _fields_ = [(n, ctypes.c_size_t) for n in ("arena", "ordblks", "smblks", "hblks", "hblkhd", "usmblks", "fsmblks", "uordblks",
-                                              "fordblks", "keepcost")]
-libc = ctypes.CDLL("libc.so.6")
-libc.mallinfo2.restype = MallInfo2
 def resident():
-    libc.malloc_trim(0)  # what malloc keeps for later goes back first
-    rss = int(open("/proc/self/statm").read().split()[1]) * resource.getpagesize() / 2**20
-    m = libc.mallinfo2()
-    return rss, (m.uordblks + m.hblkhd) / 2**20  # resident; allocated and not freed (malloc's own count)
+    ctypes.CDLL("libc.so.6").malloc_trim(0)  # what malloc keeps for later goes back first
+    return int(open("/proc/self/statm").read().split()[1]) * resource.getpagesize() / 2**20
 c = vdb_ewa.render(grid, **opts, **before)
 cold_peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 for view in (after, before):  # the process's own growth over its first renders (thread arenas, pools)
     c = vdb_ewa.render(grid, **opts, **view)
 del c
-loaded = resident()
+levels = [resident()]
 scene = vdb_ewa.Scene(grid, **opts)
 eye, at = before["translate"], before["lookat"]
 r, h = math.hypot(eye[0] - at[0], eye[2] - at[2]), math.atan2(eye[0] - at[0], eye[2] - at[2])
-after = []
+moves = []
 for k in range({args.moves}):
     a = h + math.radians(3.6 * k)
     scene.render(translate=(at[0] + r * math.sin(a), eye[1], at[2] + r * math.cos(a)), lookat=at)
     if k == 0 or (k + 1) % 10 == 0:
-        after.append((k + 1, resident()))
+        moves.append((k + 1, resident()))
 peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 del scene; gc.collect()
-print(json.dumps([cold_peak, after, (loaded, resident()), peak]))
+levels.append(resident())
+for view in (after, before):
+    vdb_ewa.render(grid, **opts, **view)
+levels.append(resident())
+print(json.dumps([cold_peak, moves, levels, peak]))
 """)
         print(f"# {label}: one vdb_ewa.Scene, {args.moves} camera moves (3.6 degrees each), {args.res}, --quality {args.quality}")
         print(f"a cold render's peak: {cold_peak:.0f} MB; the scene's: {peak:.0f} MB ({peak / cold_peak:.2f}x)")
-        print("after move: " + ", ".join(f"{k}: {mb[0]:.0f} MB resident, {mb[1]:.1f} MB allocated" for k, mb in after))
-        print(f"before the scene (the grid loaded, three cold renders done): {released[0][0]:.0f} MB resident, {released[0][1]:.1f} MB "
-              f"allocated; after the scene is released: {released[1][0]:.0f} MB resident, {released[1][1]:.1f} MB allocated")
+        print("resident after move: " + ", ".join(f"{k}: {mb:.0f} MB" for k, mb in moves))
+        print(f"resident after three cold renders, before the scene: {levels[0]:.0f} MB; after the scene is released: {levels[1]:.0f} MB; "
+              f"after two more cold renders: {levels[2]:.0f} MB")
 
 
 def cmd_turntable(args):

@@ -5,11 +5,15 @@ motion blur; a camera with depth of field aimed at a point; a sun and a spot lig
 render result as a float EXR and as a PNG (Standard view)."""
 import json
 import math
+import os
 import sys
 import time
 
 import bpy
 import mathutils
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from blender_materials import principled_volume  # noqa: E402
 
 params = json.load(open(sys.argv[sys.argv.index("--") + 1]))
 
@@ -52,24 +56,6 @@ scene.render.fps, scene.render.fps_base = params["fps"], 1.0
 obj = bpy.data.objects.new("asset", moving)
 scene.collection.objects.link(obj)
 obj.matrix_world = mathutils.Matrix(params["object_to_world"])
-def principled_volume(name, density, color, absorption_color):
-    """A material of one Principled Volume reading the density grid."""
-    material = bpy.data.materials.new(name)
-    material.use_nodes = True
-    nodes = material.node_tree.nodes
-    for node in list(nodes):
-        if node.type != "OUTPUT_MATERIAL":
-            nodes.remove(node)
-    principled = nodes.new("ShaderNodeVolumePrincipled")
-    principled.inputs["Density"].default_value = density
-    principled.inputs["Color"].default_value = (*color, 1.0)
-    principled.inputs["Absorption Color"].default_value = (*absorption_color, 1.0)
-    principled.inputs["Density Attribute"].default_value = params["grid"]
-    output = next(n for n in nodes if n.type == "OUTPUT_MATERIAL")
-    material.node_tree.links.new(principled.outputs["Volume"], output.inputs["Volume"])
-    return material
-
-
 # A second volume object of the same asset, still, interpenetrating the first, with a material
 # of its own.
 volume = bpy.data.volumes.new("asset")
@@ -77,8 +63,8 @@ volume.filepath = params["asset"]
 second = bpy.data.objects.new("asset.second", volume)
 scene.collection.objects.link(second)
 second.matrix_world = mathutils.Matrix(params["second_object_to_world"])
-volume.materials.append(principled_volume("volume.second", params["second_density"], params["second_color"], params["second_absorption_color"]))
-moving.materials.append(principled_volume("volume", params["density"], params["color"], params["absorption_color"]))
+volume.materials.append(principled_volume("volume.second", params["grid"], params["second_density"], params["second_color"], params["second_absorption_color"]))
+moving.materials.append(principled_volume("volume", params["grid"], params["density"], params["color"], params["absorption_color"]))
 
 camera_data = bpy.data.cameras.new("camera")
 camera_data.lens = params["focal"]

@@ -21,12 +21,8 @@ import subprocess
 import sys
 import time
 
-SKIP = 77
+from driver_support import read_image, skip
 
-
-def skip(message):
-    print("SKIP: " + message)
-    sys.exit(SKIP)
 
 
 try:
@@ -38,13 +34,7 @@ except ImportError as e:
 
 
 def read_rgba(path):
-    image = oiio.ImageInput.open(path)
-    if image is None:
-        sys.exit("FAIL: cannot read %s (%s)" % (path, oiio.geterror()))
-    spec = image.spec()
-    pixels = np.asarray(image.read_image(format="float")).reshape(spec.height, spec.width, spec.nchannels)
-    names = list(spec.channelnames)
-    image.close()
+    pixels, names = read_image(path)
     return np.stack([pixels[..., names.index(c)] for c in "RGBA"], axis=-1)
 
 

@@ -29,7 +29,8 @@ import subprocess
 import sys
 import time
 
-SKIP = 77
+from driver_support import read_image as read, skip
+
 
 # Thresholds, from measured values (docs/blender.md#the-rendered-viewport has them).
 MIN_COVERAGE = 0.02  # of the view's pixels off its background (measured 0.14 to 0.25; 0 when view_draw draws nothing)
@@ -42,27 +43,11 @@ LINE = re.compile(r"^vdb_ewa viewport: (\d+)x(\d+) (draft/\d+|draft|default|high
                   r"\(reused: (\d+) light maps, (\d+) light rays\)$")
 
 
-def skip(message):
-    print("SKIP: " + message)
-    sys.exit(SKIP)
-
-
 try:
     import numpy as np
     import OpenImageIO as oiio
 except ImportError as e:
     skip("needs numpy and OpenImageIO for Python (python3-openimageio): %s" % e)
-
-
-def read(path):
-    image = oiio.ImageInput.open(path)
-    if image is None:
-        sys.exit("FAIL: cannot read %s (%s)" % (path, oiio.geterror()))
-    spec = image.spec()
-    pixels = np.asarray(image.read_image(format="float")).reshape(spec.height, spec.width, spec.nchannels)
-    names = list(spec.channelnames)
-    image.close()
-    return pixels, names
 
 
 def srgb_encode(linear):

@@ -25,7 +25,9 @@ bpy.context.preferences.view.show_splash = False  # it would cover the view (rea
 # A plain background (the theme's radial gradient otherwise), to composite F12's image over.
 bpy.context.preferences.themes[0].view_3d.space.gradients.background_type = 'SINGLE_COLOR'
 sys.path.insert(0, params["addon_dir"])
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import vdb_ewa_render  # noqa: E402
+from blender_materials import principled_volume  # noqa: E402
 vdb_ewa_render.register()
 RECORDS = vdb_ewa_render.viewport.RECORDS
 
@@ -42,18 +44,7 @@ data = bpy.data.volumes.new("pyro")
 data.filepath = params["asset"]
 volume = bpy.data.objects.new("pyro", data)
 scene.collection.objects.link(volume)
-material = bpy.data.materials.new("smoke")
-material.use_nodes = True
-nodes = material.node_tree.nodes
-for node in list(nodes):
-    if node.type != "OUTPUT_MATERIAL":
-        nodes.remove(node)
-principled = nodes.new("ShaderNodeVolumePrincipled")
-principled.inputs["Density"].default_value = params["density"]
-principled.inputs["Color"].default_value = (*params["color"], 1.0)
-principled.inputs["Density Attribute"].default_value = params["grid"]
-material.node_tree.links.new(principled.outputs["Volume"], next(n for n in nodes if n.type == "OUTPUT_MATERIAL").inputs["Volume"])
-data.materials.append(material)
+data.materials.append(principled_volume("smoke", params["grid"], params["density"], params["color"]))
 
 sun_data = bpy.data.lights.new("sun", "SUN")
 sun_data.energy = params["sun_strength"]
