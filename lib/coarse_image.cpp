@@ -30,5 +30,13 @@ RenderSettings coarseSettings(const RenderSettings& asked)
     return coarse;
 }
 
+bool coarseLightsAreAsked(const RenderSettings& asked)
+{
+    // What coarseSettings changes of what the light maps read (detail::lightKey): the step and
+    // the spacing of their rays.
+    const RenderSettings coarse = coarseSettings(asked);
+    return coarse.shadow.step == asked.shadow.step && coarse.shadow.resolution == asked.shadow.resolution;
+}
+
 } // namespace detail
 } // namespace vdb_ewa

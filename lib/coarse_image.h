@@ -29,5 +29,9 @@ int coarseScale(const Camera& camera);
 /// (docs/api.md#progressive-refinement).
 RenderSettings coarseSettings(const RenderSettings& asked);
 
+/// True where the coarse image's light maps are the asked image's (asked for with draft's light
+/// maps, as `--quality draft` is): the two images share one set.
+bool coarseLightsAreAsked(const RenderSettings& asked);
+
 } // namespace detail
 } // namespace vdb_ewa

@@ -123,7 +123,8 @@ Frame Scene::Impl::renderCoarse(const RenderSettings& with, const Camera& camera
 {
     PassRequest coarsePasses = passes;
     coarsePasses.deep = false; // deep samples have no interpolation
-    Frame big = render(detail::coarseSettings(with), camera.withPixelSize(scale), coarsePasses, &stats, interrupter, coarseLights);
+    detail::LightCache& kept = detail::coarseLightsAreAsked(with) ? lights : coarseLights;
+    Frame big = render(detail::coarseSettings(with), camera.withPixelSize(scale), coarsePasses, &stats, interrupter, kept);
     stats.coarseScale = scale;
     return detail::upsampled(std::move(big), scale, camera.width(), camera.height(), coarsePasses);
 }

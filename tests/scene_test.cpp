@@ -313,3 +313,22 @@ TEST(Scene, ACancelBetweenTheImagesStopsAtOnce)
     EXPECT_EQ(calls, 1);
     expectSameFrame(scene.render(camera, somePasses()), coldFrame(cloud, camera, RenderSettings{}), "after a cancel");
 }
+
+// Asked for with draft's light maps (--quality draft), the coarse image's maps are the asked
+// image's: one set, marched once, the asked image reading what the coarse one marched.
+TEST(Scene, ADraftSceneSharesOneSetOfLightMapsBetweenItsImages)
+{
+    const GridSource cloud = makeSampleGrid(SampleGrid::Cloud, 0.05);
+    const Camera camera = cloudCamera(cloud, 128, 96);
+    const RenderSettings draft = RenderSettings::preset(Quality::Draft);
+    ASSERT_TRUE(detail::coarseLightsAreAsked(draft));
+    ASSERT_FALSE(detail::coarseLightsAreAsked(RenderSettings{}));
+    Scene scene(cloud, draft);
+    std::vector<RenderStats> stats;
+    const Frame frame = scene.render(camera, draft, [&](const Frame&, const RenderStats& s) { stats.push_back(s); }, somePasses());
+    ASSERT_EQ(stats.size(), 2u);
+    EXPECT_GT(stats[0].lightRaysMarched, 0u);
+    EXPECT_GE(stats[1].lightMapsReused, 1u) << "the asked image reads the maps the coarse one made";
+    EXPECT_GT(stats[1].lightRaysReused, 0u);
+    expectSameFrame(frame, coldFrame(cloud, camera, draft), "a draft scene's asked image");
+}
