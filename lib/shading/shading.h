@@ -10,5 +10,6 @@
 #include "shading/light_map.h"
 #include "shading/material_mix.h"
 #include "shading/optical_model.h"
+#include "shading/phase_function.h"
 #include "shading/point_light_map.h"
 #include "shading/shadow_transmittance.h"
