@@ -50,18 +50,9 @@ volume = bpy.data.volumes.new("asset")
 volume.filepath = p["asset"]
 obj = bpy.data.objects.new("asset", volume)
 scene.collection.objects.link(obj)
-material = bpy.data.materials.new("cloud")
-material.use_nodes = True
-nodes = material.node_tree.nodes
-for node in list(nodes):
-    if node.type != "OUTPUT_MATERIAL":
-        nodes.remove(node)
-principled = nodes.new("ShaderNodeVolumePrincipled")
-principled.inputs["Density"].default_value = p["density"]
-principled.inputs["Density Attribute"].default_value = p["grid"]
-output = next(n for n in nodes if n.type == "OUTPUT_MATERIAL")
-material.node_tree.links.new(principled.outputs["Volume"], output.inputs["Volume"])
-volume.materials.append(material)
+sys.path.insert(0, p["materials_dir"])
+from blender_materials import principled_volume
+volume.materials.append(principled_volume("cloud", p["grid"], p["density"], (0.5, 0.5, 0.5)))  # the node's default colour
 camera_data = bpy.data.cameras.new("camera")
 camera_data.lens, camera_data.sensor_width = 50.0, 36.0
 camera_data.clip_start, camera_data.clip_end = 0.1, 1e5
@@ -115,7 +106,7 @@ def main():
 
     def render(name, **params):
         p = dict(asset=os.path.abspath(args.asset), grid=args.grid, res=[w, h], density=args.density, eye=eye, target=target,
-                 addon_dir=os.path.join(ROOT, "plugins", "blender"), out=os.path.join(tmp, name + ".exr"), **params)
+                 addon_dir=os.path.join(ROOT, "plugins", "blender"), materials_dir=os.path.join(ROOT, "tests", "blender"), out=os.path.join(tmp, name + ".exr"), **params)
         with open(os.path.join(tmp, name + ".json"), "w") as f:
             json.dump(p, f)
         r = subprocess.run(["blender", "-b", "--factory-startup", "--python", script, "--", os.path.join(tmp, name + ".json")],

@@ -423,19 +423,7 @@ Image Renderer::render(const GridSource& grid, const Camera& camera, RenderStats
 Frame Renderer::renderFrame(const GridSource& grid, const Camera& camera, const PassRequest& passes,
     RenderStats* statsOut, Interrupter* interrupter) const
 {
-    // The interrupter's start() and end() bracket the render, also when it throws.
-    struct Bracket
-    {
-        Interrupter* interrupter;
-        Bracket(Interrupter* i, const std::string& name) : interrupter(i)
-        {
-            if (interrupter) interrupter->start(name.c_str());
-        }
-        ~Bracket()
-        {
-            if (interrupter) interrupter->end();
-        }
-    } bracket(interrupter, grid.name());
+    const detail::InterrupterBracket bracket(interrupter, grid.name());
     detail::Progress progress(interrupter);
     RenderStats stats;
     Frame frame;

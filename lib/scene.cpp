@@ -5,6 +5,7 @@
 #include "coarse_image.h"
 #include "frame_lights.h"
 #include "pixel_size.h"
+#include "support/progress.h"
 
 #include <mutex>
 
@@ -95,27 +96,21 @@ Frame Scene::render(const Camera& camera, const RenderSettings& settings, const 
 {
     settings.validate();
     const std::lock_guard<std::mutex> lock(mImpl->rendering);
-    if (interrupter) interrupter->start(mImpl->grid.name().c_str());
-    try {
-        const int scale = detail::coarseScale(camera);
-        if (scale > 1) {
-            PartOfProgress part(interrupter, 0, kCoarseShare);
-            RenderStats coarseStats;
-            const Frame coarse = mImpl->renderCoarse(settings, camera, scale, passes, coarseStats, interrupter ? &part : nullptr);
-            if (progressive) progressive(coarse, coarseStats);
-            if (interrupter && (interrupter->cancelled() || interrupter->wasInterrupted(kCoarseShare))) throw Cancelled();
-        }
-        PartOfProgress part(interrupter, scale > 1 ? kCoarseShare : 0, 100);
-        RenderStats ownStats;
-        RenderStats& out = stats ? *stats : ownStats;
-        Frame frame = mImpl->render(settings, camera, passes, &out, interrupter ? &part : nullptr, mImpl->lights);
-        if (progressive) progressive(frame, out);
-        if (interrupter) interrupter->end();
-        return frame;
-    } catch (...) {
-        if (interrupter) interrupter->end();
-        throw;
+    const detail::InterrupterBracket bracket(interrupter, mImpl->grid.name());
+    const int scale = detail::coarseScale(camera);
+    if (scale > 1) {
+        PartOfProgress part(interrupter, 0, kCoarseShare);
+        RenderStats coarseStats;
+        const Frame coarse = mImpl->renderCoarse(settings, camera, scale, passes, coarseStats, interrupter ? &part : nullptr);
+        if (progressive) progressive(coarse, coarseStats);
+        if (interrupter && (interrupter->cancelled() || interrupter->wasInterrupted(kCoarseShare))) throw Cancelled();
     }
+    PartOfProgress part(interrupter, scale > 1 ? kCoarseShare : 0, 100);
+    RenderStats ownStats;
+    RenderStats& out = stats ? *stats : ownStats;
+    Frame frame = mImpl->render(settings, camera, passes, &out, interrupter ? &part : nullptr, mImpl->lights);
+    if (progressive) progressive(frame, out);
+    return frame;
 }
 
 Frame Scene::Impl::renderCoarse(const RenderSettings& with, const Camera& camera, int scale, const PassRequest& passes, RenderStats& stats,

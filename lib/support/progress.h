@@ -9,9 +9,30 @@
 #include <chrono>
 #include <cstdint>
 #include <mutex>
+#include <string>
 
 namespace vdb_ewa {
 namespace detail {
+
+/// The interrupter's start() and end() around a render, end() also when it throws (the
+/// Renderer's frame, a Scene's progressive render).
+class InterrupterBracket
+{
+public:
+    InterrupterBracket(Interrupter* interrupter, const std::string& name) : mInterrupter(interrupter)
+    {
+        if (mInterrupter) mInterrupter->start(name.c_str());
+    }
+    ~InterrupterBracket()
+    {
+        if (mInterrupter) mInterrupter->end();
+    }
+    InterrupterBracket(const InterrupterBracket&) = delete;
+    InterrupterBracket& operator=(const InterrupterBracket&) = delete;
+
+private:
+    Interrupter* mInterrupter;
+};
 
 class Progress
 {

@@ -209,9 +209,9 @@ class Session:
         else:
             quality = str(request.options.get("quality", "default"))
         result = Image(pixels, quality, coarse, request.requested,
-                       sum(int(layer.stats.get("light_maps_reused", 0)) for layer in layers),
-                       sum(int(layer.stats.get("light_rays_reused", 0)) for layer in layers),
-                       sum(int(layer.stats.get("light_rays_marched", 0)) for layer in layers))
+                       sum(layer.stats["light_maps_reused"] for layer in layers),
+                       sum(layer.stats["light_rays_reused"] for layer in layers),
+                       sum(layer.stats["light_rays_marched"] for layer in layers))
         with self._lock:
             if request is self._request:
                 self._image, self._error, self.changed = result, None, True
