@@ -370,6 +370,7 @@ std::shared_ptr<RenderedFrame> finishCall(PreparedCall&& call, const GridSource&
     };
     const PassRequest passes = call.options->options.output().passes();
     RenderStats stats;
+    bool coarseCancelled = false; // the coarse frame's callback answered True
     Frame working = renderOnWorker(
         [&](CallInterrupter& interrupter) {
             // The coarse image goes to this thread; the last, the one returned, is handed over below.
@@ -378,7 +379,10 @@ std::shared_ptr<RenderedFrame> finishCall(PreparedCall&& call, const GridSource&
             };
             return renderFrame(camera, passes, stats, interrupter, progressive.is_none() ? ProgressiveCallback{} : post);
         },
-        progress, cancel, [&](Frame&& f, RenderStats&& s) { return handOver(frameOf(std::move(f), std::move(s))); });
+        progress, cancel, [&](Frame&& f, RenderStats&& s) { return coarseCancelled = handOver(frameOf(std::move(f), std::move(s))); });
+    // The asked image may be done before this thread hands over the coarse one (a small frame):
+    // a True for the coarse frame cancels all the same.
+    if (coarseCancelled) throw Cancelled();
     std::shared_ptr<RenderedFrame> result = frameOf(std::move(working), std::move(stats));
     handOver(result); // the render is done: what it answers no longer matters
     return result;

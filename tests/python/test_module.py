@@ -323,6 +323,9 @@ class Module(unittest.TestCase):
         # True for the coarse frame cancels the rest; a frame render() returned stays as it was.
         with self.assertRaises(vdb_ewa.Cancelled):
             scene.render(progressive=lambda f: f.coarse, **view)
+        # Answered after the asked image is done (a slow callback, a busy machine), True still cancels.
+        with self.assertRaises(vdb_ewa.Cancelled):
+            scene.render(progressive=lambda f: time.sleep(0.5) or f.coarse, **view)
         with self.assertRaisesRegex(vdb_ewa.ValueError, "progressive: expected a callable"):
             scene.render(progressive=3)
         with self.assertRaisesRegex(ZeroDivisionError, ""):
