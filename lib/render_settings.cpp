@@ -16,6 +16,7 @@ constexpr double kMaxCoefficient = 1e6;
 /// Point and spot lights: intensities (radiance at one world unit) and world positions.
 constexpr double kMaxPointLightIntensity = 1e12, kMaxPointLightDistance = 1e12;
 constexpr double kMinMemoryBudget = 64.0 * 1024 * 1024;
+constexpr int kMaxOctaves = 16, kMaxPathSamples = 1 << 20, kMaxBounces = 1024;
 bool coefficient3(const Vec3d& v)
 {
     return finite3(v) && glm::all(glm::greaterThanEqual(v, Vec3d(0.0))) && glm::all(glm::lessThanEqual(v, Vec3d(kMaxCoefficient)));
@@ -76,6 +77,13 @@ void RenderSettings::validate() const
             fail("--emission needs --absorb + --scatter > 0 in every channel that emits (the slab update divides by the optical depth)");
         }
     }
+    if (!(scattering.anisotropy > -1.0 && scattering.anisotropy < 1.0)) fail("--anisotropy must be in (-1, 1)");
+    if (!(scattering.octaves >= 1 && scattering.octaves <= kMaxOctaves)) fail("--multiple-scattering must be in [1, " + std::to_string(kMaxOctaves) + "] octaves");
+    if (!(scattering.octaveScatter >= 0.0 && scattering.octaveScatter <= 1.0)) fail("--octave-scatter must be in [0, 1]");
+    if (!(scattering.octaveExtinction >= 0.0 && scattering.octaveExtinction <= 1.0)) fail("--octave-extinction must be in [0, 1]");
+    if (!(scattering.octaveAnisotropy >= 0.0 && scattering.octaveAnisotropy <= 1.0)) fail("--octave-anisotropy must be in [0, 1]");
+    if (!(pathSamples >= 1 && pathSamples <= kMaxPathSamples)) fail("--samples must be in [1, " + std::to_string(kMaxPathSamples) + "] paths per pixel");
+    if (!(bounces >= 0 && bounces <= kMaxBounces)) fail("--bounces must be in [0, " + std::to_string(kMaxBounces) + "]");
     if (!(shadow.gain >= 0.0) || !std::isfinite(shadow.gain)) fail("--gain must be finite and >= 0");
     if (!(cutoff >= 0.0 && cutoff < 1.0)) fail("--cutoff must be in [0, 1)");
     if (!(shadow.step >= 1e-3) || !std::isfinite(shadow.step)) fail("--shadowstep must be finite and >= 0.001 voxels");

@@ -136,7 +136,7 @@ void Renderer::renderLevelSet(const GridSource::Impl& grid, const Camera& camera
     Frame& frame, RenderStats& stats, detail::Progress& progress) const
 {
     if (mSettings.method != Method::Splat) {
-        throw ValueError("--method raymarch renders fog volumes; level sets are rendered with surface splats");
+        throw ValueError("--method " + std::string(mSettings.method == Method::PathTrace ? "pathtrace" : "raymarch") + " renders fog volumes; level sets are rendered with surface splats");
     }
     if (passes.shadow || passes.emission || passes.deep) {
         throw ValueError("level sets give the beauty, Z and transmittance (shadow, emission and deep passes are volume passes)");
@@ -351,6 +351,8 @@ void Renderer::renderGrid(const GridSource::Impl& g, const Camera& camera, const
         renderLevelSet(g, camera, passes, frame, stats, progress);
     } else if (mSettings.method == Method::RayMarch) {
         frame = detail::rayMarchReference(g, camera, mSettings, passes, budgetFor(g, mSettings), stats, &progress);
+    } else if (mSettings.method == Method::PathTrace) {
+        frame = detail::pathTrace(g, camera, mSettings, passes, stats, &progress);
     } else if (mSettings.method == Method::RayMarchGaussian) {
         frame = detail::rayMarchGaussianSum(g, camera, mSettings, passes, stats, &progress);
     } else {

@@ -120,6 +120,12 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
            environment: OptionValue = None,
            environment_lights: Optional[int] = None,
            environment_intensity: Optional[Number] = None,
+           anisotropy: Optional[Number] = None,
+           multiple_scattering: Optional[int] = None,
+           octave_scatter: Optional[Number] = None,
+           octave_extinction: Optional[Number] = None,
+           octave_anisotropy: Optional[Number] = None,
+           bounces: Optional[int] = None,
            gain: Optional[Number] = None,
            cutoff: Optional[Number] = None,
            shadowstep: Optional[Number] = None,
@@ -253,6 +259,22 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
         sphere nearest its direction, in [1, 64] (default: 16)
     environment_intensity (--environment-intensity): multiplies the environment's radiance, >= 0
         (default: 1)
+    anisotropy (--anisotropy): Henyey-Greenstein phase function's g for every light but --ambient, in
+        (-1, 1): > 0 scatters forwards, so a back-lit edge glows (water droplets 0.6-0.9), 0 isotropic,
+        vdb_render's (docs/lighting.md#scattering) (default: 0)
+    multiple_scattering (--multiple-scattering): octaves of multiple scattering, in [1, 16]: octave i
+        scatters each light again with --octave-scatter^i of the scattering, --octave-extinction^i of
+        its optical depth and --octave-anisotropy^i of the anisotropy, from the same light maps: the
+        soft, bright body light scattered many times gives a cloud; 1 single scattering, vdb_render's
+        (docs/lighting.md#multiple-scattering) (default: 1)
+    octave_scatter (--octave-scatter): each octave's scattering relative to the one before, in [0, 1]
+        (default: 0.5)
+    octave_extinction (--octave-extinction): each octave's light optical depth relative to the one
+        before, in [0, 1] (default: 0.8)
+    octave_anisotropy (--octave-anisotropy): each octave's anisotropy relative to the one before, in [0,
+        1] (default: 0.7)
+    bounces (--bounces): --method pathtrace: scattering events after the first a path may have (Cycles'
+        Volume Bounces), in [0, 1024]; 0 single scattering (default: 16)
     gain (--gain): shadow-ray extinction falls as 1/(1 + gain * distance in voxels), finite and >= 0
         (default: 0.2)
     cutoff (--cutoff): density cutoff, and rays stop where |transmittance RGB|^2 < cutoff; range [0, 1)
@@ -265,7 +287,9 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
         has no primary rays and ignores it
     method (--method): splat (EWA volume splatting), raymarch (the reference: ray-marches the trilinear
         field with a shadow ray per sample, as vdb_render; slow) or raymarch-gaussian (diagnostic: ray-
-        marches the splatter's own Gaussian reconstruction and per-kernel shadows) (default: splat)
+        marches the splatter's own Gaussian reconstruction and per-kernel shadows) or pathtrace (the
+        truth of multiple scattering: --samples paths per pixel through the trilinear field, each
+        scattering up to --bounces more times, physical shadows (--gain 0); slowest) (default: splat)
     kernel_sigma (--kernel-sigma): reconstruction kernel std. deviation in voxels, range [0.1, 4]
         (default: 0.5)
     surface_sigma (--surface-sigma): level sets and --iso: surface kernel std. deviation along the
@@ -436,8 +460,9 @@ def render(grid: Union[Grid, str, PathLike], *, progress: Optional[Callable[[int
         (Halton points, rotated per pixel) and averaged: a box filter as a camera's pixel, the anti-
         aliased reference; with motion blur or depth of field the larger of it and --blur-samples, each
         ray also at its own time and lens point; range [1, 4096] (default: 1, the pixel's centre ray)
-    samples (--samples): level sets: vdb_render's rays per pixel; accepted for compatibility, the EWA
-        filter anti-aliases without extra samples (default: 1)
+    samples (--samples): --method pathtrace: paths per pixel, spread over the pixel's square, in [1,
+        1048576] (default: 64); level sets: vdb_render's rays per pixel, accepted for compatibility, the
+        EWA filter anti-aliases without extra samples
     threads (--threads): worker threads, 0 = the CPUs the farm task or container was granted
         ($SLURM_CPUS_PER_TASK, the cgroup's quota), else all cores; range [0, 1024] (default: 0;
         docs/farm.md)

@@ -1119,3 +1119,31 @@ TEST_F(Cli, RandomlyDamagedFilesRenderOrFailCleanly)
     EXPECT_GT(rendered, 0);
     EXPECT_GT(refused, 0);
 }
+
+TEST_F(Cli, ScatteringOptionsRenderAndRefuseOutOfRange)
+{
+    // --anisotropy, --multiple-scattering and --method pathtrace render; -v says them; an
+    // absurd value, or a --gain the path tracer cannot honour, is one line and no file.
+    const std::string out = mDir.file("lit.exr");
+    const std::string args = mGrid + " " + out + " --res 24x16 -translate 0,0,5 ";
+    const CliRun shaped = runCli(mDir, args + "--anisotropy 0.6 --multiple-scattering 3 --octave-extinction 0.7 -v");
+    ASSERT_EQ(shaped.code, 0) << shaped.err;
+    EXPECT_NE(shaped.out.find("--anisotropy 0.6 --multiple-scattering 3 --octave-scatter 0.5 --octave-extinction 0.7 --octave-anisotropy 0.7 --gain"),
+        std::string::npos) << shaped.out;
+    const CliRun traced = runCli(mDir, args + "--method pathtrace --samples 2 --bounces 3 -v");
+    ASSERT_EQ(traced.code, 0) << traced.err;
+    EXPECT_NE(traced.out.find("--gain 0 "), std::string::npos) << traced.out;
+    EXPECT_NE(traced.out.find("--method pathtrace --samples 2 --bounces 3"), std::string::npos) << traced.out;
+    std::filesystem::remove(out);
+    for (const auto& [bad, needle] : {std::pair{"--anisotropy 1", "--anisotropy must be in (-1, 1)"},
+             {"--multiple-scattering 0", "--multiple-scattering must be in [1, 16]"}, {"--octave-scatter 2", "--octave-scatter must be in [0, 1]"},
+             {"--method pathtrace --gain 0.2", "--gain: --method pathtrace's shadows are physical"},
+             {"--method pathtrace --bounces -1", "--bounces must be in [0, 1024]"},
+             {"--method pathtrace --aov shadow", "--method pathtrace renders the beauty, Z and transmittance only"}}) {
+        const CliRun r = runCli(mDir, args + bad);
+        EXPECT_EQ(r.code, 2) << bad;
+        EXPECT_NE(r.err.find(needle), std::string::npos) << r.err;
+        EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+        EXPECT_FALSE(std::filesystem::exists(out)) << bad;
+    }
+}

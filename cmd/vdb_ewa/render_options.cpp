@@ -18,7 +18,8 @@ namespace vdb_ewa::cli {
 namespace {
 
 const Choices<Quality> kQualities = {{"draft", Quality::Draft}, {"default", Quality::Default}, {"high", Quality::High}, {"final", Quality::Final}};
-const Choices<Method> kMethods = {{"splat", Method::Splat}, {"raymarch", Method::RayMarch}, {"raymarch-gaussian", Method::RayMarchGaussian}};
+const Choices<Method> kMethods = {{"splat", Method::Splat}, {"raymarch", Method::RayMarch}, {"raymarch-gaussian", Method::RayMarchGaussian},
+    {"pathtrace", Method::PathTrace}};
 const Choices<AntiAliasing> kAntiAliasing = {{"ewa", AntiAliasing::Ewa}, {"floor", AntiAliasing::Floor}, {"swan", AntiAliasing::Swan}, {"none", AntiAliasing::None}};
 const Choices<ExpEvaluation> kExpEvaluations = {
     {"incremental", ExpEvaluation::Incremental}, {"exact", ExpEvaluation::Exact}, {"table", ExpEvaluation::Table}};
@@ -123,13 +124,31 @@ void RenderOptions::add(CLI::App* app)
         "lights the environment becomes, each from the part of the sphere nearest its direction, in [1, " +
             std::to_string(kMaxLights) + "] (default: 16)");
     mApp->add_option("--environment-intensity", mEnvironmentIntensity, "multiplies the environment's radiance, >= 0 (default: 1)");
+    mApp->add_option("--anisotropy", mAnisotropy,
+        "Henyey-Greenstein phase function's g for every light but --ambient, in (-1, 1): > 0 scatters forwards, so a back-lit "
+        "edge glows (water droplets 0.6-0.9), 0 isotropic, vdb_render's (docs/lighting.md#scattering) (default: 0)");
+    mApp->add_option("--multiple-scattering", mOctaves,
+        "octaves of multiple scattering, in [1, 16]: octave i scatters each light again with --octave-scatter^i of the scattering, "
+        "--octave-extinction^i of its optical depth and --octave-anisotropy^i of the anisotropy, from the same light maps: the "
+        "soft, bright body light scattered many times gives a cloud; 1 single scattering, vdb_render's (docs/lighting.md#multiple-scattering) (default: 1)");
+    mApp->add_option("--octave-scatter", mOctaveScatter,
+        "each octave's scattering relative to the one before, in [0, 1] (default: " + fmt(rs.scattering.octaveScatter) + ")");
+    mApp->add_option("--octave-extinction", mOctaveExtinction,
+        "each octave's light optical depth relative to the one before, in [0, 1] (default: " + fmt(rs.scattering.octaveExtinction) + ")");
+    mApp->add_option("--octave-anisotropy", mOctaveAnisotropy,
+        "each octave's anisotropy relative to the one before, in [0, 1] (default: " + fmt(rs.scattering.octaveAnisotropy) + ")");
+    mApp->add_option("--bounces", mBounces,
+        "--method pathtrace: scattering events after the first a path may have (Cycles' Volume Bounces), in [0, 1024]; 0 single "
+        "scattering (default: " + std::to_string(rs.bounces) + ")");
     mApp->add_option("--gain", mGain, "shadow-ray extinction falls as 1/(1 + gain * distance in voxels), finite and >= 0 (default: " + fmt(rs.shadow.gain) + ")");
     mApp->add_option("--cutoff", mCutoff,
         "density cutoff, and rays stop where |transmittance RGB|^2 < cutoff; range [0, 1) (default: " + fmt(rs.cutoff) + ")");
     mApp->add_option("--shadowstep", mShadowStep, "shadow-ray step in voxels, >= 0.001; the light map's budget may raise it (docs/numerics.md) (default: " + fmt(rs.shadow.step) + ")");
     mApp->add_option("--shadow-res", mShadowRes, "light map: shadow rays every N voxels across the light, interpolated in between; range [0.25, 16] (default: " + fmt(rs.shadow.resolution) + ")");
     mApp->add_option("--step", mStep, "primary-ray step in voxels for --method raymarch, >= 0.001 (default: " + fmt(rs.step) + "); the splatter has no primary rays and ignores it");
-    mApp->add_option("--method", mMethod, "splat (EWA volume splatting), raymarch (the reference: ray-marches the trilinear field with a shadow ray per sample, as vdb_render; slow) or raymarch-gaussian (diagnostic: ray-marches the splatter's own Gaussian reconstruction and per-kernel shadows) (default: splat)");
+    mApp->add_option("--method", mMethod, "splat (EWA volume splatting), raymarch (the reference: ray-marches the trilinear field with a shadow ray per sample, as vdb_render; slow) or raymarch-gaussian (diagnostic: ray-marches the splatter's own Gaussian reconstruction and per-kernel shadows) or pathtrace (the truth of "
+        "multiple scattering: --samples paths per pixel through the trilinear field, each scattering up to --bounces more times, physical shadows "
+        "(--gain 0); slowest) (default: splat)");
     // EWA splatting.
     mApp->add_option("--kernel-sigma", mKernelSigma, "reconstruction kernel std. deviation in voxels, range [0.1, 4] (default: " + fmt(rs.splat.kernelSigma) + ")");
     mApp->add_option("--surface-sigma", mSurfaceSigma, "level sets and --iso: surface kernel std. deviation along the surface in voxels, range [0.1, 4] (default: " + fmt(rs.surface.sigma) + ")");
@@ -286,8 +305,8 @@ void RenderOptions::add(CLI::App* app)
         "a box filter as a camera's pixel, the anti-aliased reference; with motion blur or depth of field the larger of it and "
         "--blur-samples, each ray also at its own time and lens point; range [1, 4096] (default: 1, the pixel's centre ray)");
     mApp->add_option("--samples", mSamples,
-        "level sets: vdb_render's rays per pixel; accepted for compatibility, the EWA filter anti-aliases "
-        "without extra samples (default: 1)");
+        "--method pathtrace: paths per pixel, spread over the pixel's square, in [1, 1048576] (default: " + std::to_string(rs.pathSamples) +
+            "); level sets: vdb_render's rays per pixel, accepted for compatibility, the EWA filter anti-aliases without extra samples");
     mApp->add_option("--threads,--cpus", mThreads,
         "worker threads, 0 = the CPUs the farm task or container was granted ($SLURM_CPUS_PER_TASK, the cgroup's quota), "
         "else all cores; range [0, 1024] (default: 0; docs/farm.md)");
@@ -445,6 +464,17 @@ void RenderOptions::resolve(std::optional<int> frame, CameraSettings& cam, Rende
     if (mIsoOpacity) rs.surface.isoOpacity = *mIsoOpacity;
     if (!mShader.empty()) rs.surface.shader = parseChoice("shader", mShader, kShaders);
     if (mSamples && *mSamples < 1) throw ValueError("--samples must be >= 1");
+    if (mSamples && rs.method == Method::PathTrace) rs.pathSamples = *mSamples;
+    if (mBounces) rs.bounces = *mBounces;
+    if (mAnisotropy) rs.scattering.anisotropy = *mAnisotropy;
+    if (mOctaves) rs.scattering.octaves = *mOctaves;
+    if (mOctaveScatter) rs.scattering.octaveScatter = *mOctaveScatter;
+    if (mOctaveExtinction) rs.scattering.octaveExtinction = *mOctaveExtinction;
+    if (mOctaveAnisotropy) rs.scattering.octaveAnisotropy = *mOctaveAnisotropy;
+    if (rs.method == Method::PathTrace) {
+        if (mGain && *mGain != 0.0) throw ValueError("--gain: --method pathtrace's shadows are physical (gain 0); leave --gain out or give 0");
+        rs.shadow.gain = 0.0;
+    }
     if (!mSimd.empty()) rs.simd = parseChoice("simd", mSimd, kOnOff);
     if (!mCull.empty()) rs.cull = parseChoice("cull", mCull, kOnOff);
     if (mVelocityScale) rs.motionBlur.velocityScale = *mVelocityScale;
@@ -617,8 +647,16 @@ std::vector<Attributes> RenderOptions::resolvedOptions(const GridSource& grid, c
         cameraGroup.emplace_back("focus-distance", fmt(camera.focusDepth()));
     }
     Attributes model{{"absorb", fmt3(rs.medium.absorb)}, {"scatter", fmt3(rs.medium.scatter)}, {"emission", fmt3(rs.medium.emission)},
-        {"light", lightsText({rs.lights.begin(), rs.lights.end() - std::ptrdiff_t(mEnvironmentLightCount)})}, {"ambient", fmt3(rs.ambient)}, {"gain", fmt(rs.shadow.gain)}, {"cutoff", fmt(rs.cutoff)},
-        {"shadowstep", fmt(rs.shadow.step)}, {"shadow-res", fmt(rs.shadow.resolution)}};
+        {"light", lightsText({rs.lights.begin(), rs.lights.end() - std::ptrdiff_t(mEnvironmentLightCount)})}, {"ambient", fmt3(rs.ambient)},
+        {"anisotropy", fmt(rs.scattering.anisotropy)}, {"multiple-scattering", std::to_string(rs.scattering.octaves)}};
+    if (rs.scattering.octaves > 1) {
+        model.emplace_back("octave-scatter", fmt(rs.scattering.octaveScatter));
+        model.emplace_back("octave-extinction", fmt(rs.scattering.octaveExtinction));
+        model.emplace_back("octave-anisotropy", fmt(rs.scattering.octaveAnisotropy));
+    }
+    for (const auto& [k, v] : Attributes{{"gain", fmt(rs.shadow.gain)}, {"cutoff", fmt(rs.cutoff)}, {"shadowstep", fmt(rs.shadow.step)},
+             {"shadow-res", fmt(rs.shadow.resolution)}})
+        model.emplace_back(k, v);
     if (!rs.pointLights.empty()) {
         const auto [points, spots] = pointLightsText(rs.pointLights);
         if (!points.empty()) model.emplace_back("point-light", points);
@@ -669,9 +707,13 @@ std::vector<Attributes> RenderOptions::resolvedOptions(const GridSource& grid, c
         model.emplace_back("motion-light", choiceName(rs.motionBlur.lightFollows, kMotionLights));
     }
     Attributes method{{"method", choiceName(rs.method, kMethods)}};
-    if (rs.method != Method::Splat) method.emplace_back("step", fmt(rs.step));
+    if (rs.method != Method::Splat && rs.method != Method::PathTrace) method.emplace_back("step", fmt(rs.step));
     if (rs.method != Method::Splat && (grid.hasVelocityGrid() || c.fstop > 0.0)) method.emplace_back("blur-samples", std::to_string(rs.blurSamples));
-    if (rs.method != Method::Splat) method.emplace_back("pixel-samples", std::to_string(rs.pixelSamples));
+    if (rs.method != Method::Splat && rs.method != Method::PathTrace) method.emplace_back("pixel-samples", std::to_string(rs.pixelSamples));
+    if (rs.method == Method::PathTrace) {
+        method.emplace_back("samples", std::to_string(rs.pathSamples));
+        method.emplace_back("bounces", std::to_string(rs.bounces));
+    }
     if (rs.method == Method::Splat && c.fstop > 0.0 && !grid.isLevelSet()) method.emplace_back("lens-samples", std::to_string(rs.lensSamples));
     if (!grid.isLevelSet() && !std::isnan(rs.surface.iso)) {
         method.emplace_back("iso", fmt(rs.surface.iso));

@@ -109,7 +109,8 @@ private:
     std::vector<std::string> mLights, mPointLights, mSpotLights, mAddVolumes, mAddVolumeTransforms, mAddVolumeMaterials;
     std::optional<double> mPointLightRadius;
     std::string mAbsorb, mScatter, mEmission, mAmbient, mAa, mMethod, mQuality, mExp, mRenormalize, mTaper, mPrefilter, mPrecision;
-    std::optional<int> mTileSpacing, mRefine, mRefineEmission, mSamples, mPixelSize;
+    std::optional<int> mTileSpacing, mRefine, mRefineEmission, mSamples, mPixelSize, mOctaves, mBounces;
+    std::optional<double> mAnisotropy, mOctaveScatter, mOctaveExtinction, mOctaveAnisotropy;
     std::optional<double> mShadowRes;
     std::optional<double> mIsovalue, mIso, mIsoOpacity;
     std::string mShader, mColor, mEmissionGrid, mTemperatureGrid, mEmissionColor, mEnvironment;

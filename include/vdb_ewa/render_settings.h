@@ -47,7 +47,8 @@ enum class Method
 {
     Splat,           ///< EWA volume splatting (the renderer)
     RayMarch,        ///< reference integrator: ray-march the field (trilinear), a shadow ray per sample
-    RayMarchGaussian ///< diagnostic: ray-march the splatter's Gaussian reconstruction, shadows per kernel
+    RayMarchGaussian, ///< diagnostic: ray-march the splatter's Gaussian reconstruction, shadows per kernel
+    PathTrace         ///< reference: paths through the field (delta tracking), light scattered many times
 };
 
 /// The medium's optical model (vdb_render's names and defaults).
@@ -60,6 +61,23 @@ struct Medium
 
     /// Extinction sigma_t = absorb + scatter: optical depth per unit density per voxel length, RGB.
     Vec3d extinction() const { return absorb + scatter; }
+};
+
+/// How light scatters (docs/lighting.md#scattering): the Henyey-Greenstein phase function and
+/// multiple scattering by octaves (Wrenninge, Kulla and Lundqvist, "Oz: The Great and
+/// Volumetric", SIGGRAPH 2013): octave i scatters the lights again with the scattering scaled by
+/// octaveScatter^i, the lights' optical depth by octaveExtinction^i and the anisotropy by
+/// octaveAnisotropy^i, all read from the same light maps. The defaults are vdb_render's model:
+/// isotropic, single scattering.
+struct Scattering
+{
+    /// Henyey-Greenstein g, in (-1, 1): > 0 scatters forwards (a back-lit edge glows), 0 isotropic.
+    double anisotropy = 0.0;
+    /// Octaves, in [1, 16]: 1 is single scattering.
+    int octaves = 1;
+    double octaveScatter = 0.5;    ///< a, in [0, 1]: each octave's scattering relative to the one before
+    double octaveExtinction = 0.8; ///< b, in [0, 1]: each octave's light optical depth relative to the one before
+    double octaveAnisotropy = 0.7; ///< c, in [0, 1]: each octave's anisotropy relative to the one before
 };
 
 /// One directional light.
@@ -297,6 +315,7 @@ struct VDB_EWA_API RenderSettings
 {
     Method method = Method::Splat;
     Medium medium;              ///< optical model
+    Scattering scattering;      ///< phase function and multiple scattering (every volume's)
     /// Directional lights, each with its own shadow transmittance (a light map each): their
     /// scattered light adds. vdb_render's one light by default; empty: none.
     std::vector<Light> lights = std::vector<Light>(1);
@@ -336,6 +355,12 @@ struct VDB_EWA_API RenderSettings
     /// or depth of field the larger of it and blurSamples, each ray also at its own shutter time
     /// and lens point. 1: the pixel's centre ray (vdb_render's).
     int pixelSamples = 1;
+    /// --method pathtrace: paths per pixel (--samples), spread over the pixel's square as
+    /// pixelSamples' rays are, and averaged.
+    int pathSamples = 64;
+    /// --method pathtrace: scattering events after the first a path may have (Cycles' Volume
+    /// Bounces): 0 is single scattering.
+    int bounces = 16;
 
     // --- Execution ---
     /// Worker threads: N > 0 runs the render in its own tbb::task_arena of N threads; 0 runs it

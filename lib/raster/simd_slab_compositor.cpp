@@ -429,6 +429,8 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
         // material moved by shutter layer @a layer's mean move (shiftOf: with no piece on some
         // layers only, layer 0's is the whole's), the lights summed into @a litOut and
         // @a colouredOut.
+        // The phase function and the octaves, where the light is shaped (shapedLightLayer).
+        const ScatteringOctaves* octaves = shaped() ? &mOptions.model->octaves() : nullptr;
         const auto lightLanes = [&](const Floats (&depth)[C], const Floats (&scatter)[C], int layer, Floats (&litOut)[C], Floats (&colouredOut)[C]) {
             // Motion blur: the lanes' mean move (world), 0 where nothing moved (shiftOf).
             Floats moved[3] = {zero, zero, zero};
@@ -465,32 +467,63 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
                     const Floats logRatio = hn::Sub(hn::Max(log0[c], floor), hn::Max(log1[c], floor));
                     const Floats l = hn::IfThenElseZero(lightedLanes, hn::Mul(scatter[c], lightIntegral(depth[c], front, logRatio)));
                     litOut[c] = hn::Add(litOut[c], l);
-                    colouredOut[c] = hn::MulAdd(hn::Set(d, mOptions.lights[light].scale[c]), l, colouredOut[c]);
+                    if (!octaves) {
+                        colouredOut[c] = hn::MulAdd(hn::Set(d, mOptions.lights[light].scale[c]), l, colouredOut[c]);
+                        continue;
+                    }
+                    // The phase function and the octaves (shapedLightLayer): octave i with the
+                    // light's log transmittance times b^i, weighed by the pixel's a^i x phase.
+                    Floats sum = hn::Mul(hn::LoadU(d, &mPhase[phaseIndex(light, 0) + std::size_t(p)]), l);
+                    for (int i = 1; i < octaves->count(); ++i) {
+                        const Floats b = hn::Set(d, float(octaves->extinction(i)));
+                        const Floats frontI = hn::Exp(d, hn::Mul(b, hn::Max(log0[c], floor)));
+                        const Floats li = hn::IfThenElseZero(lightedLanes, hn::Mul(scatter[c], lightIntegral(depth[c], frontI, hn::Mul(b, logRatio))));
+                        sum = hn::MulAdd(hn::LoadU(d, &mPhase[phaseIndex(light, i) + std::size_t(p)]), li, sum);
+                    }
+                    colouredOut[c] = hn::MulAdd(hn::Set(d, mOptions.lights[light].scale[c]), sum, colouredOut[c]);
                 }
             }
             if (mOptions.pointLights) {
                 // Point lights: each lit lane's layer looked up lane by lane (pointLightAt: a cube
                 // of rays, not a lattice the vector lookup reads), then lit as the lights above.
                 alignas(64) float lane0[kLanes], lane1[kLanes], front[3][kLanes], logRatio[3][kLanes], falloff[kLanes];
+                alignas(64) float weights[ScatteringOctaves::kMax][kLanes];
                 hn::Store(u0, d, lane0);
                 hn::Store(u1, d, lane1);
                 const PointLights& points = *mOptions.pointLights;
                 for (std::size_t light = 0; light < points.maps().size(); ++light) {
                     for (int i = 0; i < kLanes; ++i) {
                         std::array<float, 3> f{1.0f, 1.0f, 1.0f}, r{0.0f, 0.0f, 0.0f};
-                        float g = 0.0f;
-                        if (lighted[i] != 0.0f) pointLightAt(light, p + i, slab, lane0[i], lane1[i], shiftOf(slab, p + i, layer), f, r, g);
+                        float g = 0.0f, w[ScatteringOctaves::kMax] = {};
+                        if (lighted[i] != 0.0f) {
+                            const Vec3d moved = shiftOf(slab, p + i, layer);
+                            pointLightAt(light, p + i, slab, lane0[i], lane1[i], moved, f, r, g);
+                            if (octaves) pointOctaveWeights(light, p + i, slab, lane0[i], lane1[i], moved, w);
+                        }
                         for (int c = 0; c < 3; ++c) {
                             front[c][i] = f[std::size_t(c)];
                             logRatio[c][i] = r[std::size_t(c)];
                         }
                         falloff[i] = g;
+                        for (int k = 0; octaves && k < octaves->count(); ++k) weights[k][i] = w[k];
                     }
                     const Floats g = hn::Load(d, falloff);
+                    const Floats floor = hn::Set(d, kLightFloor);
                     for (int c = 0; c < C; ++c) {
-                        const Floats l = hn::IfThenElseZero(lightedLanes, hn::Mul(scatter[c], lightIntegral(depth[c], hn::Load(d, front[c]), hn::Load(d, logRatio[c]))));
+                        const Floats f = hn::Load(d, front[c]), r = hn::Load(d, logRatio[c]);
+                        const Floats l = hn::IfThenElseZero(lightedLanes, hn::Mul(scatter[c], lightIntegral(depth[c], f, r)));
                         litOut[c] = hn::Add(litOut[c], l);
-                        colouredOut[c] = hn::MulAdd(hn::Mul(hn::Set(d, float(points.scale(light)[std::size_t(c)])), g), l, colouredOut[c]);
+                        Floats sum = l;
+                        if (octaves) {
+                            sum = hn::Mul(hn::Load(d, weights[0]), l);
+                            for (int i = 1; i < octaves->count(); ++i) {
+                                const Floats b = hn::Set(d, float(octaves->extinction(i)));
+                                const Floats frontI = hn::Exp(d, hn::Mul(b, hn::Log(d, hn::Max(f, floor))));
+                                const Floats li = hn::IfThenElseZero(lightedLanes, hn::Mul(scatter[c], lightIntegral(depth[c], frontI, hn::Mul(b, r))));
+                                sum = hn::MulAdd(hn::Load(d, weights[i]), li, sum);
+                            }
+                        }
+                        colouredOut[c] = hn::MulAdd(hn::Mul(hn::Set(d, float(points.scale(light)[std::size_t(c)])), g), sum, colouredOut[c]);
                     }
                 }
             }

@@ -50,6 +50,7 @@ struct CompositeLight
 {
     const LightMap* map = nullptr;
     float scale[3] = {0.0f, 0.0f, 0.0f};
+    Vec3d towards{0.0}; ///< unit direction towards the light (world): the phase function's angle
 };
 
 /// What every tile compositor of a frame shares.

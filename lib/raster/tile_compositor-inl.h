@@ -1285,6 +1285,10 @@ private:
     void lightLayer(std::int64_t slab, int p, float u0, float u1, const Vec3d& shift, const float* tau, const float* weight,
         float* lit, float* lighted) const
     {
+        if (shaped()) {
+            shapedLightLayer(slab, p, u0, u1, shift, tau, weight, lit, lighted);
+            return;
+        }
         for (std::size_t l = 0; l < mOptions.lights.size(); ++l) {
             std::array<float, 3> front, logRatio;
             lightAt(l, p, slab, u0, u1, shift, front, logRatio);
@@ -1306,6 +1310,75 @@ private:
                 lighted[c] += float(points.scale(l)[std::size_t(c)]) * falloff * term;
             }
         }
+    }
+
+    /// The light is shaped (ScatteringOctaves::shaped): an anisotropic phase or several octaves.
+    bool shaped() const { return mOptions.model && mOptions.model->octaves().shaped(); }
+
+    /// lightLayer with the phase function and the octaves (scattering_octaves.h): octave i
+    /// lights the layer with the light's transmittance to the power b^i (front^(b^i), its
+    /// log ratio times b^i) and weighs it by a^i x its phase at the sample (mPhase for the
+    /// directional lights, pointOctaveWeights for the point lights).
+    /// @a lit, the shadow pass's source, stays single scattering's, unweighted.
+    void shapedLightLayer(std::int64_t slab, int p, float u0, float u1, const Vec3d& shift, const float* tau, const float* weight,
+        float* lit, float* lighted) const
+    {
+        const ScatteringOctaves& octaves = mOptions.model->octaves();
+        const auto addLight = [&](const std::array<float, 3>& front, const std::array<float, 3>& logRatio, const float* weights, const float* scale) {
+            for (int c = 0; c < C; ++c) {
+                const float single = weight[c] * slabLightIntegral(tau[c], front[std::size_t(c)], logRatio[std::size_t(c)]);
+                lit[c] += single;
+                float sum = weights[0] * single;
+                for (int i = 1; i < octaves.count(); ++i) {
+                    const float b = float(octaves.extinction(i));
+                    sum += weights[i] * weight[c] * slabLightIntegral(tau[c], octaveFront(front[std::size_t(c)], b), b * logRatio[std::size_t(c)]);
+                }
+                lighted[c] += scale[c] * sum;
+            }
+        };
+        for (std::size_t l = 0; l < mOptions.lights.size(); ++l) {
+            std::array<float, 3> front, logRatio;
+            lightAt(l, p, slab, u0, u1, shift, front, logRatio);
+            float weights[ScatteringOctaves::kMax];
+            for (int i = 0; i < octaves.count(); ++i) weights[i] = mPhase[phaseIndex(l, i) + std::size_t(p)];
+            addLight(front, logRatio, weights, mOptions.lights[l].scale);
+        }
+        if (!mOptions.pointLights) return;
+        const PointLights& points = *mOptions.pointLights;
+        for (std::size_t l = 0; l < points.maps().size(); ++l) {
+            std::array<float, 3> front, logRatio;
+            float falloff, weights[ScatteringOctaves::kMax];
+            pointLightAt(l, p, slab, u0, u1, shift, front, logRatio, falloff);
+            pointOctaveWeights(l, p, slab, u0, u1, shift, weights);
+            float scale[3];
+            for (int c = 0; c < 3; ++c) scale[c] = float(points.scale(l)[std::size_t(c)]) * falloff;
+            addLight(front, logRatio, weights, scale);
+        }
+    }
+
+    /// Where light @a l's octave @a i weights start in mPhase ([light][octave][pixel]).
+    std::size_t phaseIndex(std::size_t l, int i) const
+    {
+        return (l * std::size_t(mOptions.model->octaves().count()) + std::size_t(i)) * kTilePixels;
+    }
+
+    /// An octave's light at a layer's front from the light's own @a front: front^b, floored
+    /// as slabLightIntegral floors it.
+    static float octaveFront(float front, float b) { return std::pow(std::max(front, kLightFloor), b); }
+
+    /// Point light @a l's octave weights (ScatteringOctaves::weight) at the middle of pixel p's
+    /// layer: the cosine between the direction from the sample towards the light and the ray.
+    void pointOctaveWeights(std::size_t l, int p, std::int64_t slab, float u0, float u1, const Vec3d& shift, float* weights) const
+    {
+        const ScatteringOctaves& octaves = mOptions.model->octaves();
+        const double z = mOptions.slabs.start(slab) + 0.5 * double(u0 + u1) * mOptions.slabs.thickness;
+        const LightRays& r = mRays.back(); // world coordinates (traceRays)
+        const Vec3d dir(r.dir[0][p], r.dir[1][p], r.dir[2][p]);
+        const Vec3d at = Vec3d(r.base[0][p], r.base[1][p], r.base[2][p]) - shift + z * dir;
+        const Vec3d towards = mOptions.pointLights->lights()[l].position - at;
+        const double length = glm::length(towards), dirLength = glm::length(dir);
+        const double cosTheta = length > 0.0 && dirLength > 0.0 ? glm::dot(towards, dir) / (length * dirLength) : 0.0;
+        for (int i = 0; i < octaves.count(); ++i) weights[i] = float(octaves.weight(i, cosTheta));
     }
 
     /// Point light @a l on pixel p's ray across the layer from fraction @a u0 to @a u1 of
@@ -1330,6 +1403,7 @@ private:
         if (!mOptions.lit()) return;
         // One ray per light in its map's coordinates, then (point lights) one in world ones.
         mRays.resize(mOptions.lights.size() + (mOptions.pointLights ? 1 : 0));
+        if (shaped()) mPhase.resize(mOptions.lights.size() * std::size_t(mOptions.model->octaves().count()) * kTilePixels);
         const Camera& camera = *mOptions.camera;
         for (int ly = 0; ly < mH; ++ly)
             for (int lx = 0; lx < mW; ++lx) {
@@ -1348,6 +1422,12 @@ private:
                     for (int k = 0; k < 3; ++k) {
                         mRays[l].base[k][ly * kTileSize + lx] = q[k];
                         mRays[l].dir[k][ly * kTileSize + lx] = v[k];
+                    }
+                    if (shaped()) {
+                        // A directional light's scattering angle is the same all along the ray.
+                        const ScatteringOctaves& octaves = mOptions.model->octaves();
+                        const double cosTheta = glm::dot(mOptions.lights[l].towards, dir) / glm::length(dir);
+                        for (int i = 0; i < octaves.count(); ++i) mPhase[phaseIndex(l, i) + std::size_t(ly * kTileSize + lx)] = float(octaves.weight(i, cosTheta));
                     }
                 }
             }
@@ -1434,6 +1514,9 @@ private:
     /// depth of the splats that cover only some layers, then each layer's own (foldLayers).
     std::vector<float> mLayerTau;
     std::vector<LightRays> mRays; ///< per light of CompositeOptions::lights, then (point lights) in world coordinates
+    /// With shaped light (shaped()): each directional light's octave weights per pixel
+    /// (ScatteringOctaves::weight at its ray's scattering angle), [light][octave][pixel].
+    std::vector<float> mPhase;
     bool mRaysTraced = false; ///< traceRays ran
     float mZ[kTilePixels];              ///< Z pass along the ray, +inf until alpha reaches 0.5
     float mTBefore[C];

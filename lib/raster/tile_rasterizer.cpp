@@ -114,6 +114,7 @@ FrameCompositing::FrameCompositing(const Camera& camera, const RenderSettings& s
         CompositeLight light;
         light.map = &lights[l];
         for (int c = 0; c < 3; ++c) light.scale[c] = float(model.lightScale(l, c));
+        light.towards = settings.lights[l].unitDirection();
         options.lights.push_back(light);
     }
     options.model = &model;

@@ -7,4 +7,5 @@
 #pragma once
 
 #include "reference/moved_voxels.h"
+#include "reference/path_tracer.h"
 #include "reference/reference_integrator.h"

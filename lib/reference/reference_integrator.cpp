@@ -138,6 +138,7 @@ class GaussianSumSampler
 public:
     GaussianSumSampler(const ReferenceVolume& v, double sigma) : mSum(v, sigma) {}
     void setTime(double) {} // still: rayMarchGaussianSum has no motion blur
+    void setDirection(const Vec3d&) {} // isotropic single scattering: rayMarchGaussianSum refuses the others
     bool sample(const Vec3d& pIndex, double& density, double source[3], Vec3d& emitted)
     {
         emitted = Vec3d(0.0);
@@ -162,7 +163,8 @@ public:
     /// @a moved: motion blur's moved voxels (null: a still field).
     TrilinearSampler(const GridSource::Impl& grid, const RenderSettings& settings, const EmissionModel* emission, const MovedVoxels* moved)
         : mGrid(grid), mSettings(settings), mAccessor(grid.field->getConstAccessor()), mColor(grid), mInputToWorking(settings.inputToWorking), mModel(settings), mCutoff(settings.cutoff),
-          mTinted(bool(grid.color)), mShadow(settings.lights.size(), Rgb{1.0f, 1.0f, 1.0f}), mEmission(grid, emission)
+          mTinted(bool(grid.color)), mShadow(settings.lights.size(), Rgb{1.0f, 1.0f, 1.0f}), mOctaves(settings.scattering),
+          mCosTheta(settings.lights.size(), 0.0), mEmission(grid, emission)
     {
         if (moved) mMoved.emplace(*moved);
         for (std::size_t l = 0; l < settings.lights.size(); ++l) {
@@ -178,6 +180,12 @@ public:
     /// Motion blur: the shutter time of the samples to come, as the factor a velocity is
     /// multiplied by to move a point there from the frame's time (MotionBlur::displacementPerVelocity).
     void setTime(double displacementPerVelocity) { mTime = displacementPerVelocity; }
+    /// The ray the samples to come are on (world direction): the lights' scattering angles.
+    void setDirection(const Vec3d& dirWorld)
+    {
+        mDirection = glm::normalize(dirWorld);
+        for (std::size_t l = 0; l < mCosTheta.size(); ++l) mCosTheta[l] = glm::dot(mSettings.lights[l].unitDirection(), mDirection);
+    }
 
     bool sample(Vec3d pIndex, double& density, double source[3], Vec3d& emitted)
     {
@@ -204,7 +212,14 @@ public:
             for (int c = 0; c < 3; ++c) source[c] = 0.0;
             return emitted.x > 0.0 || emitted.y > 0.0 || emitted.z > 0.0;
         }
-        for (auto& [l, marcher] : mShadows) mShadow[l] = marcher.march(pIndex);
+        for (auto& [l, marcher] : mShadows) {
+            mShadow[l] = marcher.march(pIndex);
+            // The phase function and the octaves (scattering_octaves.h): the light's
+            // transmittance becomes what it scatters towards the eye per unit isotropic light.
+            if (mOctaves.shaped()) {
+                for (float& t : mShadow[l]) t = float(mOctaves.response(mCosTheta[l], double(t)));
+            }
+        }
         const Vec3d color = mTinted ? workingColor(mInputToWorking, mColor.at(mGrid.indexToWorld(pIndex))) : Vec3d(1.0);
         for (int c = 0; c < 3; ++c) source[c] = mModel.source(c, mShadow.data(), color[c]);
         // Point and spot lights: a shadow ray from the sample to the light.
@@ -213,7 +228,12 @@ public:
             const double falloff = pointLightFalloff(light, mGrid.indexToWorld(pIndex), mGrid.voxelLength);
             if (!(falloff > 0.0)) continue;
             const double depth = pointShadowDepth(mGrid, mAccessor, pIndex, light.position, mSettings.shadow.step, mCutoff, mBoxMin, mBoxMax);
-            for (int c = 0; c < 3; ++c) source[c] += mModel.pointScale(l, c) * color[c] * falloff * std::exp(-mModel.extinction(c) * depth);
+            const Vec3d towards = light.position - mGrid.indexToWorld(pIndex);
+            const double length = glm::length(towards);
+            const double cosTheta = length > 0.0 ? glm::dot(towards, mDirection) / length : 0.0;
+            for (int c = 0; c < 3; ++c) {
+                source[c] += mModel.pointScale(l, c) * color[c] * falloff * mOctaves.response(cosTheta, std::exp(-mModel.extinction(c) * depth));
+            }
         }
         return true;
     }
@@ -230,7 +250,10 @@ private:
     OpticalModel mModel;
     double mCutoff;
     bool mTinted;
-    std::vector<Rgb> mShadow; ///< per light: its transmittance at the sample (1 if dark)
+    std::vector<Rgb> mShadow; ///< per light: its transmittance at the sample (1 if dark), or its octaves' response
+    ScatteringOctaves mOctaves;
+    Vec3d mDirection{0.0, 0.0, 1.0};  ///< the ray's unit direction (setDirection)
+    std::vector<double> mCosTheta;    ///< per light: the cosine of its scattering angle on the ray
     EmissionSampler mEmission;
     std::optional<MovedVoxels::Finder> mMoved;
     double mTime = 0.0;
@@ -371,6 +394,7 @@ Frame marchRays(const GridSource::Impl& grid, const Camera& camera, const Render
                             settings.motionBlur.shutterOpen + b.shutter * (settings.motionBlur.shutterClose - settings.motionBlur.shutterOpen)));
                         camera.lensRay(at.x, at.y, b.lensX, b.lensY, origin, dir);
                     }
+                    sampler.setDirection(dir);
                     float T[3] = {1.0f, 1.0f, 1.0f}, C[3] = {0.0f, 0.0f, 0.0f};
                     float zRay = std::numeric_limits<float>::infinity();
                     // Parameter s: world distance from the near-plane origin; far plane likewise.
@@ -482,6 +506,9 @@ Frame rayMarchGaussianSum(const GridSource::Impl& grid, const Camera& camera, co
     }
     if (!settings.pointLights.empty()) {
         throw ValueError("--method raymarch-gaussian lights with --light only: --point-light and --spot-light need --method splat or raymarch");
+    }
+    if (OpticalModel(settings).octaves().shaped()) {
+        throw ValueError("--method raymarch-gaussian scatters once and isotropically: --anisotropy and --multiple-scattering need --method splat, raymarch or pathtrace");
     }
     if (progress) progress->stage(0, 15); // kernels and shadows, then the rays
     const ReferenceVolume volume = buildVolume(grid, settings, stats, progress);

@@ -9,6 +9,7 @@
 
 #include <vdb_ewa/render_settings.h>
 
+#include "shading/scattering_octaves.h"
 #include "support/rgb.h"
 
 #include <array>
@@ -20,7 +21,8 @@ namespace detail {
 class OpticalModel
 {
 public:
-    explicit OpticalModel(const RenderSettings& settings) : mLightScale(settings.lights.size()), mPointScale(settings.pointLights.size())
+    explicit OpticalModel(const RenderSettings& settings)
+        : mOctaves(settings.scattering), mLightScale(settings.lights.size()), mPointScale(settings.pointLights.size())
     {
         for (int c = 0; c < 3; ++c) {
             mExtinction[c] = settings.medium.extinction()[c];
@@ -35,6 +37,10 @@ public:
             mAmbient[c] = scatters ? settings.ambient[c] * settings.medium.scatter[c] / mExtinction[c] : 0.0;
         }
     }
+
+    /// The phase function and the octaves of multiple scattering (docs/lighting.md#scattering):
+    /// every light but the ambient is weighed by them.
+    const ScatteringOctaves& octaves() const { return mOctaves; }
 
     /// sigma_t of channel @a c: optical depth per unit density per voxel length.
     double extinction(int c) const { return mExtinction[c]; }
@@ -99,6 +105,7 @@ public:
     bool dark(std::size_t l) const { return mLightScale[l][0] == 0.0 && mLightScale[l][1] == 0.0 && mLightScale[l][2] == 0.0; }
 
 private:
+    ScatteringOctaves mOctaves;
     double mExtinction[3], mEmitted[3], mAmbient[3];
     std::vector<std::array<double, 3>> mLightScale; ///< per light: colour x scatter / extinction
     std::vector<std::array<double, 3>> mPointScale; ///< per point light: intensity x scatter / extinction

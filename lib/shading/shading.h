@@ -11,5 +11,6 @@
 #include "shading/material_mix.h"
 #include "shading/optical_model.h"
 #include "shading/phase_function.h"
+#include "shading/scattering_octaves.h"
 #include "shading/point_light_map.h"
 #include "shading/shadow_transmittance.h"

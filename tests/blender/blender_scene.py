@@ -38,6 +38,8 @@ if params["engine"] == "CYCLES":
     scene.cycles.seed = params.get("cycles_seed", 0)
     scene.cycles.use_denoising = False
     scene.cycles.volume_bounces = 0  # single scattering, as vdb_ewa's
+else:
+    scene.cycles.volume_bounces = params["volume_bounces"]  # --multiple-scattering (docs/blender.md)
     scene.cycles.volume_step_rate = params.get("cycles_step_rate", 1.0)
     scene.cycles.device = "CPU"
     scene.render.threads_mode = "FIXED"
@@ -63,8 +65,9 @@ volume.filepath = params["asset"]
 second = bpy.data.objects.new("asset.second", volume)
 scene.collection.objects.link(second)
 second.matrix_world = mathutils.Matrix(params["second_object_to_world"])
-volume.materials.append(principled_volume("volume.second", params["grid"], params["second_density"], params["second_color"], params["second_absorption_color"]))
-moving.materials.append(principled_volume("volume", params["grid"], params["density"], params["color"], params["absorption_color"]))
+volume.materials.append(principled_volume("volume.second", params["grid"], params["second_density"], params["second_color"], params["second_absorption_color"],
+                                          params["anisotropy"]))
+moving.materials.append(principled_volume("volume", params["grid"], params["density"], params["color"], params["absorption_color"], params["anisotropy"]))
 
 camera_data = bpy.data.cameras.new("camera")
 camera_data.lens = params["focal"]

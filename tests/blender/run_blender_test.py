@@ -33,6 +33,11 @@ except ImportError as e:
     skip("needs numpy, OpenImageIO and pyopenvdb for Python (python3-openimageio, python3-openvdb): %s" % e)
 
 
+# The octaves a scene with Volume Bounces gets (scene_mapping.SCATTERING_OCTAVES, measured:
+# docs/lighting.md#multiple-scattering).
+EXPECTED_OCTAVES = 4
+
+
 def read_rgba(path):
     pixels, names = read_image(path)
     return np.stack([pixels[..., names.index(c)] for c in "RGBA"], axis=-1)
@@ -123,7 +128,9 @@ def main():
                   fstop=0.1, focus_distance=0.8 * float(np.linalg.norm(target - eye)),
                   spot_position=(target + extent * np.array([-0.6, -0.5, 0.5])).tolist(), spot_power=40.0 * extent * extent,
                   spot_color=[0.6, 0.8, 1.0], spot_angle=40.0, spot_blend=0.3, spot_radius=0.01 * extent,
-                  cycles_samples=args.samples, cycles_seed=args.seed, quality=args.quality, exr=out("blender.exr"), png=out("blender.png"))
+                  cycles_samples=args.samples, cycles_seed=args.seed,
+                  # The vdb_ewa engine's: Principled Volume's Anisotropy and Cycles' Volume Bounces.
+                  anisotropy=0.4 if args.engine == "VDB_EWA" else 0.0, volume_bounces=3 if args.engine == "VDB_EWA" else 0, quality=args.quality, exr=out("blender.exr"), png=out("blender.png"))
     with open(out("params.json"), "w") as f:
         json.dump(params, f, indent=1)
     env = dict(os.environ, VDB_EWA_PYTHONPATH=os.path.abspath(args.module_dir))
@@ -182,7 +189,9 @@ def main():
            "--velocity-grid", "velocity", "--velocity-unit", "second", "--velocity-scale", "%.17g" % params["velocity_scale"],
            "--fps", "%.17g" % params["fps"], "--shutter", "%.17g,%.17g" % (-0.5 * params["shutter"], 0.5 * params["shutter"]),
            "--light", join(light), "--spot-light", join(spot), "--point-light-radius", "%.17g" % params["spot_radius"], "--gain", "0", "--scatter", join(scatter), "--absorb", join(absorb), "--quality", args.quality,
-           "--working-space", "lin_rec709", "--output-space", "lin_rec709", "--exr-type", "float", "-q"]
+           "--working-space", "lin_rec709", "--output-space", "lin_rec709", "--exr-type", "float", "-q",
+           # Anisotropy is --anisotropy; 3 Volume Bounces are --multiple-scattering min(1 + 3, the add-on's SCATTERING_OCTAVES).
+           "--anisotropy", "%.17g" % params["anisotropy"], "--multiple-scattering", str(min(1 + params["volume_bounces"], EXPECTED_OCTAVES))]
     done = subprocess.run(cli, capture_output=True, text=True)
     if done.returncode != 0:
         sys.exit("FAIL: the CLI exited %d: %s" % (done.returncode, done.stderr))

@@ -427,6 +427,27 @@ class Module(unittest.TestCase):
         with self.assertRaisesRegex(vdb_ewa.ValueError, "translate: expected a string, number"):
             vdb_ewa.render(self.cloud, translate={"x": 1})
 
+    def test_scattering_keywords_shape_the_light(self):
+        # --anisotropy and --multiple-scattering as keywords, as the CLI takes them: 0 and 1 are
+        # the default image bit for bit; forward scattering and octaves change it; the path
+        # tracer renders; the options are in the metadata; a bad value raises the CLI's line.
+        options = dict(res="48x32", translate=(1, 0.5, 4), light=(-1, 0.3, -1, 1, 1, 1), gain=0)
+        base = vdb_ewa.render(self.cloud, **options)
+        np.testing.assert_array_equal(vdb_ewa.render(self.cloud, anisotropy=0, multiple_scattering=1, **options).beauty, base.beauty)
+        forward = vdb_ewa.render(self.cloud, anisotropy=0.6, **options)
+        self.assertGreater(forward.beauty[..., 0].sum(), 1.2 * base.beauty[..., 0].sum())  # seen against the light
+        octaves = vdb_ewa.render(self.cloud, multiple_scattering=3, octave_scatter=0.7, **options)
+        self.assertGreater(octaves.beauty[..., 0].sum(), 1.2 * base.beauty[..., 0].sum())
+        self.assertEqual(octaves.metadata["vdb_ewa/multiple-scattering"], "3")
+        self.assertEqual(octaves.metadata["vdb_ewa/octave-scatter"], "0.7")
+        self.assertEqual(forward.metadata["vdb_ewa/anisotropy"], "0.6")
+        traced = vdb_ewa.render(self.cloud, method="pathtrace", samples=2, bounces=2, **options)
+        self.assertEqual(traced.metadata["vdb_ewa/bounces"], "2")
+        self.assertGreater(traced.beauty[..., 3].max(), 0.5)
+        with self.assertRaises(vdb_ewa.ValueError) as raised:
+            vdb_ewa.render(self.cloud, anisotropy=1.5)
+        self.assertEqual(str(raised.exception), self.cli_message("--anisotropy", "1.5"))
+
     def test_bad_inputs_raise_typed_exceptions(self):
         with self.assertRaises(vdb_ewa.IoError) as raised:
             vdb_ewa.open(self.path("missing.vdb"))

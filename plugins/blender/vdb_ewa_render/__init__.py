@@ -112,6 +112,7 @@ def shading_options(depsgraph, warnings):
     scene = depsgraph.scene
     options = dict(light=scene_mapping.light_options(depsgraph, warnings) or [(0.0, 0.0, 1.0, 0.0, 0.0, 0.0)])
     options.update(scene_mapping.point_light_options(depsgraph, warnings))
+    options.update(scene_mapping.scattering_options(scene))
     # Blender's scene-linear space is linear Rec.709; render and return it there.
     # Cycles' attenuation: shadows fall as exp(-optical depth), without vdb_render's --gain.
     options["gain"] = 0.0

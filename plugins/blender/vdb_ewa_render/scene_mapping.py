@@ -248,6 +248,19 @@ def _value(node, name, warnings, where):
     return tuple(value)[:3] if socket.type == 'RGBA' else value
 
 
+MAX_ANISOTROPY = 0.999
+# Octaves of multiple scattering a scene with Cycles' Volume Bounces > 0 gets (--multiple-scattering;
+# their count measured against the path-traced truth: docs/lighting.md#multiple-scattering).
+SCATTERING_OCTAVES = 4
+
+
+def scattering_options(scene):
+    """Cycles' Volume Bounces as --multiple-scattering: 0 bounces single scattering (1 octave),
+    more the measured octaves, at most one per bounce after the first."""
+    bounces = getattr(getattr(scene, "cycles", None), "volume_bounces", 0)
+    return dict(multiple_scattering=1 if bounces <= 0 else min(1 + bounces, SCATTERING_OCTAVES))
+
+
 def material_options(obj, warnings):
     """The object's Principled Volume as vdb_ewa options, per grid value per world unit (render()
     multiplies them by the voxel length): Cycles' coefficients, scattering = Color x Density,
@@ -273,8 +286,11 @@ def material_options(obj, warnings):
             warnings.append("%s: the Color Attribute tints the scattering only; Cycles' absorption follows it too" % where)
         else:
             warnings.append("%s: no grid '%s' for the Color Attribute; ignored" % (where, color_attribute))
-    if abs(_value(node, "Anisotropy", warnings, where)) > 1e-6:
-        warnings.append("%s: anisotropy is ignored (vdb_ewa scatters isotropically)" % where)
+    anisotropy = _value(node, "Anisotropy", warnings, where)
+    if anisotropy != 0.0:
+        # vdb_ewa's --anisotropy is Henyey-Greenstein's g, as Cycles' (docs/lighting.md#scattering);
+        # Cycles takes +-1, a delta, vdb_ewa the open interval.
+        options["anisotropy"] = max(-MAX_ANISOTROPY, min(MAX_ANISOTROPY, anisotropy))
     if _value(node, "Emission Strength", warnings, where) > 0.0:
         warnings.append("%s: Emission Strength is ignored (Blender's emission does not follow the density; use a "
                         "temperature or flame grid)" % where)
