@@ -61,6 +61,7 @@ import sys
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "tests", "blender"))
 DEFAULT_CLI = "/tmp/build-pch/cmd/vdb_ewa/vdb_ewa"
 
 
@@ -105,19 +106,9 @@ def blender_main(job_path):
     volume.render.precision = "FULL"  # Blender loads grids as half floats by default
     obj = bpy.data.objects.new("sphere", volume)
     scene.collection.objects.link(obj)
-    material = bpy.data.materials.new("fog")
-    material.use_nodes = True
-    nodes = material.node_tree.nodes
-    for node in list(nodes):
-        if node.type != "OUTPUT_MATERIAL":
-            nodes.remove(node)
-    principled = nodes.new("ShaderNodeVolumePrincipled")
-    principled.inputs["Density"].default_value = job["density"]
-    principled.inputs["Color"].default_value = (*job["color"], 1.0)
-    principled.inputs["Absorption Color"].default_value = (0.0, 0.0, 0.0, 1.0)
-    principled.inputs["Density Attribute"].default_value = "density"
-    output = next(n for n in nodes if n.type == "OUTPUT_MATERIAL")
-    material.node_tree.links.new(principled.outputs["Volume"], output.inputs["Volume"])
+    from blender_materials import principled_volume  # the Blender tests' (tests/blender)
+    material = principled_volume("fog", "density", job["density"], job["color"])
+    principled = next(n for n in material.node_tree.nodes if n.type == "PRINCIPLED_VOLUME")
     volume.materials.append(material)
 
     camera_data = bpy.data.cameras.new("camera")
@@ -317,13 +308,8 @@ def main():
 
     # 4. The comparison.
     def read_rgba(path):
-        image = oiio.ImageInput.open(path)
-        if image is None:
-            sys.exit("cannot read %s: %s" % (path, oiio.geterror()))
-        spec = image.spec()
-        pixels = np.asarray(image.read_image(format="float")).reshape(spec.height, spec.width, spec.nchannels)
-        names = list(spec.channelnames)
-        image.close()
+        from driver_support import read_image  # the Blender tests' (tests/blender)
+        pixels, names = read_image(path)
         return np.stack([pixels[..., names.index(c)] for c in "RGBA"], axis=-1).astype(np.float64)
 
     def psnr(a, b):
