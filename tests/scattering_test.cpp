@@ -220,6 +220,12 @@ TEST(PathTrace, SingleScatteringEqualsTheRaymarchAtGainZero)
     path.bounces = 0;
     path.pathSamples = 256;
     const Image a = renderGrid(ball, camera, march), b = renderGrid(ball, camera, path);
+    RenderStats stats;
+    path.scattering.octaves = 4;
+    const Image octaves = renderGrid(ball, camera, path, &stats);
+    EXPECT_EQ(rmse(octaves, b), 0.0); // the octaves approximate what the paths do
+    ASSERT_EQ(stats.warnings.size(), 1u);
+    EXPECT_NE(stats.warnings[0].find("--multiple-scattering changes nothing with --method pathtrace"), std::string::npos);
     for (int c = 0; c < 4; ++c) EXPECT_NEAR(channelSum(b, c) / channelSum(a, c), 1.0, 0.015) << "channel " << c;
 }
 

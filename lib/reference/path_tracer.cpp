@@ -268,6 +268,9 @@ Frame pathTrace(const GridSource::Impl& grid, const Camera& camera, const Render
     if (passes.shadow || passes.emission || passes.deep) {
         throw ValueError("--method pathtrace renders the beauty, Z and transmittance only (shadow, emission and deep passes need --method splat)");
     }
+    if (asked.scattering.octaves > 1) {
+        stats.warnings.push_back("--multiple-scattering changes nothing with --method pathtrace: its paths scatter up to --bounces times");
+    }
     const auto t0 = std::chrono::steady_clock::now();
     stats.activeVoxels = grid.activeVoxels;
     stats.activeTiles = grid.activeTiles;
