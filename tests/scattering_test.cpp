@@ -168,6 +168,16 @@ TEST(Scattering, PointLightsWeighTheirPhaseAtEachSample)
     }
     EXPECT_NEAR(ratio[1] / ratio[0], 1.0, 0.02);
     EXPECT_GT(brightness[1], 1.5 * brightness[0]); // seen against the light: forward scattering
+    // The octaves of a point light: the SIMD backend's (a vector log and exp per octave) as the
+    // scalar one's, and brighter than one octave.
+    s.scattering.octaves = 3;
+    RenderSettings scalar = s;
+    scalar.simd = false;
+    const Image simdImage = renderGrid(ball, camera, s), scalarImage = renderGrid(ball, camera, scalar);
+    float peak = 0.0f;
+    for (const float v : scalarImage.rgba) peak = std::max(peak, v);
+    EXPECT_LT(maxAbsDiff(simdImage, scalarImage), 1e-5 * peak); // the backends' documented agreement
+    EXPECT_GT(channelSum(scalarImage, 0), 1.2 * ratio[1] * brightness[1]);
 }
 
 TEST(Scattering, OutOfRangeOptionsAreRefused)
