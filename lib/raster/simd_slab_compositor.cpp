@@ -474,9 +474,10 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
                     // The phase function and the octaves (shapedLightLayer): octave i with the
                     // light's log transmittance times b^i, weighed by the pixel's a^i x phase.
                     Floats sum = hn::Mul(hn::LoadU(d, &mPhase[phaseIndex(light, 0) + std::size_t(p)]), l);
+                    const Floats logFront = hn::Max(log0[c], floor);
                     for (int i = 1; i < octaves->count(); ++i) {
                         const Floats b = hn::Set(d, float(octaves->extinction(i)));
-                        const Floats frontI = hn::Exp(d, hn::Mul(b, hn::Max(log0[c], floor)));
+                        const Floats frontI = hn::Exp(d, hn::Mul(b, logFront));
                         const Floats li = hn::IfThenElseZero(lightedLanes, hn::Mul(scatter[c], lightIntegral(depth[c], frontI, hn::Mul(b, logRatio))));
                         sum = hn::MulAdd(hn::LoadU(d, &mPhase[phaseIndex(light, i) + std::size_t(p)]), li, sum);
                     }
@@ -516,9 +517,10 @@ void TileCompositor<C>::flushRow(std::int64_t slab, int y, int x0, int x1)
                         Floats sum = l;
                         if (octaves) {
                             sum = hn::Mul(hn::Load(d, weights[0]), l);
+                            const Floats logFront = hn::Log(d, hn::Max(f, floor));
                             for (int i = 1; i < octaves->count(); ++i) {
                                 const Floats b = hn::Set(d, float(octaves->extinction(i)));
-                                const Floats frontI = hn::Exp(d, hn::Mul(b, hn::Log(d, hn::Max(f, floor))));
+                                const Floats frontI = hn::Exp(d, hn::Mul(b, logFront));
                                 const Floats li = hn::IfThenElseZero(lightedLanes, hn::Mul(scatter[c], lightIntegral(depth[c], frontI, hn::Mul(b, r))));
                                 sum = hn::MulAdd(hn::Load(d, weights[i]), li, sum);
                             }

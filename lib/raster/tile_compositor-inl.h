@@ -1403,7 +1403,9 @@ private:
         if (!mOptions.lit()) return;
         // One ray per light in its map's coordinates, then (point lights) one in world ones.
         mRays.resize(mOptions.lights.size() + (mOptions.pointLights ? 1 : 0));
-        if (shaped()) mPhase.resize(mOptions.lights.size() * std::size_t(mOptions.model->octaves().count()) * kTilePixels);
+        // The phase function and the octaves, where the light is shaped (shapedLightLayer).
+        const ScatteringOctaves* octaves = shaped() ? &mOptions.model->octaves() : nullptr;
+        if (octaves) mPhase.resize(mOptions.lights.size() * std::size_t(octaves->count()) * kTilePixels);
         const Camera& camera = *mOptions.camera;
         for (int ly = 0; ly < mH; ++ly)
             for (int lx = 0; lx < mW; ++lx) {
@@ -1423,11 +1425,10 @@ private:
                         mRays[l].base[k][ly * kTileSize + lx] = q[k];
                         mRays[l].dir[k][ly * kTileSize + lx] = v[k];
                     }
-                    if (shaped()) {
+                    if (octaves) {
                         // A directional light's scattering angle is the same all along the ray.
-                        const ScatteringOctaves& octaves = mOptions.model->octaves();
                         const double cosTheta = glm::dot(mOptions.lights[l].towards, dir) / glm::length(dir);
-                        for (int i = 0; i < octaves.count(); ++i) mPhase[phaseIndex(l, i) + std::size_t(ly * kTileSize + lx)] = float(octaves.weight(i, cosTheta));
+                        for (int i = 0; i < octaves->count(); ++i) mPhase[phaseIndex(l, i) + std::size_t(ly * kTileSize + lx)] = float(octaves->weight(i, cosTheta));
                     }
                 }
             }

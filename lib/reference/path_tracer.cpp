@@ -1,6 +1,8 @@
 /// @file path_tracer.cpp
 #include "reference/path_tracer.h"
 
+#include "reference/halton_points.h"
+
 #include "shading/shading.h"
 #include "source/source.h"
 #include "support/blank_frame.h"
@@ -44,17 +46,12 @@ private:
     std::uint64_t mState;
 };
 
-/// The Halton points of bases 2 and 3 rotated per pixel: path @a i's place in its pixel.
+/// Path @a i's place in pixel (@a x, @a y): a Halton point rotated by the pixel's own PathRandom.
 Vec2d pixelPoint(int x, int y, int i)
 {
-    const auto radicalInverse = [](std::uint32_t n, std::uint32_t b) {
-        double inverse = 0.0, digit = 1.0 / double(b);
-        for (; n > 0; n /= b, digit /= double(b)) inverse += double(n % b) * digit;
-        return inverse;
-    };
     PathRandom r(x, y, -1, 7);
     const double r0 = r.next(), r1 = r.next();
-    return Vec2d(std::fmod(radicalInverse(std::uint32_t(i), 2) + r0, 1.0), std::fmod(radicalInverse(std::uint32_t(i), 3) + r1, 1.0));
+    return rotatedHalton(i, r0, r1);
 }
 
 /// A unit vector whose cosine with unit @a axis is @a cosTheta, at azimuth 2 pi @a u.

@@ -1,6 +1,7 @@
 /// @file reference_integrator.cpp
 #include "reference/reference_integrator.h"
 
+#include "reference/halton_points.h"
 #include "reference/moved_voxels.h"
 
 #include "shading/shading.h"
@@ -315,14 +316,6 @@ BlurSample blurSample(int x, int y, int i, int n)
     return b;
 }
 
-/// The radical inverse of @a i in base @a b: the Halton sequence's coordinate.
-double radicalInverse(std::uint32_t i, std::uint32_t b)
-{
-    double inverse = 0.0, digit = 1.0 / double(b);
-    for (; i > 0; i /= b, digit /= double(b)) inverse += double(i % b) * digit;
-    return inverse;
-}
-
 /// Ray @a i's place in pixel (@a x, @a y), in [0, 1)^2: the Halton points of bases 2
 /// and 3 (well spread for any n, unlike the R2 points blurSample gives the lens), rotated by the
 /// pixel's PixelRandom (its own multipliers and seed: independent of blurSample's).
@@ -330,7 +323,7 @@ Vec2d pixelSample(int x, int y, int i)
 {
     PixelRandom random(x, y, 0xD6E8FEB86659FD93ull, 0x9E3779B97F4A7C15ull, 0x5851F42D4C957F2Dull);
     const double r0 = random.next(), r1 = random.next();
-    return Vec2d(std::fmod(radicalInverse(std::uint32_t(i), 2) + r0, 1.0), std::fmod(radicalInverse(std::uint32_t(i), 3) + r1, 1.0));
+    return rotatedHalton(i, r0, r1);
 }
 
 void checkMarchable(const GridSource::Impl& grid, const PassRequest& passes, const char* method)
