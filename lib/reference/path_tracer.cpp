@@ -69,9 +69,10 @@ Vec3d aroundAxis(const Vec3d& axis, double cosTheta, double u)
 class Medium
 {
 public:
-    Medium(const GridSource::Impl& grid, const RenderSettings& settings, double majorantDensity)
+    /// @a progress: checked every 4,096 tracking steps (a dense voxel makes a path take millions).
+    Medium(const GridSource::Impl& grid, const RenderSettings& settings, double majorantDensity, Progress* progress)
         : mGrid(grid), mSettings(settings), mModel(settings), mAccessor(grid.field->getConstAccessor()), mColor(grid),
-          mTinted(bool(grid.color)), mMajorantDensity(majorantDensity)
+          mTinted(bool(grid.color)), mMajorantDensity(majorantDensity), mProgress(progress)
     {
         mFromWorld = glm::inverse(grid.indexToWorldLinear);
         for (std::size_t l = 0; l < settings.lights.size(); ++l) {
@@ -89,6 +90,9 @@ public:
 
     double density(const Vec3d& pWorld)
     {
+        // The field's values reach kMaxDensity (1e6), the global majorant with them: a cancel is
+        // seen between steps, not only between pixels.
+        if (mProgress && (++mSteps & 4095u) == 0) mProgress->check();
         const Vec3d q = mFromWorld * (pWorld - mGrid.indexToWorldOffset);
         float d = 0.0f;
         openvdb::tools::BoxSampler::sample(mAccessor, openvdb::Vec3d(q.x, q.y, q.z), d);
@@ -207,6 +211,8 @@ private:
     MaterialColor mColor;
     bool mTinted;
     double mMajorantDensity;
+    Progress* mProgress;
+    std::uint64_t mSteps = 0;
     Mat3d mFromWorld{1.0};
     Vec3d mBoxMin{0.0}, mBoxMax{0.0};
     std::vector<std::size_t> mLights, mPointLights; ///< the lights and point lights that are not dark
@@ -296,7 +302,7 @@ Frame pathTrace(const GridSource::Impl& grid, const Camera& camera, const Render
     const Vec3d forward = glm::transpose(camera.cameraFromWorld())[2];
     setUnits(progress, std::uint64_t(height));
     tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
-        Medium medium(grid, settings, majorant);
+        Medium medium(grid, settings, majorant, progress);
         for (int y = rows.begin(); y < rows.end(); ++y) {
             advance(progress);
             for (int x = 0; x < width; ++x) {
